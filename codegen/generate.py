@@ -1,0 +1,107 @@
+"""Generate, write and check the C folder of one estimator for one vehicle.
+
+``render(config, name)`` returns {file name: text}; the text depends only on the vehicle
+configuration, the templates, and the vsegen and CasADi versions (no time stamps, no paths), so
+regeneration is byte-identical. ``check`` compares with a folder and returns unified diffs.
+"""
+
+from __future__ import annotations
+
+import difflib
+import os
+import tempfile
+from importlib import metadata
+from pathlib import Path
+
+import casadi as ca
+import jinja2
+
+from codegen.kernel import generate_kernel
+from model import status
+from model.estimator import Estimator
+from model.estimators import build
+from model.params import VehicleConfig
+
+TEMPLATES = Path(__file__).parent / "templates"
+REALS = ("double", "float")
+
+
+def generator_version() -> str:
+    """vsegen's version as installed."""
+    return metadata.version("vsegen")
+
+
+def _environment() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(TEMPLATES),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+
+
+def render(config: VehicleConfig, name: str, real: str = "double") -> dict[str, str]:
+    """All files of ``generated/<vehicle>/<name>/`` as {file name: text}."""
+    estimator = build(name, config)
+    kernel = generate_kernel(estimator, real)
+    prefix = f"vse_{name}"
+    context = {
+        "est": estimator,
+        "p": prefix,
+        "P": prefix.upper(),
+        "guard": f"{prefix.upper()}_H",
+        "vehicle": config.name,
+        "sample_time": repr(config.sample_time),
+        "real": real,
+        "version": generator_version(),
+        "casadi_version": ca.__version__,
+        "parameter_hash": config.parameter_hash(name),
+        "ops": _operation_counts(estimator),
+        "status_bits": status.STATUS_BITS,
+        "kernel": kernel,
+    }
+    env = _environment()
+    files = {}
+    for template, file in (("api.h.j2", f"{prefix}.h"), ("api.c.j2", f"{prefix}.c")):
+        files[file] = env.get_template(template).render(context, file=file, source=f"template {template}")
+    options = ", ".join(f"{k}={v}" for k, v in sorted(kernel.options.items()))
+    for file, text in ((kernel.c_name, kernel.c_text), (kernel.h_name, kernel.h_text)):
+        banner = env.get_template("banner.j2").render(
+            context, file=file, source=f"CasADi CodeGenerator ({options})")
+        files[file] = banner + text
+    return files
+
+
+def _operation_counts(estimator: Estimator) -> dict[str, int]:
+    return {"step": estimator.step.n_instructions(), "init": estimator.init.n_instructions()}
+
+
+def write(files: dict[str, str], folder: Path) -> None:
+    """Replace ``folder``'s content by ``files`` (each written to a temporary name, then renamed)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for stale in folder.iterdir():
+        if stale.is_file() and stale.name not in files:
+            stale.unlink()
+    for name, text in files.items():
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{name}.")
+        with os.fdopen(fd, "w", newline="\n") as handle:
+            handle.write(text)
+        os.replace(tmp, folder / name)
+
+
+def check(files: dict[str, str], folder: Path, label: str) -> list[str]:
+    """Unified diffs between ``folder`` and ``files`` (empty if identical). ``label`` names the
+    folder in the diff headers."""
+    diffs = []
+    present = {p.name for p in folder.iterdir() if p.is_file()} if folder.is_dir() else set()
+    for name in sorted(set(files) | present):
+        old = (folder / name).read_text() if name in present else ""
+        new = files.get(name, "")
+        if old != new:
+            diffs.append("".join(difflib.unified_diff(
+                old.splitlines(keepends=True), new.splitlines(keepends=True),
+                fromfile=f"{label}/{name}" if name in present else "/dev/null",
+                tofile=f"{label}/{name} (regenerated)" if name in files else "/dev/null",
+            )))
+    return diffs

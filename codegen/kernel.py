@@ -1,0 +1,84 @@
+"""The numeric kernel: CasADi's CodeGenerator on the estimator's SX Functions, pinned options.
+
+Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_int = int``,
+``with_header``, ``static_aux`` and an explicit ``prefix``; never ``with_mem`` (malloc),
+``thread_safe`` (pthread) or ``inline_aux``. The raw output leaves parameters unused (``iw``, ``w``,
+``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror.
+Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
+loudly instead of emitting unreviewed code.
+"""
+
+from __future__ import annotations
+
+import re
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+
+from model.estimator import Estimator
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """Generated kernel sources and the facts the API template needs."""
+
+    c_name: str
+    h_name: str
+    c_text: str
+    h_text: str
+    work_reals: int
+    """Size of the work vector ``w`` the generated functions need (0 for straight-line SX code)."""
+    options: dict
+
+
+def kernel_options(real: str, prefix: str) -> dict:
+    """The pinned CodeGenerator options."""
+    return {
+        "casadi_real": real,
+        "casadi_int": "int",
+        "with_header": True,
+        "static_aux": True,
+        "prefix": prefix,
+    }
+
+
+def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
+    """C source and header of ``estimator``'s init and step Functions."""
+    base = f"vse_{estimator.name}_kernel"
+    options = kernel_options(real, f"{base}_")
+    generator = ca.CodeGenerator(f"{base}.c", options)
+    generator.add(estimator.init)
+    generator.add(estimator.step)
+    with tempfile.TemporaryDirectory(prefix="vsegen-kernel-") as tmp:
+        generator.generate(tmp + "/")
+        c_text = (Path(tmp) / f"{base}.c").read_text()
+        h_text = (Path(tmp) / f"{base}.h").read_text()
+    return Kernel(f"{base}.c", f"{base}.h", _mark_unused(c_text), h_text, _work_size(h_text), options)
+
+
+def _work_size(h_text: str) -> int:
+    """The largest ``<function>_SZ_W`` the generated header declares (reals of work vector)."""
+    sizes = [int(n) for n in re.findall(r"^#define \w+_SZ_W (\d+)$", h_text, flags=re.M)]
+    if not sizes:
+        raise RuntimeError("CasADi's generated header declares no _SZ_W; review codegen/kernel.py")
+    return max(sizes)
+
+
+_STATIC_BODY = re.compile(
+    r"(static int casadi_f\d+\(const casadi_real\*\* arg, casadi_real\*\* res, "
+    r"casadi_int\* iw, casadi_real\* w, int mem\) \{\n)"
+)
+_RELEASE = re.compile(r"(CASADI_SYMBOL_EXPORT void \w+_release\(int mem\) \{\n)")
+
+
+def _mark_unused(c_text: str) -> str:
+    c_text, bodies = _STATIC_BODY.subn(r"\1  (void)iw; (void)w; (void)mem;\n", c_text)
+    c_text, releases = _RELEASE.subn(r"\1  (void)mem;\n", c_text)
+    if bodies == 0 or releases == 0:
+        raise RuntimeError(
+            "CasADi's generated code no longer has the expected function signatures; "
+            f"review codegen/kernel.py for CasADi {ca.__version__}"
+        )
+    return c_text

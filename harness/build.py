@@ -1,0 +1,109 @@
+"""Compiling generated C into a shared library and calling it from Python (ctypes).
+
+Libraries are cached under the build cache, keyed by the SHA-256 of every source, the compiler
+and the flags, so an unchanged estimator is compiled once.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from harness.paths import cache_dir
+from model.estimator import Estimator
+
+WARNING_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror")
+"""The generated code must compile cleanly with these (design.md, "Generated C")."""
+LIBRARY_FLAGS = ("-O2", "-fPIC", "-shared")
+
+
+class BuildError(RuntimeError):
+    """The compiler rejected generated code (a bug in vsegen, not a user error)."""
+
+
+def compiler() -> str:
+    """The C compiler: $CC, else gcc, else cc."""
+    return os.environ.get("CC") or shutil.which("gcc") or "cc"
+
+
+def runner_source(estimator: Estimator) -> str:
+    """The harness driver C for ``estimator``."""
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).parent),
+                             undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
+    prefix = f"vse_{estimator.name}"
+    return env.get_template("runner.c.j2").render(est=estimator, p=prefix, P=prefix.upper())
+
+
+def build_library(files: dict[str, str], extra_sources: dict[str, str], cc: str | None = None,
+                  flags: tuple[str, ...] = ()) -> Path:
+    """Compile every ``.c`` of ``files`` and ``extra_sources`` into a cached shared library."""
+    cc = cc or compiler()
+    all_files = {**files, **extra_sources}
+    command_flags = (*WARNING_FLAGS, *LIBRARY_FLAGS, *flags)
+    digest = hashlib.sha256()
+    for name in sorted(all_files):
+        digest.update(name.encode() + b"\0" + all_files[name].encode() + b"\0")
+    digest.update(" ".join((cc, *command_flags)).encode())
+    target = cache_dir() / "lib" / f"{digest.hexdigest()[:24]}.so"
+    if target.exists():
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="vsegen-build-") as tmp:
+        for name, text in all_files.items():
+            (Path(tmp) / name).write_text(text)
+        sources = sorted(n for n in all_files if n.endswith(".c"))
+        out = Path(tmp) / "lib.so"
+        result = subprocess.run([cc, *command_flags, "-o", str(out), *sources, "-lm"], cwd=tmp,
+                                capture_output=True, text=True)
+        if result.returncode != 0:
+            raise BuildError(f"{cc} failed on generated code:\n{result.stderr}")
+        shutil.move(str(out), str(target))
+    return target
+
+
+@dataclass
+class CEstimator:
+    """A compiled estimator, driven through the harness runner."""
+
+    estimator: Estimator
+    library: ctypes.CDLL
+
+    def run(self, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(outputs n x ny, states (n+1) x nx) for the input rows ``inputs`` (n x nu)."""
+        inputs = np.ascontiguousarray(inputs, dtype=np.float64)
+        n = inputs.shape[0]
+        outputs = np.zeros((n, len(self.estimator.outputs)))
+        states = np.zeros((n + 1, len(self.estimator.states)))
+        self.library.vse_harness_run(ctypes.c_int(n), _ptr(inputs), _ptr(outputs), _ptr(states))
+        return outputs, states
+
+    def step(self, state: np.ndarray, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(state_next, output) of one step from ``state``."""
+        state = np.ascontiguousarray(state, dtype=np.float64)
+        inputs = np.ascontiguousarray(inputs, dtype=np.float64)
+        state_out = np.zeros(len(self.estimator.states))
+        output = np.zeros(len(self.estimator.outputs))
+        self.library.vse_harness_step(_ptr(state), _ptr(inputs), _ptr(state_out), _ptr(output))
+        return state_out, output
+
+
+def _ptr(array: np.ndarray):
+    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def load_estimator(estimator: Estimator, files: dict[str, str]) -> CEstimator:
+    """Compile ``files`` (a generated folder's content) with the runner and load it."""
+    library_path = build_library(files, {"vse_harness_runner.c": runner_source(estimator)})
+    library = ctypes.CDLL(str(library_path))
+    library.vse_harness_run.restype = None
+    library.vse_harness_step.restype = None
+    return CEstimator(estimator, library)

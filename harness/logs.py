@@ -1,0 +1,175 @@
+"""Logs: the CSV format of design.md ("Log format"), for simulated and recorded logs alike.
+
+A :class:`Log` is a set of equally long float columns with a constant sample time. The reader
+rejects bad files with :class:`LogError`, one line naming the file, the line, the column and what
+was expected. NaN is accepted in the sensor columns (estimators hold on it and report
+INVALID_INPUT), never in ``t``. The writer writes to a temporary name and renames on success, so no
+partial file is left behind.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+REQUIRED = ("t", "delta", "vx", "ax", "ay", "r")
+"""Required input columns (design.md)."""
+OPTIONAL_INPUTS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr", "mz")
+TRUTH = ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu")
+"""Optional ground truth, used only for scoring."""
+
+UNIT_LIMITS = {
+    "delta": (1.0, "rad (a front road-wheel angle above 1 rad looks like degrees or steering-wheel angle)"),
+    "vx": (150.0, "m/s (a speed above 150 m/s looks like km/h)"),
+    "ax": (100.0, "m/s^2 (above 100 m/s^2 looks like the wrong unit)"),
+    "ay": (100.0, "m/s^2 (above 100 m/s^2 looks like the wrong unit)"),
+    "r": (10.0, "rad/s (a yaw rate above 10 rad/s looks like deg/s)"),
+}
+"""Range checks that catch wrong units: |value| above the limit is rejected."""
+SAMPLE_TIME_JITTER = 1e-3
+"""Allowed relative deviation of any time step from the mean step."""
+
+
+class LogError(ValueError):
+    """A log file is wrong; the message is one line naming file, line and column."""
+
+
+@dataclass
+class Log:
+    """Columns of a log by name (all float arrays of one length), in file order."""
+
+    columns: dict[str, np.ndarray]
+    source: str = "<memory>"
+
+    def __len__(self) -> int:
+        return len(self.columns["t"])
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    def __contains__(self, name: str) -> bool:
+        return name in self.columns
+
+    @property
+    def sample_time(self) -> float:
+        """Mean time step in s."""
+        t = self.columns["t"]
+        return float((t[-1] - t[0]) / (len(t) - 1))
+
+    def matrix(self, names: tuple[str, ...]) -> np.ndarray:
+        """The named columns side by side, shape (samples, len(names))."""
+        return np.column_stack([self.columns[n] for n in names]).astype(float)
+
+
+def write_log(log: Log, path: Path) -> None:
+    """Write ``log`` as CSV (17 significant digits, round-trips exactly), atomically."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    names = list(log.columns)
+    writer.writerow(names)
+    for row in zip(*(log.columns[n] for n in names)):
+        writer.writerow([_format(v) for v in row])
+    write_text_atomic(Path(path), buffer.getvalue())
+
+
+def write_text_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to a temporary file next to ``path`` and rename it into place."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "w", newline="") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _format(value: float) -> str:
+    return "nan" if math.isnan(value) else format(float(value), ".17g")
+
+
+def read_log(path: Path, required: tuple[str, ...] = REQUIRED) -> Log:
+    """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem."""
+    source = str(path)
+    try:
+        raw = Path(path).read_bytes()
+    except OSError as exc:
+        raise LogError(f"{source}: cannot read: {exc.strerror}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise LogError(f"{source}:1: not a text file: expected UTF-8 CSV with a header row") from None
+    if "\x00" in text:
+        raise LogError(f"{source}:1: not a text file: expected UTF-8 CSV with a header row")
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows or not any(cell.strip() for cell in rows[0]):
+        raise LogError(f"{source}:1: empty file: expected a header row with columns {', '.join(required)}")
+    header = [cell.strip() for cell in rows[0]]
+    for name in header:
+        if header.count(name) > 1:
+            raise LogError(f"{source}:1: column '{name}' appears twice: expected unique column names")
+    for name in required:
+        if name not in header:
+            raise LogError(f"{source}:1: missing column '{name}': expected the columns "
+                           f"{', '.join(required)} (found {', '.join(header)})")
+    data = [row for row in rows[1:]]
+    while data and not any(cell.strip() for cell in data[-1]):
+        data.pop()
+    if len(data) < 2:
+        raise LogError(f"{source}:{len(data) + 2}: only {len(data)} data row(s): expected at least 2")
+    values = np.empty((len(data), len(header)))
+    for index, row in enumerate(data):
+        line = index + 2
+        if len(row) != len(header):
+            raise LogError(f"{source}:{line}: {len(row)} cells: expected {len(header)} (one per "
+                           f"header column; is the file truncated?)")
+        for col, cell in enumerate(row):
+            values[index, col] = _parse(cell, source, line, header[col])
+    log = Log({name: values[:, i].copy() for i, name in enumerate(header)}, source)
+    _check_time(log["t"], source)
+    for name, (limit, unit) in UNIT_LIMITS.items():
+        if name in log:
+            column = log[name]
+            bad = np.flatnonzero(np.abs(np.nan_to_num(column, nan=0.0)) > limit)
+            if bad.size:
+                i = int(bad[0])
+                raise LogError(f"{source}:{i + 2}: column '{name}' = {column[i]!r}: expected "
+                               f"|{name}| <= {limit} {unit}")
+    return log
+
+
+def _parse(cell: str, source: str, line: int, column: str) -> float:
+    text = cell.strip()
+    try:
+        value = float(text)
+    except ValueError:
+        shown = text if len(text) <= 30 else text[:27] + "..."
+        raise LogError(f"{source}:{line}: column '{column}': {shown!r} is not a number: expected a "
+                       f"decimal number (write nan for a missing sample)") from None
+    if column == "t" and not math.isfinite(value):
+        raise LogError(f"{source}:{line}: column 't' = {text}: expected a finite time in s")
+    return value
+
+
+def _check_time(t: np.ndarray, source: str) -> None:
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise LogError(f"{source}:{i + 2}: column 't' = {t[i]!r} after {t[i - 1]!r}: expected "
+                       f"strictly increasing time")
+    mean = (t[-1] - t[0]) / (len(t) - 1)
+    off = np.flatnonzero(np.abs(steps - mean) > SAMPLE_TIME_JITTER * mean)
+    if off.size:
+        i = int(off[0]) + 1
+        raise LogError(f"{source}:{i + 2}: column 't': step {steps[i - 1]!r} s: expected a constant "
+                       f"sample time of {mean:.6g} s (within {SAMPLE_TIME_JITTER:.0e} relative)")

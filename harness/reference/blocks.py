@@ -1,0 +1,77 @@
+"""Reference building blocks in plain NumPy/SciPy: the bicycle model, discretisation, the Kalman
+filter and the shared input-hold rule (shared/methods/README.md; 000-switch-sideslip.md §2.5, §2.10).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping
+
+import numpy as np
+import scipy.linalg
+
+LOW_SPEED = 1
+INVALID_INPUT = 2
+LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max"}
+
+
+def bicycle(vehicle: Mapping[str, float], vx: float):
+    """A(vx), B, C(vx), D of the linear 2-DOF model, positive stiffness, x = [vy, r], y = [ay, r]."""
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    cf, cr = vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]
+    A = np.array([
+        [-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx) - vx],
+        [(b * cr - a * cf) / (iz * vx), -(a * a * cf + b * b * cr) / (iz * vx)],
+    ])
+    B = np.array([[cf / m], [a * cf / iz]])
+    C = np.array([
+        [-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx)],
+        [0.0, 1.0],
+    ])
+    D = np.array([[cf / m], [0.0]])
+    return A, B, C, D
+
+
+def discretise(method: str, A: np.ndarray, B: np.ndarray, T: float):
+    """Phi, Gamma: "euler", "tustin" (bilinear) or "zoh" (augmented matrix exponential)."""
+    n = A.shape[0]
+    if method == "euler":
+        return np.eye(n) + A * T, B * T
+    if method == "tustin":
+        left = np.eye(n) - A * T / 2
+        return np.linalg.solve(left, np.eye(n) + A * T / 2), np.linalg.solve(left, B * T)
+    if method == "zoh":
+        augmented = np.zeros((n + B.shape[1], n + B.shape[1]))
+        augmented[:n, :n] = A
+        augmented[:n, n:] = B
+        E = scipy.linalg.expm(augmented * T)
+        return E[:n, :n], E[:n, n:]
+    raise ValueError(method)
+
+
+def kf_predict(x, P, Phi, Gamma, u, Qd):
+    return Phi @ x + Gamma @ u, Phi @ P @ Phi.T + Qd
+
+
+def kf_update(x, P, z, C, D, u, R):
+    """Joseph-form measurement update."""
+    nu = z - C @ x - D @ u
+    S = C @ P @ C.T + R
+    K = P @ C.T @ np.linalg.inv(S)
+    I_KC = np.eye(len(x)) - K @ C
+    return x + K @ nu, I_KC @ P @ I_KC.T + K @ R @ K.T
+
+
+def plausible(limits: Mapping[str, float], name: str, value: float) -> bool:
+    """Finite and within its [inputs] limit."""
+    return math.isfinite(value) and abs(value) <= limits[LIMIT_OF[name]]
+
+
+def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float, holding: bool):
+    """(active, status, plausible-by-name) per the project's low-speed / invalid-input rule."""
+    ok = {name: plausible(limits, name, value) for name, value in inputs.items()}
+    vx = inputs["vx"]
+    low = ok["vx"] and (vx < vx_min or (holding and vx < vx_resume))
+    status = (0 if all(ok.values()) else INVALID_INPUT) | (LOW_SPEED if low else 0)
+    return all(ok.values()) and not low, status, ok

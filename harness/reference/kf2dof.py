@@ -1,0 +1,66 @@
+"""Reference kf2dof: 2-DOF bicycle model + linear Kalman filter (000-switch-sideslip.md §2.5,
+§2.8-2.10, run alone), the project's hold rule, ZOH prediction with the previous sample's inputs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from harness.reference import blocks
+
+INPUTS = ("delta", "vx", "ay", "r")
+STATES = ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding")
+OUTPUTS = ("beta", "vy", "r", "status")
+
+
+def _settings(config):
+    return config.settings("kf2dof")
+
+
+def init(config, u0) -> np.ndarray:
+    s = _settings(config)
+    inputs = dict(zip(INPUTS, u0))
+    active, _, ok = blocks.hold_rule(config.limits, inputs, s["vx_resume"], s["vx_resume"], True)
+    P0 = np.array(s["initial_covariance"])
+    return np.array([
+        0.0,
+        inputs["r"] if ok["r"] else 0.0,
+        P0[0, 0], P0[0, 1], P0[1, 1],
+        inputs["delta"] if ok["delta"] else 0.0,
+        inputs["vx"] if ok["vx"] else s["vx_min"],
+        0.0 if active else 1.0,
+    ])
+
+
+def step(config, state, u):
+    s = _settings(config)
+    T = config.sample_time
+    vx_max = config.limits["vx_max"]
+    inputs = dict(zip(INPUTS, u))
+    vy, r, p11, p12, p22, delta_prev, vx_prev, holding = state
+    active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                         holding > 0.5)
+    delta_keep = inputs["delta"] if ok["delta"] else delta_prev
+    vx_keep = inputs["vx"] if ok["vx"] else vx_prev
+    if not active:
+        P0 = np.array(s["initial_covariance"])
+        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep, 1.0])
+        return new, np.array([0.0, 0.0, r, float(status)])
+
+    def clamp(v):
+        return min(max(v, s["vx_min"]), vx_max)
+
+    A, B, _, _ = blocks.bicycle(config.vehicle, clamp(vx_prev))
+    Phi, Gamma = blocks.discretise(s["discretisation"], A, B, T)
+    Qd = np.array(s["process_noise"]) * T
+    x = np.array([vy, r])
+    P = np.array([[p11, p12], [p12, p22]])
+    x, P = blocks.kf_predict(x, P, Phi, Gamma, np.array([delta_prev]), Qd)
+    vx = clamp(inputs["vx"])
+    _, _, C, D = blocks.bicycle(config.vehicle, vx)
+    z = np.array([inputs["ay"], inputs["r"]])
+    x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
+    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, 0.0])
+    return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

@@ -1,0 +1,71 @@
+"""Equivalence of generated C and the NumPy reference over the verification scenarios."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.compare import RELATIVE_TOLERANCE, Difference, difference
+from harness.reference import REFERENCES
+from harness.reference.run import run_reference
+from harness.scenarios import VERIFICATION_SET, Case
+from model.estimators import build
+from model.params import VehicleConfig
+
+
+class LayoutMismatch(RuntimeError):
+    """The reference and the symbolic model disagree on a vector layout."""
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    estimator: str
+    case: str
+    samples: int
+    outputs: tuple[Difference, ...]
+    states: Difference
+    """Worst case over all state entries."""
+
+    @property
+    def ok(self) -> bool:
+        return self.states.ok and all(d.ok for d in self.outputs)
+
+
+def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
+                     seed: int = 1, real: str = "double", progress=None) -> list[CaseResult]:
+    """Build ``name`` for ``config``, run C and reference over ``cases``, compare step by step."""
+    estimator = build(name, config)
+    reference = REFERENCES[name]
+    for label, model_layout, ref_names in (("inputs", estimator.inputs, reference.INPUTS),
+                                           ("states", estimator.states, reference.STATES),
+                                           ("outputs", estimator.outputs, reference.OUTPUTS)):
+        if tuple(model_layout.names) != tuple(ref_names):
+            raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
+    compiled = load_estimator(estimator, render(config, name, real))
+    tolerance = RELATIVE_TOLERANCE[real]
+    results = []
+    for case in cases:
+        log = case.simulate(config, 1.0 / config.sample_time, seed)
+        inputs = log.matrix(estimator.inputs.names)
+        c_out, c_states = compiled.run(inputs)
+        r_out, r_states = run_reference(reference, config, inputs)
+        outputs = tuple(
+            difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer)
+            for i, s in enumerate(estimator.outputs.signals)
+        )
+        states = difference("state (all entries)", c_states, r_states, tolerance)
+        results.append(CaseResult(name, case.label, len(log), outputs, states))
+        if progress:
+            progress()
+    return results
+
+
+def worst(results: list[CaseResult]) -> dict[str, float]:
+    """Worst relative difference per output name over all results (non-integer outputs)."""
+    table: dict[str, float] = {}
+    for result in results:
+        for d in (*result.outputs, result.states):
+            if not d.integer:
+                table[d.name] = max(table.get(d.name, 0.0), d.max_rel)
+    return table

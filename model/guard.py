@@ -1,0 +1,63 @@
+"""The input guard shared by all estimators: plausibility, low-speed hysteresis, status.
+
+Rule (design.md, "Generated C"; shared/methods/README.md, "Low speed / invalid input"):
+
+* an input is *plausible* when |value| <= its limit from ``[inputs]``. The comparison is false for
+  NaN and +-Inf, so one test rejects non-finite and out-of-range values alike (do not compile the C
+  with -ffast-math, which breaks NaN comparisons);
+* *low speed*: vx < vx_min, or vx < vx_resume while the estimator is still holding (hysteresis);
+* the estimator is *active* when every input is plausible and the speed is not low; otherwise it
+  holds (each estimator says what it holds and resets) and reports the status bits.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Mapping
+
+import casadi as ca
+
+from model import status
+
+LIMIT_KEYS = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max"}
+"""Which ``[inputs]`` limit bounds which log column."""
+
+
+@dataclass(frozen=True)
+class Guard:
+    plausible: dict[str, ca.SX]
+    active: ca.SX
+    status: ca.SX
+
+
+def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
+                vx_resume: float, holding: ca.SX) -> Guard:
+    """Plausibility of every input, activity and status bits for one sample.
+
+    Args:
+        inputs: the sample's inputs by log column name (must include ``vx``).
+        limits: the ``[inputs]`` table.
+        vx_min, vx_resume: low-speed limit and resume speed (m/s).
+        holding: 1 if the estimator held at the previous sample, else 0.
+    """
+    plausible = {name: ca.fabs(value) <= limits[LIMIT_KEYS[name]] for name, value in inputs.items()}
+    all_plausible = _all(plausible.values())
+    vx = inputs["vx"]
+    low_speed = ca.logic_and(plausible["vx"],
+                             ca.logic_or(vx < vx_min, ca.logic_and(holding, vx < vx_resume)))
+    active = ca.logic_and(all_plausible, ca.logic_not(low_speed))
+    code = (ca.if_else(all_plausible, 0, status.INVALID_INPUT)
+            + ca.if_else(low_speed, status.LOW_SPEED, 0))
+    return Guard(plausible, active, code)
+
+
+def hold(value: ca.SX, accept: ca.SX, previous: ca.SX) -> ca.SX:
+    """``value`` where ``accept`` holds, else ``previous`` (never evaluates to the rejected value)."""
+    return ca.if_else(accept, value, previous)
+
+
+def _all(flags) -> ca.SX:
+    result = None
+    for flag in flags:
+        result = flag if result is None else ca.logic_and(result, flag)
+    return result

@@ -1,0 +1,218 @@
+"""Vehicle files: parse, validate and canonicalise.
+
+A vehicle file is TOML text (see ``vehicles/c_class.toml``). This module turns that text into a
+frozen :class:`VehicleConfig` or raises :class:`ParameterError` whose message is one line naming
+the file, the line, the key, the offending value and what was expected. It is pure: the caller reads
+the file and passes its text (``model/`` does no I/O).
+
+Units are SI throughout; every field states its unit in :mod:`model.schema`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from model.schema import ESTIMATOR_SCHEMAS, INPUT_LIMITS, SAMPLING, VEHICLE, Field, Invalid
+
+WHEELBASE_TOLERANCE = 1e-3
+"""Allowed |a + b - l| in metres."""
+
+
+class ParameterError(ValueError):
+    """A vehicle file is wrong; the message is one line: ``file:line: [table] key = value: expected ...``."""
+
+
+@dataclass(frozen=True)
+class VehicleConfig:
+    """A validated vehicle file.
+
+    Attributes:
+        name: vehicle name (the file stem), used for folder and symbol naming.
+        source: where the text came from (for messages only).
+        vehicle: physical parameters, SI units, keys of :data:`model.schema.VEHICLE`.
+        limits: plausibility limits of the inputs shared by all estimators.
+        sample_time: estimator sample time T in s.
+        estimators: per estimator name, its validated settings.
+    """
+
+    name: str
+    source: str
+    vehicle: Mapping[str, float]
+    limits: Mapping[str, float]
+    sample_time: float
+    estimators: Mapping[str, Mapping[str, Any]]
+
+    def settings(self, estimator: str) -> Mapping[str, Any]:
+        """Settings of one estimator; raises ParameterError if the file has none."""
+        if estimator not in self.estimators:
+            raise ParameterError(
+                f"{self.source}: no [estimator.{estimator}] table: expected one of "
+                f"{sorted(self.estimators)}"
+            )
+        return self.estimators[estimator]
+
+    def with_sample_time(self, sample_time: float) -> "VehicleConfig":
+        """The same vehicle for another sample time (e.g. that of a log)."""
+        value = SAMPLING[0].check(sample_time)
+        return VehicleConfig(self.name, self.source, self.vehicle, self.limits, value, self.estimators)
+
+    def canonical(self, estimator: str) -> dict[str, Any]:
+        """Everything that determines ``estimator``'s generated code, as plain sorted data."""
+        return {
+            "vehicle_name": self.name,
+            "vehicle": dict(sorted(self.vehicle.items())),
+            "inputs": dict(sorted(self.limits.items())),
+            "sample_time": self.sample_time,
+            "estimator": estimator,
+            "settings": _plain(self.settings(estimator)),
+        }
+
+    def parameter_hash(self, estimator: str) -> str:
+        """SHA-256 (hex) of :meth:`canonical` serialised as sorted JSON with exact float reprs."""
+        text = json.dumps(self.canonical(estimator), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
+    """Validate the TOML ``text`` of a vehicle file.
+
+    Args:
+        text: the file's content.
+        source: the file's path as the user named it (used in messages).
+        name: the vehicle name (normally the file stem).
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{source}: not valid TOML: {exc}") from None
+    where = _Locator(text, source)
+    _reject_unknown(data, {"vehicle", "inputs", "estimator"}, (), where)
+    vehicle = _table(data, ("vehicle",), VEHICLE, where)
+    _check_wheelbase(vehicle, where)
+    limits = _table(data, ("inputs",), INPUT_LIMITS, where)
+    estimator_data = data.get("estimator")
+    if not isinstance(estimator_data, dict):
+        raise ParameterError(f"{where.at(('estimator',))}: missing table [estimator]: expected "
+                             f"sample_time and one [estimator.<name>] table per estimator")
+    _reject_unknown(estimator_data, {"sample_time", *ESTIMATOR_SCHEMAS}, ("estimator",), where)
+    sampling = _fields(estimator_data, ("estimator",), SAMPLING, where)
+    estimators = {}
+    for est_name, schema in ESTIMATOR_SCHEMAS.items():
+        if est_name in estimator_data:
+            settings = _table(data, ("estimator", est_name), schema.fields, where)
+            for rule in schema.rules:
+                problem = rule.check(settings)
+                if problem:
+                    raise ParameterError(f"{where.at(('estimator', est_name, rule.key))}: "
+                                         f"[estimator.{est_name}] {problem}")
+            estimators[est_name] = MappingProxyType(settings)
+    if not estimators:
+        raise ParameterError(f"{where.at(('estimator',))}: no estimator settings: expected at least "
+                             f"one of {', '.join(f'[estimator.{n}]' for n in ESTIMATOR_SCHEMAS)}")
+    return VehicleConfig(
+        name=name,
+        source=source,
+        vehicle=MappingProxyType(vehicle),
+        limits=MappingProxyType(limits),
+        sample_time=sampling["sample_time"],
+        estimators=MappingProxyType(estimators),
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# validation helpers
+
+
+def _table(data: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: "_Locator") -> dict:
+    node: Any = data
+    for part in path:
+        if not isinstance(node, dict) or part not in node:
+            raise ParameterError(f"{where.at(path)}: missing table [{'.'.join(path)}]: expected keys "
+                                 f"{', '.join(f.key for f in fields)}")
+        node = node[part]
+    if not isinstance(node, dict):
+        raise ParameterError(f"{where.at(path)}: [{'.'.join(path)}] is not a table")
+    _reject_unknown(node, {f.key for f in fields}, path, where)
+    return _fields(node, path, fields, where)
+
+
+def _fields(node: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: "_Locator") -> dict:
+    values = {}
+    table = ".".join(path)
+    for field in fields:
+        if field.key not in node:
+            raise ParameterError(f"{where.at(path)}: [{table}] missing key '{field.key}': expected "
+                                 f"{field.expected}")
+        try:
+            values[field.key] = field.check(node[field.key])
+        except Invalid as exc:
+            raise ParameterError(f"{where.at((*path, field.key))}: [{table}] {field.key} = "
+                                 f"{_show(node[field.key])}: expected {exc}") from None
+    return values
+
+
+def _reject_unknown(node: dict, allowed: set[str], path: tuple[str, ...], where: "_Locator") -> None:
+    for key in node:
+        if key not in allowed:
+            table = f"[{'.'.join(path)}] " if path else ""
+            raise ParameterError(f"{where.at((*path, key))}: {table}unknown key '{key}': expected one "
+                                 f"of {', '.join(sorted(allowed))}")
+
+
+def _check_wheelbase(vehicle: dict, where: "_Locator") -> None:
+    a, b, l = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], vehicle["wheelbase"]
+    if abs(a + b - l) > WHEELBASE_TOLERANCE:
+        raise ParameterError(
+            f"{where.at(('vehicle', 'wheelbase'))}: [vehicle] wheelbase = {l!r}: expected "
+            f"cg_to_front_axle + cg_to_rear_axle = {a + b!r} m within {WHEELBASE_TOLERANCE} m"
+        )
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in sorted(value.items())}
+    if isinstance(value, (tuple, list)):
+        return [_plain(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError("non-finite value in a validated configuration")
+    return value
+
+
+class _Locator:
+    """Finds the line of a table or key in TOML text, for messages (best effort, 1-based)."""
+
+    _HEADER = re.compile(r"^\s*\[\s*([A-Za-z0-9_.\- ]+?)\s*\]\s*(#.*)?$")
+    _KEY = re.compile(r"^\s*([A-Za-z0-9_\-]+)\s*=")
+
+    def __init__(self, text: str, source: str) -> None:
+        self.source = source
+        self.lines: dict[tuple[str, ...], int] = {}
+        table: tuple[str, ...] = ()
+        for number, line in enumerate(text.splitlines(), start=1):
+            header = self._HEADER.match(line)
+            if header:
+                table = tuple(p.strip() for p in header.group(1).split("."))
+                self.lines.setdefault(table, number)
+                continue
+            key = self._KEY.match(line)
+            if key:
+                self.lines.setdefault((*table, key.group(1)), number)
+
+    def at(self, path: tuple[str, ...]) -> str:
+        """``source:line`` of the longest known prefix of ``path`` (``source`` alone if none)."""
+        for end in range(len(path), 0, -1):
+            if path[:end] in self.lines:
+                return f"{self.source}:{self.lines[path[:end]]}"
+        return self.source

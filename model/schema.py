@@ -1,0 +1,170 @@
+"""What a vehicle file may contain: every key, its unit, its check and its meaning.
+
+This is the single source of truth for parameter names and their validation. Adding an estimator
+adds one :class:`EstimatorSchema` to :data:`ESTIMATOR_SCHEMAS`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+
+class Invalid(ValueError):
+    """A value failed its check; the message says what was expected."""
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key of a table: ``check`` returns the normalised value or raises :class:`Invalid`."""
+
+    key: str
+    expected: str
+    check: Callable[[Any], Any]
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A check across keys of one table; ``check`` returns a message (``key = value: expected ...``) or ''."""
+
+    key: str
+    check: Callable[[Mapping[str, Any]], str]
+
+
+@dataclass(frozen=True)
+class EstimatorSchema:
+    fields: tuple[Field, ...]
+    rules: tuple[Rule, ...] = field(default_factory=tuple)
+
+
+def _number(value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise Invalid("a number")
+    value = float(value)
+    if not math.isfinite(value):
+        raise Invalid("a finite number")
+    return value
+
+
+def positive(key: str, unit: str, doc: str = "") -> Field:
+    """A finite number > 0 in ``unit``."""
+    expected = f"a finite number > 0 ({unit})"
+
+    def check(value: Any) -> float:
+        try:
+            number = _number(value)
+        except Invalid:
+            raise Invalid(expected) from None
+        if number <= 0.0:
+            raise Invalid(expected)
+        return number
+
+    return Field(key, expected, check, doc)
+
+
+def choice(key: str, options: tuple[str, ...], doc: str = "") -> Field:
+    """One of a fixed set of strings."""
+    expected = "one of " + ", ".join(f'"{o}"' for o in options)
+
+    def check(value: Any) -> str:
+        if value not in options:
+            raise Invalid(expected)
+        return value
+
+    return Field(key, expected, check, doc)
+
+
+def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
+    """A symmetric positive-definite ``size``×``size`` matrix, written either as the list of its
+    ``size`` diagonal entries or in full as a list of rows. Normalised to a tuple of row tuples."""
+    expected = (f"a symmetric positive-definite {size}x{size} matrix ({unit}): a list of {size} "
+                f"positive diagonal entries or {size} rows of {size} numbers")
+
+    def check(value: Any) -> tuple[tuple[float, ...], ...]:
+        if not isinstance(value, list) or len(value) != size:
+            raise Invalid(expected)
+        try:
+            if all(isinstance(row, list) for row in value):
+                if any(len(row) != size for row in value):
+                    raise Invalid(expected)
+                matrix = np.array([[_number(v) for v in row] for row in value])
+            else:
+                matrix = np.diag([_number(v) for v in value])
+        except Invalid:
+            raise Invalid(expected) from None
+        if not np.array_equal(matrix, matrix.T):
+            raise Invalid(expected + " (it is not symmetric)")
+        if np.min(np.linalg.eigvalsh(matrix)) <= 0.0:
+            raise Invalid(expected + " (it is not positive definite)")
+        return tuple(tuple(float(v) for v in row) for row in matrix)
+
+    return Field(key, expected, check, doc)
+
+
+# ------------------------------------------------------------------------------------------------
+# [vehicle]: physical parameters (names fixed: other tools depend on them)
+
+VEHICLE: tuple[Field, ...] = (
+    positive("mass", "kg", "vehicle mass m"),
+    positive("yaw_inertia", "kg*m^2", "yaw moment of inertia I_z"),
+    positive("cg_to_front_axle", "m", "a, CG to front axle"),
+    positive("cg_to_rear_axle", "m", "b, CG to rear axle"),
+    positive("wheelbase", "m", "l = a + b"),
+    positive("cornering_stiffness_front", "N/rad", "C_f, front axle (both tyres), positive"),
+    positive("cornering_stiffness_rear", "N/rad", "C_r, rear axle (both tyres), positive"),
+    positive("wheel_radius", "m", "effective rolling radius R_eff"),
+    positive("track_width", "m", "track width (front = rear)"),
+    positive("cg_height", "m", "CG height above ground"),
+)
+
+# [inputs]: plausibility limits shared by all estimators. A finite input inside its limit is
+# plausible; anything else (NaN, +-Inf, beyond the limit) is rejected with status INVALID_INPUT.
+INPUT_LIMITS: tuple[Field, ...] = (
+    positive("vx_max", "m/s", "largest plausible |vx|"),
+    positive("delta_max", "rad", "largest plausible |delta| (front road-wheel angle)"),
+    positive("ax_max", "m/s^2", "largest plausible |ax|"),
+    positive("ay_max", "m/s^2", "largest plausible |ay|"),
+    positive("r_max", "rad/s", "largest plausible |r|"),
+)
+
+# [estimator]: common to all estimators of the file
+SAMPLING: tuple[Field, ...] = (
+    positive("sample_time", "s", "estimator sample time T (0.01 s = 100 Hz by default)"),
+)
+
+DISCRETISATIONS = ("euler", "tustin", "zoh")
+
+
+def _resume_above_min(settings: Mapping[str, Any]) -> str:
+    if settings["vx_resume"] <= settings["vx_min"]:
+        return (f"vx_resume = {settings['vx_resume']!r}: expected a speed above "
+                f"vx_min = {settings['vx_min']!r} m/s (hysteresis)")
+    return ""
+
+
+LOW_SPEED_FIELDS: tuple[Field, ...] = (
+    positive("vx_min", "m/s", "below this speed the estimator holds (status LOW_SPEED)"),
+    positive("vx_resume", "m/s", "after a low-speed hold, resume at or above this speed"),
+)
+LOW_SPEED_RULES: tuple[Rule, ...] = (Rule("vx_resume", _resume_above_min),)
+
+KF2DOF = EstimatorSchema(
+    fields=(
+        choice("discretisation", DISCRETISATIONS, "method turning A, B into Phi, Gamma"),
+        spd_matrix("process_noise", 2, "continuous PSD of [vy, r]: (m/s^2)^2*s, (rad/s^2)^2*s",
+                   "Q_c; the discrete Q_d = Q_c*T"),
+        spd_matrix("measurement_noise", 2, "[ay, r]: (m/s^2)^2, (rad/s)^2", "R"),
+        spd_matrix("initial_covariance", 2, "[vy, r]: (m/s)^2, (rad/s)^2",
+                   "P_0, also the covariance after a low-speed or invalid-input hold"),
+        *LOW_SPEED_FIELDS,
+    ),
+    rules=LOW_SPEED_RULES,
+)
+
+ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
+    "kf2dof": KF2DOF,
+}

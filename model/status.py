@@ -1,0 +1,9 @@
+"""Status bits every estimator reports in its ``status`` output (an integer, bits OR-ed)."""
+
+OK = 0
+LOW_SPEED = 1
+"""vx below the low-speed limit (or not yet back above the resume speed): estimator holds."""
+INVALID_INPUT = 2
+"""An input was NaN, +-Inf or beyond its plausibility limit: estimator holds, the input is ignored."""
+
+STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT}
