@@ -1,0 +1,34 @@
+"""Shared fixtures: the default vehicle, its text, and a helper to write variants of it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from harness.paths import DEFAULT_VEHICLE
+from harness.vehicles import load_vehicle
+
+
+@pytest.fixture(scope="session")
+def config():
+    return load_vehicle(DEFAULT_VEHICLE)
+
+
+@pytest.fixture(scope="session")
+def vehicle_text() -> str:
+    return DEFAULT_VEHICLE.read_text()
+
+
+@pytest.fixture
+def write_vehicle(tmp_path: Path, vehicle_text: str):
+    """Write the default vehicle file with ``old`` replaced by ``new``; returns the path."""
+
+    def write(old: str = "", new: str = "", name: str = "variant.toml") -> Path:
+        if old and old not in vehicle_text:
+            raise AssertionError(f"fixture text not found: {old!r}")
+        path = tmp_path / name
+        path.write_text(vehicle_text.replace(old, new, 1) if old else vehicle_text)
+        return path
+
+    return write
