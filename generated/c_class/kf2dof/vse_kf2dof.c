@@ -44,7 +44,14 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
     res[0] = next.x;
     res[1] = y;
     (void)vse_kf2dof_kernel_step(arg, res, 0, 0, 0);
-    *state = next;
+    state->x[0] = next.x[0];
+    state->x[1] = next.x[1];
+    state->x[2] = next.x[2];
+    state->x[3] = next.x[3];
+    state->x[4] = next.x[4];
+    state->x[5] = next.x[5];
+    state->x[6] = next.x[6];
+    state->x[7] = next.x[7];
     out->beta = y[0];
     out->vy = y[1];
     out->r = y[2];

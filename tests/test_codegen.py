@@ -1,0 +1,99 @@
+"""Generated C: byte-identical, traceable, warning-free on gcc and clang, no heap, fresh."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from codegen.generate import check, render, write
+from harness.build import WARNING_FLAGS
+from harness.paths import GENERATED
+
+COMPILERS = ["gcc", "clang"]
+ALLOWED_UNDEFINED = {"atan2", "fabs", "fmax", "fmin", "sqrt", "sin", "cos", "exp", "log", "tan"}
+"""libm functions the generated objects may call; anything else (malloc, printf, ...) fails."""
+
+
+@pytest.fixture(scope="module")
+def files(config):
+    return render(config, "kf2dof")
+
+
+def test_regeneration_is_byte_identical(config, files):
+    assert render(config, "kf2dof") == files
+
+
+def test_checked_in_folder_is_fresh(config, files):
+    assert check(files, GENERATED / "c_class" / "kf2dof", "generated") == []
+
+
+def test_every_file_is_traceable_and_marked(config, files):
+    assert set(files) == {"vse_kf2dof.h", "vse_kf2dof.c", "vse_kf2dof_kernel.c", "vse_kf2dof_kernel.h"}
+    for name, text in files.items():
+        head = text[:1500]
+        assert "DO NOT EDIT" in head
+        assert config.parameter_hash("kf2dof") in head
+        assert "Vehicle c_class" in head
+        assert re.search(r"Operations: step \d+, init \d+", head)
+        assert "template " in head or "CasADi CodeGenerator" in head
+        assert str(Path.home()) not in text and "/tmp" not in text and "/work" not in text
+        assert not re.search(r"20\d\d-\d\d-\d\d", text), "no dates in generated files"
+
+
+def test_parameter_change_changes_code(config, files):
+    other = render(config.with_sample_time(0.001), "kf2dof")
+    assert other["vse_kf2dof_kernel.c"] != files["vse_kf2dof_kernel.c"]
+
+
+def _require(tool: str) -> str:
+    path = shutil.which(tool)
+    if path is None:
+        if os.environ.get("CI"):
+            pytest.fail(f"{tool} is required in CI (install it with .ci/install)")
+        pytest.skip(f"{tool} not installed")
+    return path
+
+
+@pytest.mark.parametrize("cc", COMPILERS)
+@pytest.mark.parametrize("opt", ["-O0", "-O2"])
+def test_compiles_warning_free_without_heap(tmp_path, files, cc, opt):
+    compiler = _require(cc)
+    write(files, tmp_path)
+    for source in ("vse_kf2dof.c", "vse_kf2dof_kernel.c"):
+        obj = tmp_path / (source + ".o")
+        result = subprocess.run([compiler, *WARNING_FLAGS, opt, "-c", source, "-o", str(obj)],
+                                cwd=tmp_path, capture_output=True, text=True)
+        assert result.returncode == 0 and result.stderr == "", result.stderr
+        undefined = subprocess.run(["nm", "-u", str(obj)], capture_output=True, text=True).stdout
+        symbols = {line.split()[-1] for line in undefined.splitlines() if line.strip()}
+        symbols -= {"vse_kf2dof_kernel_init", "vse_kf2dof_kernel_step"}
+        assert symbols <= ALLOWED_UNDEFINED, f"unexpected symbols in {source}: {symbols - ALLOWED_UNDEFINED}"
+
+
+def test_header_is_self_contained_and_cpp_compatible(tmp_path, files):
+    compiler = _require("g++")
+    write(files, tmp_path)
+    (tmp_path / "use.cpp").write_text('#include "vse_kf2dof.h"\nint main() { vse_kf2dof_state s; '
+                                      "(void)s; return VSE_KF2DOF_N_STATE == 8 ? 0 : 1; }\n")
+    result = subprocess.run([compiler, "-Wall", "-Wextra", "-Werror", "-c", "use.cpp"], cwd=tmp_path,
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+def test_check_reports_a_stale_file_with_a_diff(tmp_path, files):
+    write(files, tmp_path)
+    path = tmp_path / "vse_kf2dof.c"
+    path.write_text(path.read_text().replace("pack_input(in, u);", "pack_input(in, u); /* edit */"))
+    (tmp_path / "stray.c").write_text("int stray;\n")
+    diffs = check(files, tmp_path, "out")
+    assert len(diffs) == 2
+    stray, edited = diffs
+    assert "--- out/stray.c" in stray and "+++ /dev/null" in stray
+    assert "--- out/vse_kf2dof.c" in edited and "-    pack_input(in, u); /* edit */" in edited
+    write(files, tmp_path)
+    assert check(files, tmp_path, "out") == []

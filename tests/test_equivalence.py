@@ -1,0 +1,75 @@
+"""Generated C equals the NumPy reference, step by step, on every verification scenario."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.compare import RELATIVE_TOLERANCE, difference
+from harness.reference import kf2dof as reference
+from harness.reference.run import run_reference
+from harness.scenarios import VERIFICATION_SET, Case
+from harness.verify import verify_estimator
+from model.estimators import build
+from model.params import parse_vehicle
+
+
+def test_verify_passes_on_every_scenario(config):
+    results = verify_estimator(config, "kf2dof")
+    assert [r.case for r in results] == [c.label for c in VERIFICATION_SET]
+    for result in results:
+        assert result.ok, result
+        assert result.samples > 600
+        for diff in result.outputs:
+            assert diff.max_rel <= RELATIVE_TOLERANCE["double"] or diff.integer
+
+
+def test_one_millisecond_sample_time(config):
+    fast = config.with_sample_time(0.001)
+    (result,) = verify_estimator(fast, "kf2dof", cases=(Case("dlc", {"speed_kmh": 80.0}),))
+    assert result.ok, result
+    assert result.samples > 9000
+
+
+@pytest.mark.parametrize("method", ["euler", "tustin"])
+def test_other_discretisations(vehicle_text, method):
+    text = vehicle_text.replace('discretisation = "zoh"', f'discretisation = "{method}"')
+    config = parse_vehicle(text, f"{method}.toml", "c_class")
+    results = verify_estimator(config, "kf2dof", cases=VERIFICATION_SET[:2] + VERIFICATION_SET[-2:])
+    assert all(r.ok for r in results), results
+
+
+def test_comparison_detects_a_wrong_parameter(config, vehicle_text):
+    """C generated with another stiffness must fail against the reference: the check has teeth."""
+    wrong = parse_vehicle(vehicle_text.replace("cornering_stiffness_rear = 96970.0",
+                                               "cornering_stiffness_rear = 96970.1"),
+                          "wrong.toml", "c_class")
+    compiled = load_estimator(build("kf2dof", wrong), render(wrong, "kf2dof"))
+    log = Case("dlc", {"speed_kmh": 80.0}).simulate(config, 100.0)
+    inputs = log.matrix(reference.INPUTS)
+    c_out, _ = compiled.run(inputs)
+    r_out, _ = run_reference(reference, config, inputs)
+    assert not difference("beta", c_out[:, 0], r_out[:, 0], RELATIVE_TOLERANCE["double"]).ok
+
+
+def test_difference_guard_and_failures():
+    tol = 1e-12
+    assert difference("x", np.array([1.0]), np.array([1.0 + 1e-13]), tol).ok
+    assert not difference("x", np.array([1.0]), np.array([1.0 + 1e-11]), tol).ok
+    # near zero the guard applies: 1e-16 apart at 1e-10 is fine, 1e-14 apart is not
+    assert difference("x", np.array([1e-10]), np.array([1e-10 + 1e-16]), tol).ok
+    assert not difference("x", np.array([1e-10]), np.array([1e-10 + 1e-14]), tol).ok
+    assert not difference("x", np.array([np.nan]), np.array([np.nan]), tol).ok
+    assert not difference("s", np.array([1.0]), np.array([2.0]), tol, integer=True).ok
+    assert difference("s", np.array([2.0]), np.array([2.0]), tol, integer=True).ok
+
+
+def test_reference_never_imports_casadi():
+    code = ("import sys; import harness.reference, harness.reference.run; "
+            "assert 'casadi' not in sys.modules, 'casadi imported'")
+    subprocess.run([sys.executable, "-c", code], check=True)

@@ -1,0 +1,107 @@
+"""Low-speed and invalid-input rule: identical in generated C and the reference, never non-finite."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.reference import kf2dof as reference
+from model import status
+from model.estimators import build
+
+NAN, INF = math.nan, math.inf
+GOOD = [0.02, 25.0, 1.5, 0.1]  # delta, vx, ay, r
+
+
+@pytest.fixture(scope="module")
+def compiled(config):
+    return load_estimator(build("kf2dof", config), render(config, "kf2dof"))
+
+
+@pytest.fixture(scope="module")
+def running_state(config):
+    """A state after a few normal steps (holding = 0)."""
+    state = reference.init(config, GOOD)
+    for _ in range(5):
+        state, _ = reference.step(config, state, GOOD)
+    assert state[-1] == 0.0
+    return state
+
+
+def both(compiled, config, state, u):
+    c_state, c_out = compiled.step(state, np.array(u, float))
+    r_state, r_out = reference.step(config, np.array(state), u)
+    np.testing.assert_array_equal(c_out[3], r_out[3])
+    np.testing.assert_allclose(c_state, r_state, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(c_out, r_out, rtol=1e-12, atol=1e-15)
+    assert np.all(np.isfinite(c_state)) and np.all(np.isfinite(c_out))
+    return c_state, c_out
+
+
+BAD_INPUTS = [
+    (0, NAN), (0, INF), (0, -INF), (0, 1.5),      # delta beyond 1 rad
+    (1, NAN), (1, INF), (1, 1e6), (1, -INF),      # vx
+    (2, NAN), (2, -INF), (2, 1e300),              # ay
+    (3, NAN), (3, INF), (3, -40.0),               # r
+]
+
+
+@pytest.mark.parametrize("index,value", BAD_INPUTS)
+def test_invalid_input_holds(compiled, config, running_state, index, value):
+    u = list(GOOD)
+    u[index] = value
+    state, out = both(compiled, config, running_state, u)
+    assert int(out[3]) & status.INVALID_INPUT
+    assert out[0] == 0.0 and out[1] == 0.0 and out[2] == running_state[1]  # beta, vy, held r
+    P0 = config.settings("kf2dof")["initial_covariance"]
+    assert list(state[2:5]) == [P0[0][0], P0[0][1], P0[1][1]]
+    # the rejected input is not stored, the others are
+    previous = {0: 5, 1: 6}
+    for i, slot in previous.items():
+        assert state[slot] == (running_state[slot] if i == index else GOOD[i])
+    assert state[-1] == 1.0
+
+
+@pytest.mark.parametrize("vx", [2.99, 1.0, 0.0, -0.0, -5.0, -89.0])
+def test_low_speed_holds(compiled, config, running_state, vx):
+    state, out = both(compiled, config, running_state, [0.02, vx, 1.5, 0.1])
+    assert int(out[3]) == status.LOW_SPEED
+    assert out[0] == 0.0 and state[0] == 0.0 and state[-1] == 1.0
+
+
+def test_hysteresis_and_resume(compiled, config, running_state):
+    state, _ = both(compiled, config, running_state, [0.0, 2.0, 0.0, 0.0])
+    state, out = both(compiled, config, state, [0.0, 3.2, 0.0, 0.0])  # above vx_min, below resume
+    assert int(out[3]) == status.LOW_SPEED
+    state, out = both(compiled, config, state, [0.0, 3.5, 0.0, 0.0])  # resume
+    assert int(out[3]) == status.OK and state[-1] == 0.0
+    state, out = both(compiled, config, state, [0.0, 3.2, 0.0, 0.0])  # running: only vx_min counts
+    assert int(out[3]) == status.OK
+
+
+def test_both_bits_when_speed_low_and_input_invalid(compiled, config, running_state):
+    _, out = both(compiled, config, running_state, [0.0, 1.0, NAN, 0.0])
+    assert int(out[3]) == status.LOW_SPEED | status.INVALID_INPUT
+
+
+@pytest.mark.parametrize("first", [GOOD, [NAN, NAN, NAN, NAN], [0.0, 1.0, 0.0, 0.0], [0, INF, 0, 5.0]])
+def test_init_accepts_anything(compiled, config, first):
+    c_states = compiled.run(np.array([first, GOOD], float))[1]
+    r_state = reference.init(config, first)
+    np.testing.assert_array_equal(c_states[0], r_state)
+    assert np.all(np.isfinite(c_states))
+
+
+def test_random_garbage_never_leaves_a_non_finite_state(compiled, config):
+    rng = np.random.default_rng(3)
+    choices = np.array([NAN, INF, -INF, 0.0, -0.0, 1e-300, 1e300, 3.0, 3.5, 25.0, -1.0, 0.5])
+    inputs = rng.choice(choices, size=(5000, 4))
+    inputs[::3, 1] = rng.uniform(-5, 60, size=inputs[::3].shape[0])
+    outputs, states = compiled.run(inputs)
+    assert np.all(np.isfinite(outputs)) and np.all(np.isfinite(states))
+    P = states[:, 2:5]
+    assert np.all(P[:, 0] > 0) and np.all(P[:, 2] > 0) and np.all(P[:, 0] * P[:, 2] - P[:, 1] ** 2 > 0)
