@@ -2,8 +2,9 @@
 
 A :class:`Log` is a set of equally long float columns with a constant sample time. The reader
 rejects bad files with :class:`LogError`, one line naming the file, the line, the column and what
-was expected. NaN is accepted in the sensor columns (estimators hold on it and report
-INVALID_INPUT), never in ``t``. The writer writes to a temporary name and renames on success, so no
+was expected. NaN, Inf and single out-of-range samples are accepted in the sensor
+columns (estimators hold on them and report INVALID_INPUT), never in ``t``. Unknown columns are
+kept as text and ignored. The writer writes to a temporary name and renames on success, so no
 partial file is left behind.
 """
 
@@ -32,7 +33,9 @@ UNIT_LIMITS = {
     "ay": (100.0, "m/s^2 (above 100 m/s^2 looks like the wrong unit)"),
     "r": (10.0, "rad/s (a yaw rate above 10 rad/s looks like deg/s)"),
 }
-"""Range checks that catch wrong units: |value| above the limit is rejected."""
+"""Range checks that catch wrong units: a column with more than UNIT_FRACTION of its finite samples
+beyond the limit is rejected. Single glitches pass: the estimators reject them per sample."""
+UNIT_FRACTION = 0.05
 SAMPLE_TIME_JITTER = 1e-3
 """Allowed relative deviation of any time step from the mean step."""
 
@@ -43,7 +46,8 @@ class LogError(ValueError):
 
 @dataclass
 class Log:
-    """Columns of a log by name (all float arrays of one length), in file order."""
+    """Columns of a log by name, in file order: float arrays for the known columns (design.md),
+    text arrays for unknown ones; all of one length."""
 
     columns: dict[str, np.ndarray]
     source: str = "<memory>"
@@ -93,7 +97,9 @@ def write_text_atomic(path: Path, text: str) -> None:
         raise
 
 
-def _format(value: float) -> str:
+def _format(value) -> str:
+    if isinstance(value, str):
+        return value
     return "nan" if math.isnan(value) else format(float(value), ".17g")
 
 
@@ -126,25 +132,32 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED) -> Log:
         data.pop()
     if len(data) < 2:
         raise LogError(f"{source}:{len(data) + 2}: only {len(data)} data row(s): expected at least 2")
-    values = np.empty((len(data), len(header)))
+    known = set(REQUIRED) | set(OPTIONAL_INPUTS) | set(TRUTH)
+    cells: list[list] = [[] for _ in header]
     for index, row in enumerate(data):
         line = index + 2
         if len(row) != len(header):
             raise LogError(f"{source}:{line}: {len(row)} cells: expected {len(header)} (one per "
                            f"header column; is the file truncated?)")
         for col, cell in enumerate(row):
-            values[index, col] = _parse(cell, source, line, header[col])
-    log = Log({name: values[:, i].copy() for i, name in enumerate(header)}, source)
+            name = header[col]
+            cells[col].append(_parse(cell, source, line, name) if name in known else cell)
+    log = Log({name: np.array(cells[i], dtype=float if name in known else str)
+               for i, name in enumerate(header)}, source)
     _check_time(log["t"], source)
     for name, (limit, unit) in UNIT_LIMITS.items():
         if name in log:
-            column = log[name]
-            bad = np.flatnonzero(np.abs(np.nan_to_num(column, nan=0.0)) > limit)
-            if bad.size:
-                i = int(bad[0])
-                raise LogError(f"{source}:{i + 2}: column '{name}' = {column[i]!r}: expected "
-                               f"|{name}| <= {limit} {unit}")
+            _check_unit(log[name], name, limit, unit, source)
     return log
+
+
+def _check_unit(column: np.ndarray, name: str, limit: float, unit: str, source: str) -> None:
+    finite = np.isfinite(column)
+    beyond = finite & (np.abs(column) > limit)
+    if beyond.sum() > UNIT_FRACTION * max(finite.sum(), 1):
+        i = int(np.flatnonzero(beyond)[0])
+        raise LogError(f"{source}:{i + 2}: column '{name}' = {float(column[i])!r}: expected |{name}| <= "
+                       f"{limit} {unit}; {beyond.sum()} of {finite.sum()} samples are beyond it")
 
 
 def _parse(cell: str, source: str, line: int, column: str) -> float:
@@ -165,11 +178,11 @@ def _check_time(t: np.ndarray, source: str) -> None:
     bad = np.flatnonzero(steps <= 0)
     if bad.size:
         i = int(bad[0]) + 1
-        raise LogError(f"{source}:{i + 2}: column 't' = {t[i]!r} after {t[i - 1]!r}: expected "
+        raise LogError(f"{source}:{i + 2}: column 't' = {float(t[i])!r} after {float(t[i - 1])!r}: expected "
                        f"strictly increasing time")
     mean = (t[-1] - t[0]) / (len(t) - 1)
     off = np.flatnonzero(np.abs(steps - mean) > SAMPLE_TIME_JITTER * mean)
     if off.size:
         i = int(off[0]) + 1
-        raise LogError(f"{source}:{i + 2}: column 't': step {steps[i - 1]!r} s: expected a constant "
+        raise LogError(f"{source}:{i + 2}: column 't': step {float(steps[i - 1]):.6g} s: expected a constant "
                        f"sample time of {mean:.6g} s (within {SAMPLE_TIME_JITTER:.0e} relative)")
