@@ -52,72 +52,110 @@ OUTPUTS = Layout((
 ))
 
 
-def build(config: VehicleConfig) -> Estimator:
-    """The kf2dof estimator for ``config`` (its [vehicle], [inputs] and [estimator.kf2dof])."""
-    vehicle, limits, T = config.vehicle, config.limits, config.sample_time
+def dynamic_update(config: VehicleConfig) -> ca.Function:
+    """One Kalman predict + update of the 2-DOF model, as a named CasADi Function.
+
+    Inputs: ``x`` = [vy, r] (m/s, rad/s), ``P`` = packed covariance [P11, P12, P22],
+    ``delta_prev`` (rad), ``vx_prev`` (m/s): the inputs held over the prediction (ZOH);
+    ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
+    Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad).
+    Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
+    are plausible. Reused by every estimator with a dynamic (KF) scheme.
+    """
+    vehicle, T = config.vehicle, config.sample_time
     settings = config.settings(NAME)
-    vx_min, vx_resume, vx_max = settings["vx_min"], settings["vx_resume"], limits["vx_max"]
+    vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
     Qd = ca.SX(ca.DM(settings["process_noise"])) * T
     R = ca.SX(ca.DM(settings["measurement_noise"]))
-    P0 = ca.SX(ca.DM(settings["initial_covariance"]))
     plan = discretize.plan_zoh(state_matrix_norm_bound(vehicle, vx_min, vx_max), T)
+    x = ca.SX.sym("x", 2)
+    P_packed = ca.SX.sym("P", kalman.packed_size(2))
+    delta_prev, vx_prev, delta, vx, ay, r_meas = (
+        ca.SX.sym(n) for n in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"))
+
+    def model_speed(speed):
+        return ca.fmin(ca.fmax(speed, vx_min), vx_max)
+
+    A, B, _, _ = bicycle_matrices(vehicle, model_speed(vx_prev))
+    Phi, Gamma = discretize.discretise(settings["discretisation"], A, B, T, plan)
+    x_pred, P_pred = kalman.predict(x, kalman.unpack_symmetric(P_packed, 2), Phi, Gamma,
+                                    delta_prev, Qd)
+    _, _, C, D = bicycle_matrices(vehicle, model_speed(vx))
+    x_new, P_new, _ = kalman.update_joseph(x_pred, P_pred, ca.vertcat(ay, r_meas), C, D, delta, R)
+    return ca.Function(
+        f"{NAME}_dynamic_update",
+        [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas],
+        [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx))],
+        ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"],
+        ["x_next", "P_next", "beta"],
+    )
+
+
+def zoh_note(config: VehicleConfig) -> dict[str, str]:
+    """Notes for generated files: the discretisation and, for ZOH, the series' error bound."""
+    settings = config.settings(NAME)
+    notes = {"discretisation": settings["discretisation"]}
+    if settings["discretisation"] == "zoh":
+        vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
+        plan = discretize.plan_zoh(state_matrix_norm_bound(config.vehicle, vx_min, vx_max),
+                                   config.sample_time)
+        notes["zoh_series"] = (f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
+                               f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e} for "
+                               f"{vx_min} <= vx <= {vx_max} m/s")
+    return notes
+
+
+def build(config: VehicleConfig) -> Estimator:
+    """The kf2dof estimator for ``config`` (its [vehicle], [inputs] and [estimator.kf2dof])."""
+    limits = config.limits
+    settings = config.settings(NAME)
+    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
+    P0 = kalman.pack_symmetric(ca.SX(ca.DM(settings["initial_covariance"])))
+    update = dynamic_update(config)
 
     state, s = STATES.symbols("state")
     inputs, u = INPUTS.symbols("input")
-
     guard = input_guard(u, limits, vx_min, vx_resume, s["holding"])
-
-    def model_speed(vx):
-        return ca.fmin(ca.fmax(vx, vx_min), vx_max)
-
-    # dynamic update from the previous (plausible) inputs and this sample
-    x = ca.vertcat(s["vy"], s["r"])
-    P = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _COVARIANCE]), 2)
-    A, B, _, _ = bicycle_matrices(vehicle, model_speed(s["vx_prev"]))
-    Phi, Gamma = discretize.discretise(settings["discretisation"], A, B, T, plan)
-    x_pred, P_pred = kalman.predict(x, P, Phi, Gamma, s["delta_prev"], Qd)
-
-    vx = model_speed(hold(u["vx"], guard.plausible["vx"], vx_min))
-    delta = hold(u["delta"], guard.plausible["delta"], 0)
-    z = ca.vertcat(hold(u["ay"], guard.plausible["ay"], 0), hold(u["r"], guard.plausible["r"], 0))
-    _, _, C, D = bicycle_matrices(vehicle, vx)
-    x_upd, P_upd, _ = kalman.update_joseph(x_pred, P_pred, z, C, D, delta, R)
-
+    ok = guard.plausible
+    result = update(
+        x=ca.vertcat(s["vy"], s["r"]),
+        P=ca.vertcat(*[s[n] for n in _COVARIANCE]),
+        delta_prev=s["delta_prev"],
+        vx_prev=s["vx_prev"],
+        delta=hold(u["delta"], ok["delta"], 0),
+        vx=hold(u["vx"], ok["vx"], vx_min),
+        ay=hold(u["ay"], ok["ay"], 0),
+        r_meas=hold(u["r"], ok["r"], 0),
+    )
     active = guard.active
-    vy_next = ca.if_else(active, x_upd[0], 0)
-    r_next = ca.if_else(active, x_upd[1], s["r"])
-    P_next = kalman.pack_symmetric(ca.if_else(active, P_upd, P0))
+    vy_next = ca.if_else(active, result["x_next"][0], 0)
+    r_next = ca.if_else(active, result["x_next"][1], s["r"])
+    P_next = ca.if_else(active, result["P_next"], P0)
     next_state = STATES.pack({
         "vy": vy_next,
         "r": r_next,
         **{name: P_next[i] for i, name in enumerate(_COVARIANCE)},
-        "delta_prev": hold(u["delta"], guard.plausible["delta"], s["delta_prev"]),
-        "vx_prev": hold(u["vx"], guard.plausible["vx"], s["vx_prev"]),
+        "delta_prev": hold(u["delta"], ok["delta"], s["delta_prev"]),
+        "vx_prev": hold(u["vx"], ok["vx"], s["vx_prev"]),
         "holding": ca.if_else(active, 0, 1),
     })
     output = OUTPUTS.pack({
-        "beta": ca.if_else(active, ca.atan2(x_upd[0], vx), 0),
+        "beta": ca.if_else(active, result["beta"], 0),
         "vy": vy_next,
         "r": r_next,
         "status": guard.status,
     })
 
     first = input_guard(u, limits, vx_resume, vx_resume, ca.SX(1))
-    P0_packed = kalman.pack_symmetric(P0)
     init_state = STATES.pack({
         "vy": ca.SX(0),
         "r": hold(u["r"], first.plausible["r"], 0),
-        **{name: P0_packed[i] for i, name in enumerate(_COVARIANCE)},
+        **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
         "delta_prev": hold(u["delta"], first.plausible["delta"], 0),
         "vx_prev": hold(u["vx"], first.plausible["vx"], vx_min),
         "holding": ca.if_else(first.active, 0, 1),
     })
     init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
                                 next_state, output)
-    notes = {"discretisation": settings["discretisation"]}
-    if settings["discretisation"] == "zoh":
-        notes["zoh_series"] = (f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
-                               f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e} for "
-                               f"{vx_min} <= vx <= {vx_max} m/s")
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
-                     INPUTS, STATES, OUTPUTS, init, step, notes)
+                     INPUTS, STATES, OUTPUTS, init, step, zoh_note(config))
