@@ -13,12 +13,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from harness.files import read_user_text, write_text_atomic
 
 REQUIRED = ("t", "delta", "vx", "ax", "ay", "r")
 """Required input columns (design.md)."""
@@ -83,20 +83,6 @@ def write_log(log: Log, path: Path) -> None:
     write_text_atomic(Path(path), buffer.getvalue())
 
 
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to a temporary file next to ``path`` and rename it into place."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        with os.fdopen(fd, "w", newline="") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
 def _format(value) -> str:
     if isinstance(value, str):
         return value
@@ -106,16 +92,7 @@ def _format(value) -> str:
 def read_log(path: Path, required: tuple[str, ...] = REQUIRED) -> Log:
     """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem."""
     source = str(path)
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise LogError(f"{source}: cannot read: {exc.strerror}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise LogError(f"{source}:1: not a text file: expected UTF-8 CSV with a header row") from None
-    if "\x00" in text:
-        raise LogError(f"{source}:1: not a text file: expected UTF-8 CSV with a header row")
+    text = read_user_text(path, LogError, "CSV log")
     rows = list(csv.reader(io.StringIO(text)))
     if not rows or not any(cell.strip() for cell in rows[0]):
         raise LogError(f"{source}:1: empty file: expected a header row with columns {', '.join(required)}")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from harness.files import read_user_text
 from harness.paths import VEHICLES
 from model.params import ParameterError, VehicleConfig, parse_vehicle
 
@@ -11,14 +12,7 @@ from model.params import ParameterError, VehicleConfig, parse_vehicle
 def load_vehicle(path: Path | str) -> VehicleConfig:
     """Read and validate a vehicle TOML file; ParameterError (one line) on any problem."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ParameterError(f"{path}: cannot read vehicle file: {exc.strerror}") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ParameterError(f"{path}:1: not a text file: expected UTF-8 TOML") from None
+    text = read_user_text(path, ParameterError, "vehicle file (TOML)")
     return parse_vehicle(text, str(path), path.stem)
 
 
