@@ -13,7 +13,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,8 +23,9 @@ from harness.files import read_user_text, write_text_atomic
 REQUIRED = ("t", "delta", "vx", "ax", "ay", "r")
 """Required input columns (design.md)."""
 OPTIONAL_INPUTS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr", "mz")
-TRUTH = ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu")
-"""Optional ground truth, used only for scoring."""
+TRUTH = ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu", "off_course")
+"""Optional ground truth, used only for scoring. ``off_course`` is 1 where a simulated run touched
+a cone or had spun (latched), else 0."""
 
 UNIT_LIMITS = {
     "delta": (1.0, "rad (a front road-wheel angle above 1 rad looks like degrees or steering-wheel angle)"),
@@ -51,6 +52,8 @@ class Log:
 
     columns: dict[str, np.ndarray]
     source: str = "<memory>"
+    notes: dict[str, str] = field(default_factory=dict)
+    """What a simulation reports about its run (e.g. whether it stayed inside the cones)."""
 
     def __len__(self) -> int:
         return len(self.columns["t"])

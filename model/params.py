@@ -15,11 +15,12 @@ import json
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from model.schema import ESTIMATOR_SCHEMAS, INPUT_LIMITS, SAMPLING, VEHICLE, Field, Invalid
+from model.schema import (ESTIMATOR_SCHEMAS, INPUT_LIMITS, PLANT, SAMPLING, SENSORS, VEHICLE,
+                          Field, Invalid)
 
 WHEELBASE_TOLERANCE = 1e-3
 """Allowed |a + b - l| in metres."""
@@ -40,6 +41,8 @@ class VehicleConfig:
         limits: plausibility limits of the inputs shared by all estimators.
         sample_time: estimator sample time T in s.
         estimators: per estimator name, its validated settings.
+        plant: the truth plant's parameters ([plant], simulation only), or None.
+        sensors: the simulated sensors' parameters ([sensors]), or None.
     """
 
     name: str
@@ -48,6 +51,8 @@ class VehicleConfig:
     limits: Mapping[str, float]
     sample_time: float
     estimators: Mapping[str, Mapping[str, Any]]
+    plant: Mapping[str, Any] | None = None
+    sensors: Mapping[str, float] | None = None
 
     def settings(self, estimator: str) -> Mapping[str, Any]:
         """Settings of one estimator; raises ParameterError if the file has none."""
@@ -61,7 +66,7 @@ class VehicleConfig:
     def with_sample_time(self, sample_time: float) -> "VehicleConfig":
         """The same vehicle for another sample time (e.g. that of a log)."""
         value = SAMPLING[0].check(sample_time)
-        return VehicleConfig(self.name, self.source, self.vehicle, self.limits, value, self.estimators)
+        return replace(self, sample_time=value)
 
     def canonical(self, estimator: str) -> dict[str, Any]:
         """Everything that determines ``estimator``'s generated code, as plain sorted data."""
@@ -73,6 +78,15 @@ class VehicleConfig:
             "estimator": estimator,
             "settings": _plain(self.settings(estimator)),
         }
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the whole configuration (every table), e.g. to memoise simulations."""
+        everything = {"name": self.name, "vehicle": dict(self.vehicle), "inputs": dict(self.limits),
+                      "sample_time": self.sample_time, "plant": _plain(self.plant or {}),
+                      "sensors": _plain(self.sensors or {}),
+                      "estimators": {k: _plain(v) for k, v in self.estimators.items()}}
+        text = json.dumps(everything, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
 
     def parameter_hash(self, estimator: str) -> str:
         """SHA-256 (hex) of :meth:`canonical` serialised as sorted JSON with exact float reprs."""
@@ -93,7 +107,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{source}: not valid TOML: {exc}") from None
     where = _Locator(text, source)
-    _reject_unknown(data, {"vehicle", "inputs", "estimator"}, (), where)
+    _reject_unknown(data, {"vehicle", "inputs", "estimator", "plant", "sensors"}, (), where)
     vehicle = _table(data, ("vehicle",), VEHICLE, where)
     _check_wheelbase(vehicle, where)
     limits = _table(data, ("inputs",), INPUT_LIMITS, where)
@@ -116,6 +130,8 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
     if not estimators:
         raise ParameterError(f"{where.at(('estimator',))}: no estimator settings: expected at least "
                              f"one of {', '.join(f'[estimator.{n}]' for n in ESTIMATOR_SCHEMAS)}")
+    optional = {key: MappingProxyType(_table(data, (key,), fields, where)) if key in data else None
+                for key, fields in (("plant", PLANT), ("sensors", SENSORS))}
     return VehicleConfig(
         name=name,
         source=source,
@@ -123,6 +139,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
         limits=MappingProxyType(limits),
         sample_time=sampling["sample_time"],
         estimators=MappingProxyType(estimators),
+        **optional,
     )
 
 

@@ -66,6 +66,38 @@ def positive(key: str, unit: str, doc: str = "") -> Field:
     return Field(key, expected, check, doc)
 
 
+def nonnegative(key: str, unit: str, doc: str = "") -> Field:
+    """A finite number >= 0 in ``unit``."""
+    expected = f"a finite number >= 0 ({unit})"
+
+    def check(value: Any) -> float:
+        try:
+            number = _number(value)
+        except Invalid:
+            raise Invalid(expected) from None
+        if number < 0.0:
+            raise Invalid(expected)
+        return number
+
+    return Field(key, expected, check, doc)
+
+
+def fraction(key: str, doc: str = "") -> Field:
+    """A number strictly between 0 and 1."""
+    expected = "a number between 0 and 1 (exclusive)"
+
+    def check(value: Any) -> float:
+        try:
+            number = _number(value)
+        except Invalid:
+            raise Invalid(expected) from None
+        if not 0.0 < number < 1.0:
+            raise Invalid(expected)
+        return number
+
+    return Field(key, expected, check, doc)
+
+
 def choice(key: str, options: tuple[str, ...], doc: str = "") -> Field:
     """One of a fixed set of strings."""
     expected = "one of " + ", ".join(f'"{o}"' for o in options)
@@ -129,6 +161,34 @@ INPUT_LIMITS: tuple[Field, ...] = (
     positive("ax_max", "m/s^2", "largest plausible |ax|"),
     positive("ay_max", "m/s^2", "largest plausible |ay|"),
     positive("r_max", "rad/s", "largest plausible |r|"),
+)
+
+# [plant]: the truth plant of harness/plant (simulation only; never in generated code). Optional.
+PLANT: tuple[Field, ...] = (
+    positive("tyre_nominal_load", "N", "F_z0 of the Magic Formula load law"),
+    positive("tyre_cornering_factor", "-", "p_Ky1: peak of K_y/F_z0 in K_y = p_Ky1 F_z0 sin(2 atan(F_z/(p_Ky2 F_z0)))"),
+    positive("tyre_cornering_load_factor", "-", "p_Ky2: load at peak K_y, in units of F_z0"),
+    positive("tyre_slip_stiffness_factor", "-", "K_x / F_z: longitudinal slip stiffness per unit load"),
+    positive("tyre_shape_lateral", "-", "Magic Formula shape factor C_y"),
+    positive("tyre_shape_longitudinal", "-", "Magic Formula shape factor C_x"),
+    positive("wheel_inertia_front", "kg*m^2", "spin inertia of one front wheel incl. driveline share"),
+    positive("wheel_inertia_rear", "kg*m^2", "spin inertia of one rear wheel"),
+    choice("driven_axle", ("front", "rear"), "axle the drive torque goes to"),
+    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration (quasi-static)"),
+    nonnegative("pitch_gradient", "rad/(m/s^2)", "body pitch per longitudinal deceleration (quasi-static)"),
+    fraction("roll_stiffness_front_share", "share of lateral load transfer taken by the front axle"),
+    positive("load_transfer_time_constant", "s", "lag of load transfer behind the accelerations"),
+    nonnegative("drag_area", "m^2", "C_d * A"),
+    nonnegative("rolling_resistance", "-", "rolling-resistance coefficient"),
+)
+
+# [sensors]: the sensor model of simulated logs (seed 000 Table 2). Optional.
+SENSORS: tuple[Field, ...] = (
+    nonnegative("gyro_noise", "rad/s", "yaw-rate white noise, 1 sigma"),
+    nonnegative("gyro_bias", "rad/s", "yaw-rate bias (used only by scenarios with bias = true)"),
+    nonnegative("accel_noise", "m/s^2", "accelerometer white noise, 1 sigma"),
+    nonnegative("accel_bias", "m/s^2", "accelerometer bias (used only with bias = true)"),
+    nonnegative("wheel_speed_noise", "rad/s", "wheel-speed white noise, 1 sigma"),
 )
 
 # [estimator]: common to all estimators of the file

@@ -31,7 +31,7 @@ def test_verify_passes_on_every_scenario(config):
 
 def test_one_millisecond_sample_time(config):
     fast = config.with_sample_time(0.001)
-    (result,) = verify_estimator(fast, "kf2dof", cases=(Case("dlc", {"speed_kmh": 80.0}),))
+    (result,) = verify_estimator(fast, "kf2dof", cases=(Case.of("dlc", speed_kmh=80.0),))
     assert result.ok, result
     assert result.samples > 9000
 
@@ -50,7 +50,7 @@ def test_comparison_detects_a_wrong_parameter(config, vehicle_text):
                                                "cornering_stiffness_rear = 96970.1"),
                           "wrong.toml", "c_class")
     compiled = load_estimator(build("kf2dof", wrong), render(wrong, "kf2dof"))
-    log = Case("dlc", {"speed_kmh": 80.0}).simulate(config, 100.0)
+    log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
     inputs = log.matrix(reference.INPUTS)
     c_out, _ = compiled.run(inputs)
     r_out, _ = run_reference(reference, config, inputs)

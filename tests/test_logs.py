@@ -10,7 +10,7 @@ from harness.scenarios import Case
 
 
 def test_round_trip_is_exact(tmp_path, config):
-    log = Case("invalid_inputs", {}).simulate(config, 100.0)
+    log = Case.of("invalid_inputs").simulate(config, 100.0)
     path = tmp_path / "log.csv"
     write_log(log, path)
     back = read_log(path)

@@ -1,12 +1,13 @@
 """Scenarios: named manoeuvres that produce logs (harness.logs.Log) with ground truth.
 
-``SCENARIOS[name].simulate(config, rate_hz, seed, **options)``. ``VERIFICATION_SET`` is the list of
+``SCENARIOS[name]`` has a ``simulate(config, rate_hz, seed, **options)`` and the defaults of its
+options; the names are stable (scripts rely on them). ``VERIFICATION_SET`` is the list of
 (scenario, options) every estimator is checked on by ``vsegen verify``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from harness.logs import Log
@@ -19,17 +20,54 @@ class Scenario:
     name: str
     description: str
     simulate: Callable[..., Log]
-    defaults: dict[str, Any]
+    defaults: dict[str, Any] = field(default_factory=dict)
 
 
-SCENARIOS: dict[str, Scenario] = {
-    "dlc": Scenario("dlc", "ISO 3888-1 double lane change, path-following driver, constant speed",
-                    manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False}),
-    "low_speed": Scenario("low_speed", "slow down to a stop, reverse briefly, drive off again "
-                          "(exercises the low-speed hold)", manoeuvres.low_speed, {}),
-    "invalid_inputs": Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range "
-                               "samples in every input", manoeuvres.invalid_inputs, {}),
-}
+_NOISE = {"bias": False}
+SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
+    Scenario("dlc", "ISO 3888-1 double lane change, path-following driver, speed held",
+             manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False, **_NOISE}),
+    Scenario("continuous_dlc", "seed 000: three DLCs back to back, friction 0.85 -> 0.5 -> 0.35",
+             manoeuvres.continuous_dlc,
+             {"speed_kmh": 120.0, "mu_sequence": "0.85,0.5,0.35", "switch_times": "9,18",
+              "duration": 30.0, "outliers": False, **_NOISE}),
+    Scenario("step_steer", "seed 001: front wheels stepped to 0.05 rad, speed held",
+             manoeuvres.step_steer, {"speed_kmh": 80.0, "mu": 1.0, "delta": 0.05, "t_step": 1.0,
+                                     "duration": 6.0, **_NOISE}),
+    Scenario("sine_steer", "seed 003: sinusoidal steering, speed held", manoeuvres.sine_steer,
+             {"speed_kmh": 80.0, "mu": 1.0, "amplitude": 0.02, "frequency": 0.5, "duration": 10.0,
+              **_NOISE}),
+    Scenario("fishhook", "seed 002: NHTSA-style fishhook", manoeuvres.fishhook,
+             {"speed_kmh": 96.0, "mu": 0.8, "amplitude": 0.06, "duration": 7.0, **_NOISE}),
+    Scenario("low_speed", "slow down to a stop, reverse briefly, drive off again (low-speed hold)",
+             manoeuvres.low_speed),
+    Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range samples in every input",
+             manoeuvres.invalid_inputs),
+)}
+
+
+class ScenarioError(ValueError):
+    """An unknown scenario or option; the message is one line."""
+
+
+def parse_option(scenario: str, text: str) -> tuple[str, Any]:
+    """``key=value`` for ``scenario``, typed like the option's default."""
+    defaults = SCENARIOS[scenario].defaults
+    key, sep, value = text.partition("=")
+    if not sep or key not in defaults:
+        known = ", ".join(f"{k}={v}" for k, v in defaults.items()) or "none"
+        raise ScenarioError(f"scenario '{scenario}': unknown option '{text}': expected key=value "
+                            f"with a key of: {known}")
+    default = defaults[key]
+    try:
+        if isinstance(default, bool):
+            if value.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                raise ValueError
+            return key, value.lower() in ("true", "1", "yes")
+        return key, type(default)(value)
+    except ValueError:
+        raise ScenarioError(f"scenario '{scenario}': option {key} = {value!r}: expected a "
+                            f"{type(default).__name__} like {default!r}") from None
 
 
 @dataclass(frozen=True)
@@ -37,23 +75,40 @@ class Case:
     """One scenario with its options, as verified and scored."""
 
     scenario: str
-    options: dict[str, Any]
+    options: tuple[tuple[str, Any], ...] = ()
+
+    @staticmethod
+    def of(scenario: str, **options: Any) -> "Case":
+        return Case(scenario, tuple(sorted(options.items())))
 
     @property
     def label(self) -> str:
-        text = ",".join(f"{k}={v}" for k, v in self.options.items())
+        text = ",".join(f"{k}={v}" for k, v in self.options)
         return f"{self.scenario}({text})" if text else self.scenario
 
     def simulate(self, config: VehicleConfig, rate_hz: float, seed: int = 1) -> Log:
-        scenario = SCENARIOS[self.scenario]
-        return scenario.simulate(config, rate_hz, seed, **{**scenario.defaults, **self.options})
+        """The log of this case (memoised per vehicle configuration, rate and seed)."""
+        key = (self, config.fingerprint(), rate_hz, seed)
+        if key not in _MEMO:
+            scenario = SCENARIOS[self.scenario]
+            _MEMO[key] = scenario.simulate(config, rate_hz, seed,
+                                           **{**scenario.defaults, **dict(self.options)})
+        log = _MEMO[key]
+        return Log({k: v.copy() for k, v in log.columns.items()}, log.source, dict(log.notes))
+
+
+_MEMO: dict[tuple, Log] = {}
 
 
 VERIFICATION_SET: tuple[Case, ...] = (
-    Case("dlc", {"speed_kmh": 80.0}),
-    Case("dlc", {"speed_kmh": 120.0}),
-    Case("dlc", {"speed_kmh": 120.0, "mu": 0.5}),
-    Case("dlc", {"speed_kmh": 120.0, "outliers": True}),
-    Case("low_speed", {}),
-    Case("invalid_inputs", {}),
+    Case.of("dlc", speed_kmh=80.0),
+    Case.of("dlc", speed_kmh=120.0),
+    Case.of("dlc", speed_kmh=120.0, outliers=True),
+    Case.of("continuous_dlc"),
+    Case.of("step_steer"),
+    Case.of("sine_steer"),
+    Case.of("fishhook"),
+    Case.of("dlc", speed_kmh=120.0, mu=0.5),
+    Case.of("low_speed"),
+    Case.of("invalid_inputs"),
 )

@@ -1,23 +1,86 @@
-"""ISO 3888-1 double-lane-change course (shared/methods/README.md, "DLC geometry").
+"""Courses: the driver's target path y(x) and the cone gates a run must stay inside.
 
-Sections 15 / 30 / 25 / 25 / 15 / 15 m: entry lane, lane change, offset lane, change back, exit
-lane, run-out; lateral offset 3.5 m. The driver's target path is the centre line, with
-half-cosine transitions over the two change sections. x measured from the course entry (m).
+ISO 3888-1 double lane change (shared/methods/README.md, "DLC geometry"): sections 15 / 30 / 25 /
+25 / 15 / 15 m (entry lane, change, offset lane, change back, exit lane, run-out), lateral offset
+3.5 m, lane widths 1.1 w + 0.25, 1.2 w + 0.25 and 1.3 w + 0.25 m (w: vehicle width). The target
+path is the centre line, with half-cosine transitions over the change sections.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-SECTIONS = (15.0, 30.0, 25.0, 25.0, 15.0, 15.0)
-OFFSET = 3.5
-LENGTH = sum(SECTIONS)
+ISO_SECTIONS = (15.0, 30.0, 25.0, 25.0, 15.0, 15.0)
+ISO_OFFSET = 3.5
+BODY_OVERHANG = 0.2
+"""Vehicle width w = track width + this (m): tyre width and body beyond the track."""
 
 
-def centre_line(x: np.ndarray | float) -> np.ndarray:
-    """Lateral position y (m, positive left) of the course centre line at distance x (m)."""
-    x = np.asarray(x, dtype=float)
-    s1, s2, s3, s4 = np.cumsum(SECTIONS[:4])
-    up = np.clip((x - s1) / (s2 - s1), 0.0, 1.0)
-    down = np.clip((x - s3) / (s4 - s3), 0.0, 1.0)
-    return OFFSET * 0.5 * ((1 - np.cos(np.pi * up)) - (1 - np.cos(np.pi * down)))
+@dataclass(frozen=True)
+class Gate:
+    """A lane between cones: from x_start to x_end (m), centred at y_centre, ``width`` wide (m)."""
+
+    x_start: float
+    x_end: float
+    y_centre: float
+    width: float
+
+
+@dataclass(frozen=True)
+class Course:
+    """A piecewise path of half-cosine lane changes and the gates along it (x, y in m)."""
+
+    knots: tuple[tuple[float, float, float], ...]
+    """(x_start, x_end, lateral shift) of each transition."""
+    gates: tuple[Gate, ...]
+    length: float
+
+    def centre_line(self, x) -> np.ndarray:
+        """Target lateral position y (m, positive left) at distance x (m)."""
+        x = np.asarray(x, dtype=float)
+        y = np.zeros_like(x)
+        for start, end, shift in self.knots:
+            progress = np.clip((x - start) / (end - start), 0.0, 1.0)
+            y = y + shift * 0.5 * (1 - np.cos(np.pi * progress))
+        return y
+
+    def outside(self, x: np.ndarray, y: np.ndarray, vehicle_width: float) -> np.ndarray:
+        """True where a vehicle of ``vehicle_width`` centred at (x, y) touches a gate's cones."""
+        hit = np.zeros(len(x), dtype=bool)
+        for gate in self.gates:
+            inside = (x >= gate.x_start) & (x <= gate.x_end)
+            hit |= inside & (np.abs(y - gate.y_centre) + vehicle_width / 2 > gate.width / 2)
+        return hit
+
+
+def iso_dlc(start: float, vehicle_width: float) -> Course:
+    """ISO 3888-1 course whose entry is at x = ``start``."""
+    s = start + np.cumsum((0.0, *ISO_SECTIONS))
+    w = vehicle_width
+    return Course(
+        knots=((s[1], s[2], ISO_OFFSET), (s[3], s[4], -ISO_OFFSET)),
+        gates=(Gate(s[0], s[1], 0.0, 1.1 * w + 0.25),
+               Gate(s[2], s[3], ISO_OFFSET, 1.2 * w + 0.25),
+               Gate(s[4], s[5], 0.0, 1.3 * w + 0.25)),
+        length=float(s[-1]),
+    )
+
+
+def lane_changes(starts: list[float], transitions: list[float], hold: float, vehicle_width: float,
+                 offset: float = ISO_OFFSET) -> Course:
+    """Double lane changes starting at ``starts`` (m), each with its transition length (m), a
+    ``hold`` m long offset lane, and ISO lane widths on the entry, offset and exit lanes."""
+    knots, gates = [], []
+    w = vehicle_width
+    end = 0.0
+    for start, length in zip(starts, transitions):
+        up_end = start + length
+        down_start = up_end + hold
+        end = down_start + length
+        knots += [(start, up_end, offset), (down_start, end, -offset)]
+        gates += [Gate(start - 15.0, start, 0.0, 1.1 * w + 0.25),
+                  Gate(up_end, down_start, offset, 1.2 * w + 0.25),
+                  Gate(end, end + 15.0, 0.0, 1.3 * w + 0.25)]
+    return Course(tuple(knots), tuple(gates), end + 15.0)

@@ -1,43 +1,86 @@
-"""Path-following driver: pure pursuit with understeer compensation and a steering lag."""
+"""Driver models: path following (curvature feed-forward + error feedback), speed hold (PI on
+wheel torque)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Callable, Mapping
 
 import numpy as np
 
-PREVIEW_TIME = 0.55
-"""Look-ahead distance = max(PREVIEW_MIN, vx * PREVIEW_TIME) in m."""
-PREVIEW_MIN = 6.0
+BANDWIDTH = 2.0
+"""Natural frequency of the driver's closed-loop lateral error (rad/s)."""
+DAMPING = 0.8
+PREVIEW_TIME = 0.2
+"""The path curvature is read this far ahead (s), covering steering lag and yaw response."""
 STEER_LAG = 0.05
 """First-order lag of the driver's steering (s)."""
 STEER_LIMIT = 0.5
 """Largest front road-wheel angle the driver commands (rad)."""
+STATE_X, STATE_Y, STATE_PSI, STATE_VX, STATE_VY = 0, 1, 2, 3, 4
+"""Indices of the plant state the drivers read (harness.plant.two_track.STATE)."""
 
 
-def pure_pursuit(vehicle: Mapping[str, float], vx: float, path: Callable[[float], float],
-                 x_start: float, dt: float) -> Callable[[float, np.ndarray], float]:
-    """A steering law ``steer(t, state)`` that follows ``path(x)`` (x from the course entry,
-    the car starting ``x_start`` m before it)."""
-    m = vehicle["mass"]
-    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
-    cf, cr = vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]
-    l = a + b
-    ks = m / l**2 * (b / cf - a / cr)
-    preview = max(PREVIEW_MIN, vx * PREVIEW_TIME)
-    memory = {"delta": 0.0}
+@dataclass
+class PathFollower:
+    """Lateral driver: steady-state curvature feed-forward l kappa (1 + K_s vx^2), read
+    PREVIEW_TIME ahead, plus feedback on the lateral error e_y and course-angle error e_chi
+    (chi = psi + beta: where the car goes). With e_y'' ~ vx^2 delta / l the gains
+    k_y = w^2 l / vx^2 and k_chi = 2 zeta w l / vx place the error poles at w = BANDWIDTH,
+    zeta = DAMPING. A first-order STEER_LAG models the driver's arms."""
 
-    def steer(t: float, state: np.ndarray) -> float:
-        X, Y, psi = state[0], state[1], state[2]
-        target_x = X + preview
-        target_y = float(path(target_x - x_start))
-        dx, dy = target_x - X, target_y - Y
-        lateral = -np.sin(psi) * dx + np.cos(psi) * dy
-        distance = np.hypot(dx, dy)
-        command = np.arctan(2 * l * lateral / distance**2) * (1 + ks * vx**2)
+    vehicle: Mapping[str, float]
+    path: Callable[[float], float]
+    dt: float
+    delta: float = 0.0
+
+    def __call__(self, t: float, state: np.ndarray) -> float:
+        v = self.vehicle
+        l = v["cg_to_front_axle"] + v["cg_to_rear_axle"]
+        ks = v["mass"] / l**2 * (v["cg_to_rear_axle"] / v["cornering_stiffness_front"]
+                                 - v["cg_to_front_axle"] / v["cornering_stiffness_rear"])
+        X, Y, psi = state[STATE_X], state[STATE_Y], state[STATE_PSI]
+        vx, vy = max(state[STATE_VX], 1.0), state[STATE_VY]
+        ahead = X + vx * PREVIEW_TIME
+        h = 0.5
+        y0, y1, y2 = (float(self.path(x)) for x in (ahead - h, ahead, ahead + h))
+        slope, second = (y2 - y0) / (2 * h), (y2 - 2 * y1 + y0) / (h * h)
+        curvature = second / (1 + slope * slope) ** 1.5
+        e_y = float(self.path(X)) - Y
+        e_chi = np.arctan((float(self.path(X + h)) - float(self.path(X - h))) / (2 * h)) \
+            - (psi + np.arctan2(vy, vx))
+        k_y = BANDWIDTH**2 * l / vx**2
+        k_chi = 2 * DAMPING * BANDWIDTH * l / vx
+        command = l * curvature * (1 + ks * vx * vx) + k_y * e_y + k_chi * e_chi
         command = float(np.clip(command, -STEER_LIMIT, STEER_LIMIT))
-        memory["delta"] += dt / STEER_LAG * (command - memory["delta"])
-        return memory["delta"]
+        self.delta += self.dt / STEER_LAG * (command - self.delta)
+        return self.delta
 
-    return steer
 
+@dataclass
+class SpeedHold:
+    """PI speed control: total wheel torque m R (kp e + ki int e) + drag feed-forward, to the
+    driven axle when positive, to the brakes (front 70 %, rear 30 %) when negative."""
+
+    vehicle: Mapping[str, float]
+    plant: Mapping[str, float]
+    target: Callable[[float], float]
+    dt: float
+    kp: float = 1.5
+    ki: float = 0.5
+    integral: float = field(default=0.0)
+
+    def __call__(self, t: float, state: np.ndarray) -> np.ndarray:
+        """Torques (N*m) at fl, fr, rl, rr."""
+        vx = state[STATE_VX]
+        error = self.target(t) - vx
+        self.integral += error * self.dt
+        m, radius = self.vehicle["mass"], self.vehicle["wheel_radius"]
+        drag = 0.5 * 1.2 * self.plant["drag_area"] * vx * abs(vx) + \
+            self.plant["rolling_resistance"] * m * 9.81
+        torque = (m * (self.kp * error + self.ki * self.integral) + drag) * radius
+        if torque >= 0:
+            front = self.plant["driven_axle"] == "front"
+            half = torque / 2
+            return np.array([half, half, 0.0, 0.0] if front else [0.0, 0.0, half, half])
+        return torque * np.array([0.35, 0.35, 0.15, 0.15])

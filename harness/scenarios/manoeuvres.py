@@ -1,49 +1,101 @@
-"""The manoeuvres: each returns a Log at ``rate_hz`` with the columns of design.md and truth."""
+"""The manoeuvres. Each returns a Log at ``rate_hz`` with the columns of design.md, the truth
+columns, and notes saying whether the car stayed inside the cones and did not spin.
+
+Scenario parameters not given by the seeds are marked *assumption* in the docstrings.
+"""
 
 from __future__ import annotations
+
+from typing import Callable
 
 import numpy as np
 
 from harness.logs import Log
-from harness.scenarios import course, sensors, simple_plant
-from harness.scenarios.driver import pure_pursuit
+from harness.scenarios import course as courses
+from harness.scenarios import sensors
+from harness.scenarios.driver import PathFollower, SpeedHold
+from harness.scenarios.simulate import SPIN_BETA, Run, simulate, substeps
 from model.params import VehicleConfig
 
-PLANT_RATE = 1000.0
-"""Minimum plant integration rate (Hz); the plant runs at an integer multiple of the log rate."""
 LEAD_IN = 40.0
-"""Straight road before the course entry (m)."""
+"""Straight road before a course (m)."""
 RUN_OUT = 60.0
-"""Straight road after the course (m)."""
-
-
-def _plant_substeps(rate_hz: float) -> int:
-    return max(1, int(np.ceil(PLANT_RATE / rate_hz - 1e-9)))
+"""Straight road after a course (m)."""
+GRAVITY = 9.81
 
 
 def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-        outliers: bool) -> Log:
-    """ISO 3888-1 DLC at ``speed_kmh`` on friction ``mu``; gyro outliers of seed 000 Fig. 6b if
-    ``outliers``."""
-    vx = speed_kmh / 3.6
-    sub = _plant_substeps(rate_hz)
-    dt = 1.0 / (rate_hz * sub)
-    duration = (LEAD_IN + course.LENGTH + RUN_OUT) / vx
-    steer = pure_pursuit(config.vehicle, vx, course.centre_line, LEAD_IN, dt)
-    truth = simple_plant.simulate(config.vehicle, vx, mu, duration, dt, steer)
-    pick = slice(None, None, sub)
-    t = truth.t[pick]
-    vy, r, ay, delta = truth.vy[pick], truth.r[pick], truth.ay[pick], truth.delta[pick]
-    ax_true = -r * vy  # body-frame x acceleration at constant speed: vx' - r vy
-    rng = np.random.default_rng(seed)
-    ax_m, ay_m, r_m = sensors.add_noise(rng, ax_true, ay, r)
-    if outliers:
-        r_m = sensors.inject_gyro_outliers(t, r_m)
-    return _log(config, t, delta, np.full_like(t, vx), ax_m, ay_m, r_m, vy, r, np.full_like(t, mu))
+        outliers: bool, bias: bool) -> Log:
+    """ISO 3888-1 double lane change at constant ``speed_kmh`` on friction ``mu``, path-following
+    driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on."""
+    speed = speed_kmh / 3.6
+    course = courses.iso_dlc(LEAD_IN, _width(config))
+    duration = (course.length + RUN_OUT) / speed
+    return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias)
+
+
+def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
+                   mu_sequence: str, switch_times: str, duration: float, outliers: bool,
+                   bias: bool) -> Log:
+    """Seed 000 scenario B: three double lane changes back to back at constant speed, the road
+    friction stepping through ``mu_sequence`` (comma-separated) at ``switch_times`` (s).
+
+    The seed gives no geometry: each DLC has the ISO offset (3.5 m) and lane widths, and a
+    transition length chosen so that its centre line asks for 70 % of the friction then
+    available, L = pi v sqrt(offset / (2 * 0.7 mu g)), as a skilled driver would (*assumption*).
+    """
+    speed = speed_kmh / 3.6
+    mus = [float(m) for m in mu_sequence.split(",")]
+    switches = [float(s) for s in switch_times.split(",")]
+    if len(mus) != len(switches) + 1:
+        raise ValueError("mu_sequence needs one value more than switch_times")
+    segment_starts = [0.0] + [s * speed for s in switches]
+    transitions = [np.pi * speed * np.sqrt(courses.ISO_OFFSET / (2 * 0.7 * m * GRAVITY)) for m in mus]
+    course = courses.lane_changes([x + LEAD_IN for x in segment_starts], transitions, 25.0,
+                                  _width(config))
+
+    def mu(t: float, state: np.ndarray) -> float:
+        return mus[int(np.searchsorted(switches, t, side="right"))]
+
+    return _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias)
+
+
+def step_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
+               delta: float, t_step: float, duration: float, bias: bool) -> Log:
+    """Seed 001's step steer: front road-wheel angle to ``delta`` rad at ``t_step`` s (ramped over
+    0.1 s, *assumption*: a true step is not physical), speed held."""
+    def steer(t: float, state: np.ndarray) -> float:
+        return delta * float(np.clip((t - t_step) / 0.1, 0.0, 1.0))
+
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
+
+
+def sine_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
+               amplitude: float, frequency: float, duration: float, bias: bool) -> Log:
+    """Seed 003's sine steer: delta = amplitude sin(2 pi f (t - 1)) after 1 s straight, speed held
+    (amplitude 0.02 rad and 0.5 Hz are *assumptions*: the seed gives none)."""
+    def steer(t: float, state: np.ndarray) -> float:
+        return amplitude * np.sin(2 * np.pi * frequency * (t - 1.0)) if t > 1.0 else 0.0
+
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
+
+
+def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
+             amplitude: float, duration: float, bias: bool) -> Log:
+    """Seed 002's fishhook (NHTSA profile, reconstructed): after 1 s straight, steer to
+    +amplitude in 0.25 s, hold 0.25 s, to -amplitude in 0.5 s, hold 3 s, back to 0 in 0.5 s."""
+    times = np.array([0.0, 1.0, 1.25, 1.5, 2.0, 5.0, 5.5])
+    values = np.array([0.0, 0.0, 1.0, 1.0, -1.0, -1.0, 0.0]) * amplitude
+
+    def steer(t: float, state: np.ndarray) -> float:
+        return float(np.interp(t, times, values))
+
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
 
 
 def low_speed(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
-    """Kinematic steady-state cornering while the speed falls 12 -> 0 -> -1 (reverse) -> 12 m/s."""
+    """Synthetic steady-state cornering while the speed falls 12 -> 0 -> -1 (reverse) -> 12 m/s;
+    exercises the estimators' low-speed hold (no plant: the plant needs |v| > 3.5 m/s)."""
     vehicle = config.vehicle
     l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
     t = np.arange(0.0, 24.0 + 0.5 / rate_hz, 1.0 / rate_hz)
@@ -54,17 +106,25 @@ def low_speed(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
     ks = m / l**2 * (b / vehicle["cornering_stiffness_front"] - a / cr)
     gain = 1.0 / (1.0 + ks * vx**2)
     r = vx * delta / l * gain
-    beta = (b / l - m * a * vx**2 / (l**2 * cr)) * delta * gain
-    vy = vx * np.tan(beta)
+    vy = vx * np.tan((b / l - m * a * vx**2 / (l**2 * cr)) * delta * gain)
     rng = np.random.default_rng(seed)
-    ax_m, ay_m, r_m = sensors.add_noise(rng, np.gradient(vx, t), vx * r, r)
-    return _log(config, t, delta, vx, ax_m, ay_m, r_m, vy, r, np.ones_like(t))
+    noise = config.sensors or {"accel_noise": 0.3, "gyro_noise": np.deg2rad(1.0)}
+    omega = vx / vehicle["wheel_radius"]
+    return Log({
+        "t": t, "delta": delta, "vx": vx,
+        "ax": np.gradient(vx, t) + rng.normal(0, noise["accel_noise"], len(t)),
+        "ay": vx * r + rng.normal(0, noise["accel_noise"], len(t)),
+        "r": r + rng.normal(0, noise["gyro_noise"], len(t)),
+        "omega_rl": omega, "omega_rr": omega,
+        "beta_ref": np.arctan2(vy, vx), "vx_ref": vx, "vy_ref": vy, "r_ref": r,
+        "mu": np.ones_like(t), "off_course": np.zeros_like(t),
+    }, source="<simulated low_speed>", notes={"run": "synthetic, no plant"})
 
 
 def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
     """The 80 km/h DLC with bad samples: NaN, +-Inf and out-of-range values in every input, alone
     and in runs, so every hold/resume path is taken."""
-    log = dlc(config, rate_hz, seed, 80.0, 1.0, False)
+    log = dlc(config, rate_hz, seed, 80.0, 1.0, False, False)
     n = len(log)
     faults = (
         ("ay", 0.30, 1, np.nan), ("r", 0.50, 1, np.inf), ("delta", 0.70, 1, -np.inf),
@@ -76,15 +136,49 @@ def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
         start = int(round(time * rate_hz))
         if start < n:
             log.columns[column][start:start + count] = value
+    log.source = "<simulated invalid_inputs>"
     return log
 
 
-def _log(config, t, delta, vx, ax, ay, r, vy_true, r_true, mu) -> Log:
-    radius = config.vehicle["wheel_radius"]
-    omega = vx / radius
-    return Log({
-        "t": t, "delta": delta, "vx": vx, "ax": ax, "ay": ay, "r": r,
-        "omega_rl": omega, "omega_rr": omega,
-        "beta_ref": np.arctan2(vy_true, vx),
-        "vx_ref": vx.astype(float), "vy_ref": vy_true, "r_ref": r_true, "mu": mu,
-    }, source="<simulated>")
+# ------------------------------------------------------------------------------------------------
+
+
+def _width(config: VehicleConfig) -> float:
+    return config.vehicle["track_width"] + courses.BODY_OVERHANG
+
+
+def _constant(mu: float) -> Callable[[float, np.ndarray], float]:
+    return lambda t, state: mu
+
+
+def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias) -> Log:
+    dt = 1.0 / (rate_hz * substeps(rate_hz))
+    steer = PathFollower(config.vehicle, course.centre_line, dt)
+    hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
+    run = simulate(config, rate_hz, duration, speed, steer, hold, mu)
+    hit = course.outside(run.state("X"), run.state("Y"), _width(config))
+    return _log(config, run, seed, outliers, bias, hit)
+
+
+def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias) -> Log:
+    dt = 1.0 / (rate_hz * substeps(rate_hz))
+    hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
+    run = simulate(config, rate_hz, duration, speed, steer, hold, _constant(mu))
+    return _log(config, run, seed, False, bias, np.zeros(len(run.t), dtype=bool))
+
+
+def _log(config: VehicleConfig, run: Run, seed: int, outliers: bool, bias: bool,
+         hit_cone: np.ndarray) -> Log:
+    spun = np.maximum.accumulate(np.abs(run.beta) > SPIN_BETA)
+    columns = {"t": run.t, **sensors.measure(config, run, seed, bias, outliers),
+               "beta_ref": run.beta, "vx_ref": run.state("vx"), "vy_ref": run.state("vy"),
+               "r_ref": run.state("r"), "mu": run.input("mu"),
+               "off_course": (hit_cone | spun).astype(float)}
+    notes = {
+        "stayed in cones": "yes" if not hit_cone.any() else
+        f"no (first cone at t = {run.t[np.argmax(hit_cone)]:.2f} s)",
+        "spun": "no" if not spun.any() else f"yes (|beta| > 15 deg at t = {run.t[np.argmax(spun)]:.2f} s)",
+        "peak |ay|": f"{np.abs(run.truth_of('ay')).max():.2f} m/s^2",
+        "peak |beta|": f"{np.rad2deg(np.abs(run.beta)).max():.2f} deg",
+    }
+    return Log(columns, source="<simulated>", notes=notes)

@@ -1,23 +1,51 @@
-"""Sensor model for simulated logs: seed 000 Table 2 white noise (biases compensated, the
-default of shared/methods/README.md), optional single-sample gyro outliers; seeded."""
+"""Sensor model of simulated logs (configured by the vehicle file's [sensors] table).
+
+* body-fixed accelerometers: ax_m = ax cos(theta) - g sin(theta), ay_m = ay cos(phi) + g sin(phi),
+  with quasi-static roll phi = roll_gradient * ay_lt and pitch theta = -pitch_gradient * ax_lt
+  (design.md: a rolled body's lateral accelerometer reads the gravity component);
+* white Gaussian noise (seed 000 Table 2), biases only when asked (the paper assumes compensated
+  biases; shared/methods/README.md);
+* wheel speeds from the plant's wheel spin states (a driven wheel spins up under traction), vx as
+  the ECU computes it: mean of the rear wheel speeds x R_eff;
+* optional single-sample yaw-rate outliers (seed 000 Fig. 6b).
+All random draws come from one seeded generator: the same seed gives the same log.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-GYRO_NOISE = np.deg2rad(1.0)
-"""Yaw-rate noise 1 sigma (rad/s)."""
-ACCEL_NOISE = 0.3
-"""Accelerometer noise 1 sigma (m/s^2)."""
+from harness.scenarios.simulate import Run
+from model.params import ParameterError, VehicleConfig
+
+GRAVITY = 9.81
 GYRO_OUTLIERS = ((2.0, 0.47), (7.0, 0.84))
 """Seed 000 Fig. 6b: (time s, value rad/s) of single-sample yaw-rate spikes."""
+WHEELS = ("fl", "fr", "rl", "rr")
 
 
-def add_noise(rng: np.random.Generator, ax, ay, r):
-    """Measured ax, ay, r: truth plus Gaussian white noise."""
-    return (ax + rng.normal(0.0, ACCEL_NOISE, len(ax)),
-            ay + rng.normal(0.0, ACCEL_NOISE, len(ay)),
-            r + rng.normal(0.0, GYRO_NOISE, len(r)))
+def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bool) -> dict:
+    """The measured log columns (design.md) of ``run``."""
+    if config.sensors is None:
+        raise ParameterError(f"{config.source}: no [sensors] table: expected the sensor model to "
+                             f"simulate (see vehicles/c_class.toml)")
+    sensors, plant = config.sensors, config.plant
+    rng = np.random.default_rng(seed)
+    n = len(run.t)
+    phi = plant["roll_gradient"] * run.state("ay_lt")
+    theta = -plant["pitch_gradient"] * run.state("ax_lt")
+    ax = run.truth_of("ax") * np.cos(theta) - GRAVITY * np.sin(theta)
+    ay = run.truth_of("ay") * np.cos(phi) + GRAVITY * np.sin(phi)
+    r = run.state("r").copy()
+    ax += rng.normal(0.0, sensors["accel_noise"], n) + (sensors["accel_bias"] if bias else 0.0)
+    ay += rng.normal(0.0, sensors["accel_noise"], n) + (sensors["accel_bias"] if bias else 0.0)
+    r += rng.normal(0.0, sensors["gyro_noise"], n) + (sensors["gyro_bias"] if bias else 0.0)
+    if outliers:
+        r = inject_gyro_outliers(run.t, r)
+    omegas = {f"omega_{w}": run.state(f"omega_{w}") + rng.normal(0.0, sensors["wheel_speed_noise"], n)
+              for w in WHEELS}
+    vx = 0.5 * (omegas["omega_rl"] + omegas["omega_rr"]) * config.vehicle["wheel_radius"]
+    return {"delta": run.input("delta"), "vx": vx, "ax": ax, "ay": ay, "r": r, **omegas}
 
 
 def inject_gyro_outliers(t: np.ndarray, r: np.ndarray) -> np.ndarray:
