@@ -20,7 +20,9 @@ from model.params import VehicleConfig
 LEAD_IN = 40.0
 """Straight road before a course (m)."""
 RUN_OUT = 60.0
-"""Straight road after a course (m)."""
+"""Straight road after a course (m), at least."""
+MIN_DLC_DURATION = 10.0
+"""A DLC log lasts at least this long (s): seed 000's Fig. 6 run has an outlier at 7 s."""
 GRAVITY = 9.81
 
 
@@ -30,7 +32,7 @@ def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: 
     driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on."""
     speed = speed_kmh / 3.6
     course = courses.iso_dlc(LEAD_IN, _width(config))
-    duration = (course.length + RUN_OUT) / speed
+    duration = max((course.length + RUN_OUT) / speed, MIN_DLC_DURATION)
     return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias)
 
 

@@ -1,0 +1,98 @@
+"""Scenarios and the sensor model: names, columns, reports, determinism, sensor effects."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.logs import REQUIRED, TRUTH
+from harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option
+
+STABLE_NAMES = {"dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook"}
+
+
+def test_stable_names():
+    assert STABLE_NAMES <= set(SCENARIOS)
+
+
+@pytest.mark.parametrize("name", sorted(SCENARIOS))
+def test_every_scenario_gives_a_complete_log(config, name):
+    log = Case.of(name).simulate(config, 100.0)
+    for column in (*REQUIRED, *TRUTH):
+        assert column in log, column
+    assert np.allclose(np.diff(log["t"]), 0.01)
+    for column in ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu"):
+        assert np.all(np.isfinite(log[column]))
+    if name != "invalid_inputs":
+        assert all(np.all(np.isfinite(log[c])) for c in REQUIRED)
+
+
+def test_dlc_reports_cones_and_spin(config):
+    clean = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
+    assert clean.notes["stayed in cones"] == "yes" and clean.notes["spun"] == "no"
+    assert not clean["off_course"].any()
+    hard = Case.of("dlc", speed_kmh=120.0, mu=0.35).simulate(config, 100.0)
+    assert hard.notes["stayed in cones"].startswith("no") and hard["off_course"].any()
+
+
+def test_continuous_dlc_friction_steps(config):
+    log = Case.of("continuous_dlc").simulate(config, 100.0)
+    assert log["t"][-1] == pytest.approx(30.0)
+    mu = log["mu"]
+    assert set(np.unique(mu)) == {0.35, 0.5, 0.85}
+    assert mu[int(8.9 * 100)] == 0.85 and mu[int(9.1 * 100)] == 0.5 and mu[int(18.1 * 100)] == 0.35
+    assert log.notes["stayed in cones"] == "yes" and log.notes["spun"] == "no"
+    assert log["vx_ref"].min() > 32.5  # speed held at 120 km/h
+
+
+def test_sensor_noise_is_seeded(config):
+    a = Case.of("sine_steer").simulate(config, 100.0, seed=3)
+    b = Case.of("sine_steer").simulate(config, 100.0, seed=3)
+    c = Case.of("sine_steer").simulate(config, 100.0, seed=4)
+    np.testing.assert_array_equal(a["ay"], b["ay"])
+    assert not np.array_equal(a["ay"], c["ay"])
+    noise = a["r"] - a["r_ref"]
+    assert np.std(noise) == pytest.approx(config.sensors["gyro_noise"], rel=0.1)
+
+
+def test_outliers_and_bias(config):
+    log = Case.of("dlc", speed_kmh=120.0, outliers=True).simulate(config, 100.0)
+    assert log["r"][200] == 0.47 and log["r"][700] == 0.84
+    plain = Case.of("step_steer").simulate(config, 100.0)
+    biased = Case.of("step_steer", bias=True).simulate(config, 100.0)
+    np.testing.assert_allclose(np.mean(biased["ay"] - plain["ay"]), config.sensors["accel_bias"])
+    np.testing.assert_allclose(np.mean(biased["r"] - plain["r"]), config.sensors["gyro_bias"])
+
+
+def test_body_roll_shows_in_lateral_accelerometer(config):
+    """In a steady left turn the rolled accelerometer reads more than the CG acceleration."""
+    log = Case.of("step_steer").simulate(config, 100.0)
+    steady = slice(400, 600)
+    ay_true = log["vx_ref"][steady] * log["r_ref"][steady]  # steady state: ay = vx r
+    excess = np.mean(log["ay"][steady]) - np.mean(ay_true)
+    expected = 9.81 * np.sin(config.plant["roll_gradient"] * np.mean(ay_true))
+    assert excess == pytest.approx(expected, rel=0.15)
+    assert excess > 0.3  # "several tenths of m/s^2"
+
+
+def test_vx_from_rear_wheels(config):
+    log = Case.of("dlc").simulate(config, 100.0)
+    vx = 0.5 * (log["omega_rl"] + log["omega_rr"]) * config.vehicle["wheel_radius"]
+    np.testing.assert_array_equal(log["vx"], vx)
+    assert np.abs(log["vx"] - log["vx_ref"]).max() < 0.1
+
+
+@pytest.mark.parametrize("text,fragment", [
+    ("speed=3", "unknown option 'speed=3'"),
+    ("speed_kmh", "unknown option"),
+    ("speed_kmh=fast", "speed_kmh = 'fast': expected a float"),
+    ("outliers=maybe", "expected a bool"),
+])
+def test_option_errors(text, fragment):
+    with pytest.raises(ScenarioError, match=fragment.replace("(", r"\(").replace("'", "'")):
+        parse_option("dlc", text)
+
+
+def test_option_parsing():
+    assert parse_option("dlc", "speed_kmh=120") == ("speed_kmh", 120.0)
+    assert parse_option("dlc", "outliers=true") == ("outliers", True)
