@@ -6,17 +6,20 @@ status 2; a failed check ends with status 1.
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
 import click
+import numpy as np
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
 from codegen import generate as codegen
+from harness.logs import LogError, read_estimates, read_log, write_log
 from harness.paths import DEFAULT_VEHICLE, GENERATED
-from harness.scenarios import SCENARIOS, VERIFICATION_SET
+from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
 from model.estimators import BUILDERS
 from model.params import ParameterError, VehicleConfig
@@ -33,11 +36,21 @@ class UserError(click.ClickException):
         click.echo(f"vsegen: error: {self.message}", err=True)
 
 
-def _load(path: Path) -> VehicleConfig:
-    try:
-        return load_vehicle(path)
-    except ParameterError as exc:
-        raise UserError(str(exc)) from None
+def user_errors(command):
+    """Turn the user-facing errors of a command into one line and exit status 2."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except (ParameterError, LogError, ScenarioError) as exc:
+            raise UserError(str(exc)) from None
+
+    return wrapper
+
+
+VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
+                              show_default="vehicles/c_class.toml", help="Vehicle TOML.")
 
 
 def _estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str]:
@@ -71,12 +84,13 @@ def main() -> None:
               help="Folder that receives <vehicle>/<estimator>/.")
 @click.option("--check", "check_only", is_flag=True,
               help="Do not write: compare with --out and print a unified diff of what would change.")
+@user_errors
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
              check_only: bool) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
     stale = []
     for path in vehicles or tuple(shipped_vehicles()):
-        config = _load(path)
+        config = load_vehicle(path)
         for name in _estimators(config, estimators):
             folder = out / config.name / name
             files = codegen.render(config, name)
@@ -98,18 +112,17 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
 
 
 @main.command()
-@click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
-              show_default="vehicles/c_class.toml",
-              help="Vehicle TOML.")
+@VEHICLE_OPTION
 @click.option("--estimator", "estimators", multiple=True,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
+@user_errors
 def verify(vehicle: Path, estimators: tuple[str, ...], seed: int) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
     from harness.compare import FLOOR, RELATIVE_TOLERANCE
     from harness.verify import verify_estimator
 
-    config = _load(vehicle)
+    config = load_vehicle(vehicle)
     names = _estimators(config, estimators)
     results = []
     with Progress(console=console, transient=True) as progress:
@@ -139,11 +152,111 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int) -> None:
     console.print(f"verify passed: {len(results)} runs, every output within tolerance")
 
 
+@main.command()
+@click.argument("scenario")
+@VEHICLE_OPTION
+@click.option("--set", "options", multiple=True, metavar="KEY=VALUE",
+              help="Scenario option (repeatable), e.g. --set speed_kmh=120 --set mu=0.5.")
+@click.option("--seed", default=1, show_default=True, help="Seed of the sensor noise.")
+@click.option("--rate", default=100.0, show_default=True, help="Log rate in Hz.")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Log CSV to write.")
+@user_errors
+def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, rate: float,
+             out: Path) -> None:
+    """Simulate SCENARIO on the truth plant and write its log (design.md format)."""
+    if scenario not in SCENARIOS:
+        raise UserError(f"unknown scenario '{scenario}': expected one of {', '.join(SCENARIOS)}")
+    if not rate > 0:
+        raise UserError(f"--rate {rate}: expected a rate in Hz > 0")
+    config = load_vehicle(vehicle)
+    case = Case.of(scenario, **dict(parse_option(scenario, o) for o in options))
+    with console.status(f"simulating {case.label} at {rate:g} Hz"):
+        log = case.simulate(config, rate, seed)
+    write_log(log, out)
+    report = ", ".join(f"{k}: {v}" for k, v in log.notes.items())
+    console.print(f"wrote {out} ({len(log)} samples, {log['t'][-1]:.2f} s): {report}")
+
+
+@main.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True, help="Input log CSV.")
+@click.option("--estimator", required=True, help="Estimator name.")
+@VEHICLE_OPTION
+@click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
+              help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Estimates CSV to write.")
+@user_errors
+def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path) -> None:
+    """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
+    from harness.run import run_estimator
+
+    config = load_vehicle(vehicle)
+    _estimators(config, (estimator,))
+    log = read_log(log_path)
+    with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
+        estimates = run_estimator(config, estimator, log, backend)
+    write_log(estimates, out)
+    flagged = int(np.count_nonzero(estimates["status"]))
+    console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, "
+                  f"{flagged} with status != 0)")
+
+
+@main.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Log CSV with ground truth.")
+@click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
+              help="Estimates CSV from `vsegen run`.")
+@user_errors
+def score(log_path: Path, est_path: Path) -> None:
+    """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
+    from harness.score import score as compute
+
+    log = read_log(log_path)
+    scores = compute(log, read_estimates(est_path))
+    table = Table(title=f"{est_path} against {log_path}")
+    for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
+        table.add_column(column, justify="left" if column == "signal" else "right")
+    for s in scores:
+        table.add_row(f"{s.signal} ({s.unit})", str(s.samples), f"{s.max:.3f}", f"{s.mean:.3f}",
+                      f"{s.rmse:.3f}")
+    console.print(table)
+    if "off_course" in log and np.any(log["off_course"] > 0):
+        first = log["t"][np.argmax(log["off_course"] > 0)]
+        console.print(f"warning: the run left the course or spun from t = {first:.2f} s "
+                      f"(column off_course); these scores include those samples")
+
+
+@main.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Log CSV with ground truth.")
+@click.option("--est", "est_paths", type=click.Path(path_type=Path), multiple=True, required=True,
+              help="Estimates CSV (repeatable).")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="PNG to write.")
+@user_errors
+def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path) -> None:
+    """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style)."""
+    from harness.plot import plot as draw
+
+    log = read_log(log_path)
+    if "beta_ref" not in log:
+        raise UserError(f"{log_path}:1: missing column 'beta_ref': expected ground truth to plot")
+    estimates = {}
+    for path in est_paths:
+        est = read_estimates(path)
+        if len(est) != len(log):
+            raise UserError(f"{path}: {len(est)} samples: expected {len(log)} like {log_path}")
+        estimates[path.stem] = est
+    draw(log, estimates, out, title=log_path.name)
+    console.print(f"wrote {out}")
+
+
 @main.command(name="list")
 def list_() -> None:
     """List the estimators, scenarios and vehicles vsegen knows."""
     console.print("estimators: " + ", ".join(BUILDERS))
-    console.print("scenarios:  " + ", ".join(f"{s.name} ({s.description})" for s in SCENARIOS.values()))
+    console.print("scenarios:")
+    for s in SCENARIOS.values():
+        options = " ".join(f"{k}={v}" for k, v in s.defaults.items())
+        console.print(f"  {s.name}: {s.description}" + (f"  [options: {options}]" if options else ""))
     console.print("vehicles:   " + ", ".join(_display(p) for p in shipped_vehicles()))
 
 

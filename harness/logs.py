@@ -92,8 +92,14 @@ def _format(value) -> str:
     return "nan" if math.isnan(value) else format(float(value), ".17g")
 
 
-def read_log(path: Path, required: tuple[str, ...] = REQUIRED) -> Log:
-    """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem."""
+def read_estimates(path: Path) -> Log:
+    """Read an estimates file written by ``vsegen run``: ``t``, ``beta`` and other numeric columns."""
+    return read_log(path, required=("t", "beta"), all_numeric=True)
+
+
+def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool = False) -> Log:
+    """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem. Columns
+    not named by design.md are kept as text unless ``all_numeric``."""
     source = str(path)
     text = read_user_text(path, LogError, "CSV log")
     rows = list(csv.reader(io.StringIO(text)))
@@ -112,7 +118,7 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED) -> Log:
         data.pop()
     if len(data) < 2:
         raise LogError(f"{source}:{len(data) + 2}: only {len(data)} data row(s): expected at least 2")
-    known = set(REQUIRED) | set(OPTIONAL_INPUTS) | set(TRUTH)
+    known = set(header) if all_numeric else set(REQUIRED) | set(OPTIONAL_INPUTS) | set(TRUTH)
     cells: list[list] = [[] for _ in header]
     for index, row in enumerate(data):
         line = index + 2

@@ -62,3 +62,51 @@ def test_bad_vehicle_file_is_one_line(tmp_path):
 def test_list():
     result = vsegen("list")
     assert result.returncode == 0 and "kf2dof" in result.stdout and "dlc" in result.stdout
+
+
+def test_simulate_run_score_plot(tmp_path):
+    log, est, ref, fig = (tmp_path / n for n in ("log.csv", "est.csv", "ref.csv", "fig.png"))
+    result = vsegen("simulate", "dlc", "--set", "speed_kmh=100", "--seed", "2", "--out", str(log))
+    assert result.returncode == 0, result.stderr
+    assert "stayed in cones" in result.stdout
+    for backend, out in (("c", est), ("reference", ref)):
+        result = vsegen("run", "--log", str(log), "--estimator", "kf2dof", "--backend", backend,
+                        "--out", str(out))
+        assert result.returncode == 0, result.stderr
+    header = est.read_text().splitlines()[0]
+    assert header == "t,beta,vy,r,status"
+    result = vsegen("score", "--log", str(log), "--est", str(est))
+    assert result.returncode == 0 and "beta (deg)" in result.stdout and "RMSE" in result.stdout
+    result = vsegen("plot", "--log", str(log), "--est", str(est), "--est", str(ref), "--out", str(fig))
+    assert result.returncode == 0, result.stderr
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_run_at_another_rate_generates_for_it(tmp_path):
+    log, est = tmp_path / "log.csv", tmp_path / "est.csv"
+    assert vsegen("simulate", "sine_steer", "--rate", "200", "--out", str(log)).returncode == 0
+    result = vsegen("run", "--log", str(log), "--estimator", "kf2dof", "--out", str(est))
+    assert result.returncode == 0, result.stderr
+    assert "T = 0.005 s" in result.stdout
+
+
+@pytest.mark.parametrize("args,fragment", [
+    (["simulate", "nope", "--out", "x.csv"], "unknown scenario 'nope'"),
+    (["simulate", "dlc", "--set", "mu=slippery", "--out", "x.csv"], "mu = 'slippery': expected a float"),
+    (["run", "--log", "missing.csv", "--estimator", "kf2dof", "--out", "x.csv"], "missing.csv: cannot read"),
+    (["score", "--log", "missing.csv", "--est", "e.csv"], "missing.csv: cannot read"),
+])
+def test_more_user_errors(tmp_path, args, fragment):
+    result = vsegen(*args, cwd=tmp_path)
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and fragment in result.stderr
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_score_rejects_mismatched_files(tmp_path):
+    a, b, est = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "est.csv"
+    assert vsegen("simulate", "sine_steer", "--out", str(a)).returncode == 0
+    assert vsegen("simulate", "step_steer", "--out", str(b)).returncode == 0
+    assert vsegen("run", "--log", str(b), "--estimator", "kf2dof", "--out", str(est)).returncode == 0
+    result = vsegen("score", "--log", str(a), "--est", str(est))
+    assert result.returncode == 2 and "expected the same time stamps" in result.stderr

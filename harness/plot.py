@@ -1,0 +1,60 @@
+"""Seed 000 Fig. 8 style plot: beta against the reference, |delta beta| over time, background
+shaded where a switching estimator used its kinematic scheme (``mode`` = 1)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from harness.logs import Log  # noqa: E402
+
+KINEMATIC = 1
+
+
+def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> None:
+    """Write a PNG with beta (deg) over time and the absolute error (deg) of each estimate."""
+    t = log["t"]
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5.5),
+                                      gridspec_kw={"height_ratios": [3, 2]})
+    top.plot(t, np.rad2deg(log["beta_ref"]), color="black", lw=1.6, label="reference (truth)")
+    for label, est in estimates.items():
+        line, = top.plot(t, np.rad2deg(est["beta"]), lw=1.0, label=label)
+        error = np.abs(np.rad2deg(est["beta"] - log["beta_ref"]))
+        bottom.plot(t, error, lw=1.0, color=line.get_color(), label=label)
+    for est in estimates.values():
+        if "mode" in est:
+            for axis in (top, bottom):
+                _shade(axis, t, est["mode"] == KINEMATIC)
+            top.fill_between([], [], color="tab:orange", alpha=0.15, label="kinematic scheme")
+            break
+    if "off_course" in log and log["off_course"].any():
+        first = t[np.argmax(log["off_course"] > 0)]
+        for axis in (top, bottom):
+            axis.axvline(first, color="red", ls=":", lw=1)
+        top.text(first, top.get_ylim()[1], " off course / cone", color="red", va="top", fontsize=8)
+    top.set_ylabel("sideslip angle β (deg)")
+    bottom.set_ylabel("|Δβ| (deg)")
+    bottom.set_xlabel("time (s)")
+    top.legend(loc="upper right", fontsize=8)
+    top.grid(alpha=0.3)
+    bottom.grid(alpha=0.3)
+    if title:
+        top.set_title(title, fontsize=10)
+    fig.tight_layout()
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(out)
+
+
+def _shade(axis, t: np.ndarray, mask: np.ndarray) -> None:
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(int), [0]))))
+    for start, stop in zip(edges[::2], edges[1::2]):
+        axis.axvspan(t[start], t[min(stop, len(t) - 1)], color="tab:orange", alpha=0.15, lw=0)

@@ -1,0 +1,52 @@
+"""Accuracy of estimates against ground truth, in the format of seed 000's Table 3.
+
+e = estimate - truth over the samples that have ground truth; max |e|, mean |e| and RMSE.
+Reports show beta and r in degrees (deg, deg/s) and vy in m/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.logs import Log, LogError
+
+SIGNALS = (  # estimate column, truth column, report unit, factor from SI
+    ("beta", "beta_ref", "deg", 180.0 / np.pi),
+    ("vy", "vy_ref", "m/s", 1.0),
+    ("r", "r_ref", "deg/s", 180.0 / np.pi),
+)
+
+
+@dataclass(frozen=True)
+class Score:
+    signal: str
+    unit: str
+    samples: int
+    max: float
+    mean: float
+    rmse: float
+
+
+def errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """e over the samples where both are finite."""
+    keep = np.isfinite(estimate) & np.isfinite(truth)
+    return estimate[keep] - truth[keep]
+
+
+def score(log: Log, estimates: Log) -> list[Score]:
+    """Scores of every estimated signal that has ground truth in ``log``."""
+    if len(log) != len(estimates) or not np.allclose(log["t"], estimates["t"], rtol=0, atol=1e-9):
+        raise LogError(f"{estimates.source}:2: column 't': expected the same time stamps as "
+                       f"{log.source} ({len(log)} samples)")
+    if "beta_ref" not in log:
+        raise LogError(f"{log.source}:1: missing column 'beta_ref': expected ground truth to score")
+    scores = []
+    for name, truth, unit, factor in SIGNALS:
+        if name in estimates and truth in log:
+            e = errors(estimates[name], log[truth]) * factor
+            if e.size:
+                scores.append(Score(name, unit, e.size, float(np.abs(e).max()),
+                                    float(np.abs(e).mean()), float(np.sqrt(np.mean(e * e)))))
+    return scores
