@@ -1,0 +1,1 @@
+"""Benchmarks and accuracy reports (run as commands, never as pass/fail tests)."""
