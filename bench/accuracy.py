@@ -5,7 +5,7 @@
 Prints and writes a Markdown table: per scenario whether the run stayed in the cones / spun, and per
 estimator the beta max / mean / RMSE in degrees (seed 000 Table 3 format; with --seeds N > 1,
 mean ± standard deviation over seeds 1..N), plus vy and r RMSE. Also draws a seed-000-Fig.-8-style
-plot of each estimator on the continuous DLC into docs/figures/.
+plot of each estimator on every scenario (seed 1) into docs/figures/.
 """
 
 from __future__ import annotations
@@ -34,11 +34,20 @@ SCORING_SET: tuple[Case, ...] = (
     Case.of("sine_steer"),
     Case.of("fishhook"),
 )
-FIGURE_CASE = Case.of("continuous_dlc")
 
 
 def _cell(values: list[float]) -> str:
     return f"{np.mean(values):.3f}" if len(values) == 1 else f"{np.mean(values):.3f} ± {np.std(values):.3f}"
+
+
+def _figure(config, case: Case, names: list[str]) -> str:
+    """Plot every estimator on ``case`` (seed 1); returns the Markdown line embedding it."""
+    log = case.simulate(config, 1.0 / config.sample_time, 1)
+    slug = case.label.replace("(", "_").replace(")", "").replace(",", "_").replace("=", "")
+    figure = REPO / "docs" / "figures" / f"{slug}.png"
+    plot(log, {name: run_estimator(config, name, log) for name in names}, figure,
+         title=f"{case.label}, vehicle {config.name}, seed 1")
+    return f"![{case.label}](figures/{figure.name})"
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -51,6 +60,7 @@ def main(argv: list[str] | None = None) -> None:
     names = list(config.estimators)
     rows = ["| scenario | stayed in cones | spun | estimator | β max (°) | β mean (°) | β RMSE (°) "
             "| v_y RMSE (m/s) | r RMSE (°/s) |", "|---|---|---|---|---|---|---|---|---|"]
+    figures = []
     for case in track(SCORING_SET, description="scoring", console=Console(stderr=True)):
         stats: dict[str, dict[str, list[float]]] = {n: {} for n in names}
         for seed in range(1, args.seeds + 1):
@@ -60,6 +70,7 @@ def main(argv: list[str] | None = None) -> None:
                     for key, value in ((f"{s.signal}_max", s.max), (f"{s.signal}_mean", s.mean),
                                        (f"{s.signal}_rmse", s.rmse)):
                         stats[name].setdefault(key, []).append(value)
+        figures.append(_figure(config, case, names))
         cones = log.notes.get("stayed in cones", "-").split(" (")[0]
         spun = log.notes.get("spun", "-").split(" (")[0]
         for name in names:
@@ -67,13 +78,6 @@ def main(argv: list[str] | None = None) -> None:
             rows.append(f"| {case.label} | {cones} | {spun} | {name} | {_cell(st['beta_max'])} | "
                         f"{_cell(st['beta_mean'])} | {_cell(st['beta_rmse'])} | "
                         f"{_cell(st['vy_rmse'])} | {_cell(st['r_rmse'])} |")
-    figures = []
-    log = FIGURE_CASE.simulate(config, 1.0 / config.sample_time, 1)
-    for name in names:
-        figure = REPO / "docs" / "figures" / f"{name}_{FIGURE_CASE.scenario}.png"
-        plot(log, {name: run_estimator(config, name, log)}, figure,
-             title=f"{name} on {FIGURE_CASE.label}, vehicle {config.name}, seed 1")
-        figures.append(f"![{name} on {FIGURE_CASE.label}](figures/{figure.name})")
     text = "\n".join([
         f"# Accuracy on the common scenarios (vehicle {config.name})",
         "",
@@ -84,6 +88,8 @@ def main(argv: list[str] | None = None) -> None:
         "course (see the columns).",
         "",
         *rows,
+        "",
+        "## Plots (seed 1)",
         "",
         *figures,
         "",

@@ -170,8 +170,10 @@ def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, 
         raise UserError(f"--rate {rate}: expected a rate in Hz > 0")
     config = load_vehicle(vehicle)
     case = Case.of(scenario, **dict(parse_option(scenario, o) for o in options))
-    with console.status(f"simulating {case.label} at {rate:g} Hz"):
-        log = case.simulate(config, rate, seed)
+    with Progress(console=console, transient=True) as progress:
+        task = progress.add_task(f"simulating {case.label} at {rate:g} Hz", total=1.0)
+        log = case.simulate(config, rate, seed,
+                            progress=lambda done: progress.update(task, completed=done))
     write_log(log, out)
     report = ", ".join(f"{k}: {v}" for k, v in log.notes.items())
     console.print(f"wrote {out} ({len(log)} samples, {log['t'][-1]:.2f} s): {report}")

@@ -49,7 +49,7 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
-    fig.savefig(tmp, dpi=110)
+    fig.savefig(tmp, dpi=80)
     plt.close(fig)
     tmp.replace(out)
 

@@ -96,3 +96,11 @@ def test_option_errors(text, fragment):
 def test_option_parsing():
     assert parse_option("dlc", "speed_kmh=120") == ("speed_kmh", 120.0)
     assert parse_option("dlc", "outliers=true") == ("outliers", True)
+
+
+def test_friction_by_distance(config):
+    log = Case.of("continuous_dlc", switch_by="distance", switch_times="300,600").simulate(config, 100.0)
+    travelled = np.cumsum(log["vx_ref"]) * 0.01
+    assert np.all(log["mu"][travelled < 295] == 0.85)
+    assert np.all(log["mu"][(travelled > 305) & (travelled < 595)] == 0.5)
+    assert np.all(log["mu"][travelled > 605] == 0.35)

@@ -12,7 +12,7 @@ from typing import Any, Callable
 
 from harness.logs import Log
 from harness.scenarios import manoeuvres
-from model.params import VehicleConfig
+from model.params import ParameterError, VehicleConfig
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,7 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("continuous_dlc", "seed 000: three DLCs back to back, friction 0.85 -> 0.5 -> 0.35",
              manoeuvres.continuous_dlc,
              {"speed_kmh": 120.0, "mu_sequence": "0.85,0.5,0.35", "switch_times": "9,18",
-              "duration": 30.0, "outliers": False, **_NOISE}),
+              "switch_by": "time", "duration": 30.0, "outliers": False, **_NOISE}),
     Scenario("step_steer", "seed 001: front wheels stepped to 0.05 rad, speed held",
              manoeuvres.step_steer, {"speed_kmh": 80.0, "mu": 1.0, "delta": 0.05, "t_step": 1.0,
                                      "duration": 6.0, **_NOISE}),
@@ -86,13 +86,19 @@ class Case:
         text = ",".join(f"{k}={v}" for k, v in self.options)
         return f"{self.scenario}({text})" if text else self.scenario
 
-    def simulate(self, config: VehicleConfig, rate_hz: float, seed: int = 1) -> Log:
+    def simulate(self, config: VehicleConfig, rate_hz: float, seed: int = 1,
+                 progress: Callable[[float], None] | None = None) -> Log:
         """The log of this case (memoised per vehicle configuration, rate and seed)."""
         key = (self, config.fingerprint(), rate_hz, seed)
         if key not in _MEMO:
             scenario = SCENARIOS[self.scenario]
-            _MEMO[key] = scenario.simulate(config, rate_hz, seed,
-                                           **{**scenario.defaults, **dict(self.options)})
+            try:
+                _MEMO[key] = scenario.simulate(config, rate_hz, seed, progress=progress,
+                                               **{**scenario.defaults, **dict(self.options)})
+            except ValueError as exc:
+                if isinstance(exc, (ScenarioError, ParameterError)):
+                    raise
+                raise ScenarioError(f"scenario {self.label}: {exc}") from None
         log = _MEMO[key]
         return Log({k: v.copy() for k, v in log.columns.items()}, log.source, dict(log.notes))
 

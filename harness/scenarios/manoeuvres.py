@@ -1,12 +1,11 @@
 """The manoeuvres. Each returns a Log at ``rate_hz`` with the columns of design.md, the truth
-columns, and notes saying whether the car stayed inside the cones and did not spin.
+columns, and notes saying whether the car stayed inside the cones and did not spin. ``progress``,
+if given, is called with the fraction simulated.
 
 Scenario parameters not given by the seeds are marked *assumption* in the docstrings.
 """
 
 from __future__ import annotations
-
-from typing import Callable
 
 import numpy as np
 
@@ -14,7 +13,7 @@ from harness.logs import Log
 from harness.scenarios import course as courses
 from harness.scenarios import sensors
 from harness.scenarios.driver import PathFollower, SpeedHold
-from harness.scenarios.simulate import SPIN_BETA, Run, simulate, substeps
+from harness.scenarios.simulate import SPIN_BETA, FrictionProfile, Run, simulate, substeps
 from model.params import VehicleConfig
 
 LEAD_IN = 40.0
@@ -27,63 +26,62 @@ GRAVITY = 9.81
 
 
 def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-        outliers: bool, bias: bool) -> Log:
+        outliers: bool, bias: bool, progress=None) -> Log:
     """ISO 3888-1 double lane change at constant ``speed_kmh`` on friction ``mu``, path-following
     driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on."""
     speed = speed_kmh / 3.6
     course = courses.iso_dlc(LEAD_IN, _width(config))
     duration = max((course.length + RUN_OUT) / speed, MIN_DLC_DURATION)
-    return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias)
+    return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias,
+                  progress)
 
 
 def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
-                   mu_sequence: str, switch_times: str, duration: float, outliers: bool,
-                   bias: bool) -> Log:
+                   mu_sequence: str, switch_times: str, switch_by: str, duration: float,
+                   outliers: bool, bias: bool, progress=None) -> Log:
     """Seed 000 scenario B: three double lane changes back to back at constant speed, the road
-    friction stepping through ``mu_sequence`` (comma-separated) at ``switch_times`` (s).
+    friction stepping through ``mu_sequence`` (comma-separated) at ``switch_times`` (s, or m of
+    travelled distance when ``switch_by`` is "distance"); one DLC per friction segment.
 
     The seed gives no geometry: each DLC has the ISO offset (3.5 m) and lane widths, and a
     transition length chosen so that its centre line asks for 70 % of the friction then
     available, L = pi v sqrt(offset / (2 * 0.7 mu g)), as a skilled driver would (*assumption*).
     """
     speed = speed_kmh / 3.6
-    mus = [float(m) for m in mu_sequence.split(",")]
-    switches = [float(s) for s in switch_times.split(",")]
-    if len(mus) != len(switches) + 1:
-        raise ValueError("mu_sequence needs one value more than switch_times")
-    segment_starts = [0.0] + [s * speed for s in switches]
-    transitions = [np.pi * speed * np.sqrt(courses.ISO_OFFSET / (2 * 0.7 * m * GRAVITY)) for m in mus]
+    profile = FrictionProfile(_numbers("mu_sequence", mu_sequence),
+                              _numbers("switch_times", switch_times), switch_by)
+    scale = speed if switch_by == "time" else 1.0
+    segment_starts = [0.0] + [s * scale for s in profile.switches]
+    transitions = [np.pi * speed * np.sqrt(courses.ISO_OFFSET / (2 * 0.7 * m * GRAVITY))
+                   for m in profile.values]
     course = courses.lane_changes([x + LEAD_IN for x in segment_starts], transitions, 25.0,
                                   _width(config))
-
-    def mu(t: float, state: np.ndarray) -> float:
-        return mus[int(np.searchsorted(switches, t, side="right"))]
-
-    return _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias)
+    return _drive(config, rate_hz, seed, course, speed, duration, profile, outliers, bias, progress)
 
 
 def step_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-               delta: float, t_step: float, duration: float, bias: bool) -> Log:
+               delta: float, t_step: float, duration: float, bias: bool, progress=None) -> Log:
     """Seed 001's step steer: front road-wheel angle to ``delta`` rad at ``t_step`` s (ramped over
     0.1 s, *assumption*: a true step is not physical), speed held."""
     def steer(t: float, state: np.ndarray) -> float:
         return delta * float(np.clip((t - t_step) / 0.1, 0.0, 1.0))
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
 
 
 def sine_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-               amplitude: float, frequency: float, duration: float, bias: bool) -> Log:
+               amplitude: float, frequency: float, duration: float, bias: bool,
+               progress=None) -> Log:
     """Seed 003's sine steer: delta = amplitude sin(2 pi f (t - 1)) after 1 s straight, speed held
     (amplitude 0.02 rad and 0.5 Hz are *assumptions*: the seed gives none)."""
     def steer(t: float, state: np.ndarray) -> float:
         return amplitude * np.sin(2 * np.pi * frequency * (t - 1.0)) if t > 1.0 else 0.0
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
 
 
 def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-             amplitude: float, duration: float, bias: bool) -> Log:
+             amplitude: float, duration: float, bias: bool, progress=None) -> Log:
     """Seed 002's fishhook (NHTSA profile, reconstructed): after 1 s straight, steer to
     +amplitude in 0.25 s, hold 0.25 s, to -amplitude in 0.5 s, hold 3 s, back to 0 in 0.5 s."""
     times = np.array([0.0, 1.0, 1.25, 1.5, 2.0, 5.0, 5.5])
@@ -92,10 +90,10 @@ def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
     def steer(t: float, state: np.ndarray) -> float:
         return float(np.interp(t, times, values))
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
 
 
-def low_speed(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
+def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
     """Synthetic steady-state cornering while the speed falls 12 -> 0 -> -1 (reverse) -> 12 m/s;
     exercises the estimators' low-speed hold (no plant: the plant needs |v| > 3.5 m/s)."""
     vehicle = config.vehicle
@@ -123,10 +121,10 @@ def low_speed(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
     }, source="<simulated low_speed>", notes={"run": "synthetic, no plant"})
 
 
-def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
+def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
     """The 80 km/h DLC with bad samples: NaN, +-Inf and out-of-range values in every input, alone
     and in runs, so every hold/resume path is taken."""
-    log = dlc(config, rate_hz, seed, 80.0, 1.0, False, False)
+    log = dlc(config, rate_hz, seed, 80.0, 1.0, False, False, progress)
     n = len(log)
     faults = (
         ("ay", 0.30, 1, np.nan), ("r", 0.50, 1, np.inf), ("delta", 0.70, 1, -np.inf),
@@ -145,27 +143,34 @@ def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int) -> Log:
 # ------------------------------------------------------------------------------------------------
 
 
+def _numbers(key: str, text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(part) for part in text.split(","))
+    except ValueError:
+        raise ValueError(f"{key} = {text!r}: expected comma-separated numbers") from None
+
+
 def _width(config: VehicleConfig) -> float:
     return config.vehicle["track_width"] + courses.BODY_OVERHANG
 
 
-def _constant(mu: float) -> Callable[[float, np.ndarray], float]:
-    return lambda t, state: mu
+def _constant(mu: float) -> FrictionProfile:
+    return FrictionProfile((mu,))
 
 
-def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias) -> Log:
+def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress) -> Log:
     dt = 1.0 / (rate_hz * substeps(rate_hz))
     steer = PathFollower(config.vehicle, course.centre_line, dt)
     hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-    run = simulate(config, rate_hz, duration, speed, steer, hold, mu)
+    run = simulate(config, rate_hz, duration, speed, steer, hold, mu, progress=progress)
     hit = course.outside(run.state("X"), run.state("Y"), _width(config))
     return _log(config, run, seed, outliers, bias, hit)
 
 
-def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias) -> Log:
+def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress) -> Log:
     dt = 1.0 / (rate_hz * substeps(rate_hz))
     hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-    run = simulate(config, rate_hz, duration, speed, steer, hold, _constant(mu))
+    run = simulate(config, rate_hz, duration, speed, steer, hold, _constant(mu), progress=progress)
     return _log(config, run, seed, False, bias, np.zeros(len(run.t), dtype=bool))
 
 

@@ -60,12 +60,34 @@ def _plant(vehicle: tuple, params: tuple, dt: float) -> Plant:
     return build_plant(dict(vehicle), dict(params), dt)
 
 
+@dataclass(frozen=True)
+class FrictionProfile:
+    """Road friction by segments: ``values[i]`` until ``switches[i]`` (s of time, or m of
+    travelled distance X when ``by`` is "distance"), the last value after the last switch."""
+
+    values: tuple[float, ...]
+    switches: tuple[float, ...] = ()
+    by: str = "time"
+
+    def __post_init__(self) -> None:
+        if len(self.values) != len(self.switches) + 1:
+            raise ValueError("a friction profile needs one value more than switches")
+        if self.by not in ("time", "distance"):
+            raise ValueError("friction switches are by 'time' or 'distance'")
+
+    def __call__(self, t: float, state: np.ndarray) -> float:
+        where = t if self.by == "time" else state[STATE.index("X")]
+        return self.values[int(np.searchsorted(self.switches, where, side="right"))]
+
+
 def simulate(config: VehicleConfig, rate_hz: float, duration: float, speed: float,
              steer: Callable[[float, np.ndarray], float],
              torques: Callable[[float, np.ndarray], np.ndarray],
-             mu: Callable[[float, np.ndarray], float], y0: float = 0.0) -> Run:
+             mu: Callable[[float, np.ndarray], float], y0: float = 0.0,
+             progress: Callable[[float], None] | None = None) -> Run:
     """Integrate from straight running at ``speed`` (m/s) for ``duration`` s. ``steer``,
-    ``torques`` and ``mu`` are called every plant step with (t, state)."""
+    ``torques`` and ``mu`` are called every plant step with (t, state); ``progress`` (if given)
+    with the fraction done, every simulated second."""
     plant = plant_for(config, rate_hz)
     sub = substeps(rate_hz)
     samples = int(round(duration * rate_hz)) + 1
@@ -78,6 +100,8 @@ def simulate(config: VehicleConfig, rate_hz: float, duration: float, speed: floa
         u = np.concatenate(([steer(t, state)], torques(t, state), [mu(t, state)]))
         if k % sub == 0:
             states[k // sub], inputs[k // sub], truth[k // sub] = state, u, plant.truth(state, u)
+            if progress and (k // sub) % int(rate_hz) == 0:
+                progress(k / (samples * sub))
         state = plant.step(state, u)
         if not np.all(np.isfinite(state)):
             raise RuntimeError(f"truth plant diverged at t = {t:.3f} s")
