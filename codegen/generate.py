@@ -17,13 +17,14 @@ import casadi as ca
 import jinja2
 
 from codegen.kernel import generate_kernel
+from codegen.precision import literal
 from model import status
 from model.estimator import Estimator
 from model.estimators import build
 from model.params import VehicleConfig
+from model.schema import REALS
 
 TEMPLATES = Path(__file__).parent / "templates"
-REALS = ("double", "float")
 
 
 def generator_version() -> str:
@@ -32,17 +33,22 @@ def generator_version() -> str:
 
 
 def _environment() -> jinja2.Environment:
-    return jinja2.Environment(
+    env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(TEMPLATES),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
     )
+    return env
 
 
-def render(config: VehicleConfig, name: str, real: str = "double") -> dict[str, str]:
-    """All files of ``generated/<vehicle>/<name>/`` as {file name: text}."""
+def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[str, str]:
+    """All files of ``generated/<vehicle>/<name>/`` as {file name: text}; ``real`` ("double" or
+    "float") defaults to the vehicle file's [codegen] setting."""
+    real = real or config.codegen["real"]
+    if real not in REALS:
+        raise ValueError(f"real type {real!r}: expected one of {REALS}")
     estimator = build(name, config)
     kernel = generate_kernel(estimator, real)
     prefix = f"vse_{name}"
@@ -53,6 +59,7 @@ def render(config: VehicleConfig, name: str, real: str = "double") -> dict[str, 
         "guard": f"{prefix.upper()}_H",
         "vehicle": config.name,
         "sample_time": repr(config.sample_time),
+        "sample_time_literal": literal(config.sample_time, real),
         "real": real,
         "version": generator_version(),
         "casadi_version": ca.__version__,

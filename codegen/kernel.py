@@ -17,6 +17,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from codegen.precision import to_single
 from model.estimator import Estimator
 
 
@@ -55,7 +56,10 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()
         h_text = (Path(tmp) / f"{base}.h").read_text()
-    return Kernel(f"{base}.c", f"{base}.h", _mark_unused(c_text), h_text, _work_size(h_text), options)
+    c_text = _mark_unused(c_text)
+    if real == "float":
+        c_text = to_single(c_text)
+    return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, _work_size(h_text), options)
 
 
 def _work_size(h_text: str) -> int:

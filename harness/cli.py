@@ -49,6 +49,8 @@ def user_errors(command):
     return wrapper
 
 
+REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), default=None,
+                           help="C floating-point type. Default: the vehicle file's [codegen] real.")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
                               show_default="vehicles/c_class.toml", help="Vehicle TOML.")
 
@@ -84,16 +86,17 @@ def main() -> None:
               help="Folder that receives <vehicle>/<estimator>/.")
 @click.option("--check", "check_only", is_flag=True,
               help="Do not write: compare with --out and print a unified diff of what would change.")
+@REAL_OPTION
 @user_errors
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
-             check_only: bool) -> None:
+             check_only: bool, real: str | None) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
     stale = []
     for path in vehicles or tuple(shipped_vehicles()):
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
             folder = out / config.name / name
-            files = codegen.render(config, name)
+            files = codegen.render(config, name, real)
             if check_only:
                 diffs = codegen.check(files, folder, _display(folder))
                 if diffs:
@@ -116,22 +119,24 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
 @click.option("--estimator", "estimators", multiple=True,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
+@REAL_OPTION
 @user_errors
-def verify(vehicle: Path, estimators: tuple[str, ...], seed: int) -> None:
+def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
-    from harness.compare import FLOOR, RELATIVE_TOLERANCE
+    from harness.compare import TOLERANCES
     from harness.verify import verify_estimator
 
     config = load_vehicle(vehicle)
+    real = real or config.codegen["real"]
     names = _estimators(config, estimators)
     results = []
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("verifying", total=len(names) * len(VERIFICATION_SET))
         for name in names:
-            results += verify_estimator(config, name, seed=seed,
+            results += verify_estimator(config, name, seed=seed, real=real,
                                         progress=lambda: progress.advance(task))
     table = Table(title=f"generated C vs NumPy reference, vehicle {config.name}, "
-                        f"T = {config.sample_time} s, double")
+                        f"T = {config.sample_time} s, {real}")
     for column in ("estimator", "scenario", "samples", "signal", "max |diff|", "max rel diff",
                    "tolerance", "result"):
         table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
@@ -143,8 +148,9 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int) -> None:
                           tolerance, "ok" if diff.ok else "FAIL")
         table.add_section()
     console.print(table)
-    console.print(f"relative difference = |c - ref| / max(|c|, |ref|, {FLOOR:g}); tolerance "
-                  f"{RELATIVE_TOLERANCE['double']:.0e} (harness/compare.py)")
+    tolerance = TOLERANCES[real]
+    console.print(f"relative difference = |c - ref| / max(|c|, |ref|, {tolerance.floor:g}); "
+                  f"tolerance {tolerance.relative:.0e} for {real} (harness/compare.py)")
     failed = [r for r in results if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
@@ -249,6 +255,43 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path) -> None:
         estimates[path.stem] = est
     draw(log, estimates, out, title=log_path.name)
     console.print(f"wrote {out}")
+
+
+@main.command()
+@VEHICLE_OPTION
+@click.option("--estimator", "estimators", multiple=True,
+              help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
+@user_errors
+def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
+    """Cross-build every estimator for Cortex-M4F (float) and Cortex-M7 (double); print the
+    resource budget: .text/.data/.bss and worst-case stack (bytes)."""
+    from harness.targets import TARGETS, TargetError, available, build_for_target
+
+    config = load_vehicle(vehicle)
+    table = Table(title=f"resource budget, vehicle {config.name} (arm-none-eabi-gcc -O2, linked "
+                        f"with --gc-sections to the public API)")
+    for column in ("estimator", "target", "real", ".text", ".data", ".bss", "stack init",
+                   "stack step", "library calls (not counted)"):
+        table.add_column(column, justify="left" if column in ("estimator", "target", "real") or
+                         column.startswith("library") else "right")
+    failures = []
+    for name in _estimators(config, estimators):
+        for target in TARGETS:
+            if not available(target):
+                raise UserError(f"{target.compiler} not found: expected the Debian package "
+                                f"gcc-arm-none-eabi (run scripts/setup.sh)")
+            try:
+                r = build_for_target(codegen.render(config, name, target.real), name, target)
+            except TargetError as exc:
+                failures.append(f"{name} on {target.name}: {exc}")
+                continue
+            table.add_row(name, r.target, r.real, str(r.text), str(r.data), str(r.bss),
+                          str(r.stack_init), str(r.stack_step), ", ".join(r.library_calls))
+    console.print(table)
+    if failures:
+        for failure in failures:
+            click.echo(f"vsegen: {failure}", err=True)
+        sys.exit(1)
 
 
 @main.command(name="list")

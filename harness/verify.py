@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from codegen.generate import render
 from harness.build import load_estimator
-from harness.compare import RELATIVE_TOLERANCE, Difference, difference
+from harness.compare import TOLERANCES, Difference, as_seen_by, difference
 from harness.reference import REFERENCES
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
@@ -21,6 +21,7 @@ class LayoutMismatch(RuntimeError):
 @dataclass(frozen=True)
 class CaseResult:
     estimator: str
+    real: str
     case: str
     samples: int
     outputs: tuple[Difference, ...]
@@ -33,8 +34,10 @@ class CaseResult:
 
 
 def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
-                     seed: int = 1, real: str = "double", progress=None) -> list[CaseResult]:
-    """Build ``name`` for ``config``, run C and reference over ``cases``, compare step by step."""
+                     seed: int = 1, real: str | None = None, progress=None) -> list[CaseResult]:
+    """Build ``name`` for ``config``, run C and reference over ``cases``, compare step by step.
+    ``real`` defaults to the vehicle file's [codegen] setting."""
+    real = real or config.codegen["real"]
     estimator = build(name, config)
     reference = REFERENCES[name]
     for label, model_layout, ref_names in (("inputs", estimator.inputs, reference.INPUTS),
@@ -43,11 +46,11 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
         if tuple(model_layout.names) != tuple(ref_names):
             raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
     compiled = load_estimator(estimator, render(config, name, real))
-    tolerance = RELATIVE_TOLERANCE[real]
+    tolerance = TOLERANCES[real]
     results = []
     for case in cases:
         log = case.simulate(config, 1.0 / config.sample_time, seed)
-        inputs = log.matrix(estimator.inputs.names)
+        inputs = as_seen_by(real, log.matrix(estimator.inputs.names))
         c_out, c_states = compiled.run(inputs)
         r_out, r_states = run_reference(reference, config, inputs)
         outputs = tuple(
@@ -55,7 +58,7 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
             for i, s in enumerate(estimator.outputs.signals)
         )
         states = difference("state (all entries)", c_states, r_states, tolerance)
-        results.append(CaseResult(name, case.label, len(log), outputs, states))
+        results.append(CaseResult(name, real, case.label, len(log), outputs, states))
         if progress:
             progress()
     return results

@@ -15,12 +15,12 @@ import json
 import math
 import re
 import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from model.schema import (ESTIMATOR_SCHEMAS, INPUT_LIMITS, PLANT, SAMPLING, SENSORS, VEHICLE,
-                          Field, Invalid)
+from model.schema import (CODEGEN, ESTIMATOR_SCHEMAS, INPUT_LIMITS, PLANT, SAMPLING, SENSORS,
+                          VEHICLE, Field, Invalid)
 
 WHEELBASE_TOLERANCE = 1e-3
 """Allowed |a + b - l| in metres."""
@@ -43,6 +43,7 @@ class VehicleConfig:
         estimators: per estimator name, its validated settings.
         plant: the truth plant's parameters ([plant], simulation only), or None.
         sensors: the simulated sensors' parameters ([sensors]), or None.
+        codegen: generation defaults ([codegen]): ``real`` and ``params``.
     """
 
     name: str
@@ -53,6 +54,8 @@ class VehicleConfig:
     estimators: Mapping[str, Mapping[str, Any]]
     plant: Mapping[str, Any] | None = None
     sensors: Mapping[str, float] | None = None
+    codegen: Mapping[str, str] = field(
+        default_factory=lambda: MappingProxyType({f.key: f.default for f in CODEGEN}))
 
     def settings(self, estimator: str) -> Mapping[str, Any]:
         """Settings of one estimator; raises ParameterError if the file has none."""
@@ -107,7 +110,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{source}: not valid TOML: {exc}") from None
     where = _Locator(text, source)
-    _reject_unknown(data, {"vehicle", "inputs", "estimator", "plant", "sensors"}, (), where)
+    _reject_unknown(data, {"vehicle", "inputs", "estimator", "plant", "sensors", "codegen"}, (), where)
     vehicle = _table(data, ("vehicle",), VEHICLE, where)
     _check_wheelbase(vehicle, where)
     limits = _table(data, ("inputs",), INPUT_LIMITS, where)
@@ -132,7 +135,13 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
                              f"one of {', '.join(f'[estimator.{n}]' for n in ESTIMATOR_SCHEMAS)}")
     optional = {key: MappingProxyType(_table(data, (key,), fields, where)) if key in data else None
                 for key, fields in (("plant", PLANT), ("sensors", SENSORS))}
+    codegen_table = data.get("codegen", {})
+    if not isinstance(codegen_table, dict):
+        raise ParameterError(f"{where.at(('codegen',))}: [codegen] is not a table")
+    _reject_unknown(codegen_table, {f.key for f in CODEGEN}, ("codegen",), where)
+    codegen = _fields(codegen_table, ("codegen",), CODEGEN, where)
     return VehicleConfig(
+        codegen=MappingProxyType(codegen),
         name=name,
         source=source,
         vehicle=MappingProxyType(vehicle),
@@ -163,15 +172,18 @@ def _table(data: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: 
 def _fields(node: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: "_Locator") -> dict:
     values = {}
     table = ".".join(path)
-    for field in fields:
-        if field.key not in node:
-            raise ParameterError(f"{where.at(path)}: [{table}] missing key '{field.key}': expected "
-                                 f"{field.expected}")
+    for spec in fields:
+        if spec.key not in node and spec.default is not None:
+            values[spec.key] = spec.default
+            continue
+        if spec.key not in node:
+            raise ParameterError(f"{where.at(path)}: [{table}] missing key '{spec.key}': expected "
+                                 f"{spec.expected}")
         try:
-            values[field.key] = field.check(node[field.key])
+            values[spec.key] = spec.check(node[spec.key])
         except Invalid as exc:
-            raise ParameterError(f"{where.at((*path, field.key))}: [{table}] {field.key} = "
-                                 f"{_show(node[field.key])}: expected {exc}") from None
+            raise ParameterError(f"{where.at((*path, spec.key))}: [{table}] {spec.key} = "
+                                 f"{_show(node[spec.key])}: expected {exc}") from None
     return values
 
 

@@ -25,6 +25,8 @@ class Field:
     expected: str
     check: Callable[[Any], Any]
     doc: str = ""
+    default: Any = None
+    """Value used when the key is absent; None makes the key required."""
 
 
 @dataclass(frozen=True)
@@ -98,7 +100,7 @@ def fraction(key: str, doc: str = "") -> Field:
     return Field(key, expected, check, doc)
 
 
-def choice(key: str, options: tuple[str, ...], doc: str = "") -> Field:
+def choice(key: str, options: tuple[str, ...], doc: str = "", default: str | None = None) -> Field:
     """One of a fixed set of strings."""
     expected = "one of " + ", ".join(f'"{o}"' for o in options)
 
@@ -107,7 +109,7 @@ def choice(key: str, options: tuple[str, ...], doc: str = "") -> Field:
             raise Invalid(expected)
         return value
 
-    return Field(key, expected, check, doc)
+    return Field(key, expected, check, doc, default)
 
 
 def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
@@ -189,6 +191,15 @@ SENSORS: tuple[Field, ...] = (
     nonnegative("accel_noise", "m/s^2", "accelerometer white noise, 1 sigma"),
     nonnegative("accel_bias", "m/s^2", "accelerometer bias (used only with bias = true)"),
     nonnegative("wheel_speed_noise", "rad/s", "wheel-speed white noise, 1 sigma"),
+)
+
+# [codegen]: how the C is generated for this vehicle (command-line options override). Optional.
+REALS = ("double", "float")
+PARAMETER_MODES = ("baked", "calibratable")
+CODEGEN: tuple[Field, ...] = (
+    choice("real", REALS, "C floating-point type of the generated code", default="double"),
+    choice("params", PARAMETER_MODES, "parameters as literals (baked) or read at run time from a "
+           "const calibration struct (calibratable)", default="baked"),
 )
 
 # [estimator]: common to all estimators of the file

@@ -13,15 +13,22 @@ import pytest
 from codegen.generate import check, render, write
 from harness.build import WARNING_FLAGS
 from harness.paths import GENERATED
+from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
 
 COMPILERS = ["gcc", "clang"]
-ALLOWED_UNDEFINED = {"atan2", "fabs", "fmax", "fmin", "sqrt", "sin", "cos", "exp", "log", "tan"}
-"""libm functions the generated objects may call; anything else (malloc, printf, ...) fails."""
+STRICT_TEMPLATE_FLAGS = ("-Wconversion", "-Wshadow", "-Wcast-qual", "-Wstrict-prototypes",
+                         "-Wmissing-prototypes", "-Wdouble-promotion", "-Wvla")
+"""Extra warnings our own template code (the API file) must pass."""
 
 
 @pytest.fixture(scope="module")
 def files(config):
     return render(config, "kf2dof")
+
+
+@pytest.fixture(scope="module", params=["double", "float"])
+def files_real(config, request):
+    return request.param, render(config, "kf2dof", request.param)
 
 
 def test_regeneration_is_byte_identical(config, files):
@@ -61,18 +68,60 @@ def _require(tool: str) -> str:
 
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("opt", ["-O0", "-O2"])
-def test_compiles_warning_free_without_heap(tmp_path, files, cc, opt):
+def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
+    real, files = files_real
     compiler = _require(cc)
     write(files, tmp_path)
+    extra = ("-Wdouble-promotion",) if real == "float" else ()
     for source in ("vse_kf2dof.c", "vse_kf2dof_kernel.c"):
         obj = tmp_path / (source + ".o")
-        result = subprocess.run([compiler, *WARNING_FLAGS, opt, "-c", source, "-o", str(obj)],
+        result = subprocess.run([compiler, *WARNING_FLAGS, *extra, opt, "-c", source, "-o", str(obj)],
                                 cwd=tmp_path, capture_output=True, text=True)
         assert result.returncode == 0 and result.stderr == "", result.stderr
         undefined = subprocess.run(["nm", "-u", str(obj)], capture_output=True, text=True).stdout
         symbols = {line.split()[-1] for line in undefined.splitlines() if line.strip()}
         symbols -= {"vse_kf2dof_kernel_init", "vse_kf2dof_kernel_step"}
-        assert symbols <= ALLOWED_UNDEFINED, f"unexpected symbols in {source}: {symbols - ALLOWED_UNDEFINED}"
+        assert symbols <= ALLOWED[real], f"unexpected symbols in {source}: {symbols - ALLOWED[real]}"
+
+
+@pytest.mark.parametrize("cc", COMPILERS)
+def test_template_code_passes_strict_warnings(tmp_path, files_real, cc):
+    real, files = files_real
+    compiler = _require(cc)
+    write(files, tmp_path)
+    result = subprocess.run([compiler, *WARNING_FLAGS, *STRICT_TEMPLATE_FLAGS, "-c", "vse_kf2dof.c"],
+                            cwd=tmp_path, capture_output=True, text=True)
+    assert result.returncode == 0 and result.stderr == "", result.stderr
+
+
+@pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
+def test_cross_builds_within_budget(config, target):
+    if not available(target):
+        _require(target.compiler)
+    report = build_for_target(render(config, "kf2dof", target.real), "kf2dof", target)
+    assert set(report.undefined) <= ALLOWED[target.real]
+    assert not any(s.startswith("__aeabi_d") for s in report.undefined)
+    assert 0 < report.text < 16384 and report.data == 0 and report.bss == 0
+    assert 0 < report.stack_step < 1024 and 0 < report.stack_init < 1024
+
+
+def test_memory_discipline_violations_are_caught(config):
+    target = TARGETS[0]
+    if not available(target):
+        _require(target.compiler)
+    files = render(config, "kf2dof", target.real)
+    heap = dict(files)
+    heap["vse_kf2dof.c"] = heap["vse_kf2dof.c"].replace(
+        '#include "vse_kf2dof_kernel.h"\n',
+        '#include "vse_kf2dof_kernel.h"\n#include <stdlib.h>\n'
+        "static void *vse_leak(void) { return malloc(4); }\n", 1).replace(
+        "pack_input(in, u);\n", "pack_input(in, u);\n    free(vse_leak());\n", 1)
+    with pytest.raises(TargetError, match="malloc"):
+        build_for_target(heap, "kf2dof", target)
+    vla = dict(files)
+    vla["vse_kf2dof.c"] += "\nint vse_vla(int n);\nint vse_vla(int n) { float a[n]; a[0] = 1.0f; return (int)a[0]; }\n"
+    with pytest.raises(TargetError, match="vla|VLA|variable length"):
+        build_for_target(vla, "kf2dof", target)
 
 
 def test_header_is_self_contained_and_cpp_compatible(tmp_path, files):

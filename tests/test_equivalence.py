@@ -10,7 +10,7 @@ import pytest
 
 from codegen.generate import render
 from harness.build import load_estimator
-from harness.compare import RELATIVE_TOLERANCE, difference
+from harness.compare import TOLERANCES, Tolerance, difference
 from harness.reference import kf2dof as reference
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
@@ -26,7 +26,16 @@ def test_verify_passes_on_every_scenario(config):
         assert result.ok, result
         assert result.samples > 600
         for diff in result.outputs:
-            assert diff.max_rel <= RELATIVE_TOLERANCE["double"] or diff.integer
+            assert diff.max_rel <= TOLERANCES["double"].relative or diff.integer
+
+
+def test_float_code_matches_the_reference(config):
+    results = verify_estimator(config, "kf2dof", real="float")
+    assert len(results) == len(VERIFICATION_SET)
+    for result in results:
+        assert result.ok, result
+        beta = result.outputs[0]
+        assert beta.name == "beta" and beta.max_abs <= 1e-4
 
 
 def test_one_millisecond_sample_time(config):
@@ -54,16 +63,20 @@ def test_comparison_detects_a_wrong_parameter(config, vehicle_text):
     inputs = log.matrix(reference.INPUTS)
     c_out, _ = compiled.run(inputs)
     r_out, _ = run_reference(reference, config, inputs)
-    assert not difference("beta", c_out[:, 0], r_out[:, 0], RELATIVE_TOLERANCE["double"]).ok
+    assert not difference("beta", c_out[:, 0], r_out[:, 0], TOLERANCES["double"]).ok
 
 
 def test_difference_guard_and_failures():
-    tol = 1e-12
+    tol = Tolerance(1e-12, 1e-3)
     assert difference("x", np.array([1.0]), np.array([1.0 + 1e-13]), tol).ok
     assert not difference("x", np.array([1.0]), np.array([1.0 + 1e-11]), tol).ok
     # near zero the guard applies: 1e-16 apart at 1e-10 is fine, 1e-14 apart is not
     assert difference("x", np.array([1e-10]), np.array([1e-10 + 1e-16]), tol).ok
     assert not difference("x", np.array([1e-10]), np.array([1e-10 + 1e-14]), tol).ok
+    single = TOLERANCES["float"]  # 1e-4 absolute below 1, relative above
+    assert difference("b", np.array([0.01]), np.array([0.01 + 9e-5]), single).ok
+    assert not difference("b", np.array([0.01]), np.array([0.01 + 2e-4]), single).ok
+    assert difference("v", np.array([30.0]), np.array([30.002]), single).ok
     assert not difference("x", np.array([np.nan]), np.array([np.nan]), tol).ok
     assert not difference("s", np.array([1.0]), np.array([2.0]), tol, integer=True).ok
     assert difference("s", np.array([2.0]), np.array([2.0]), tol, integer=True).ok
