@@ -25,6 +25,8 @@ from model.params import VehicleConfig
 from model.schema import REALS
 
 TEMPLATES = Path(__file__).parent / "templates"
+EXAMPLE = "example_main.c"
+"""The host example of a generated folder (stdio; not part of the library)."""
 
 
 def generator_version() -> str:
@@ -61,6 +63,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[st
         "sample_time": repr(config.sample_time),
         "sample_time_literal": literal(config.sample_time, real),
         "real": real,
+        "params": "baked",
         "version": generator_version(),
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
@@ -70,14 +73,42 @@ def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[st
     }
     env = _environment()
     files = {}
-    for template, file in (("api.h.j2", f"{prefix}.h"), ("api.c.j2", f"{prefix}.c")):
-        files[file] = env.get_template(template).render(context, file=file, source=f"template {template}")
+    for template, file, style in TEMPLATE_FILES:
+        file = file.format(p=prefix)
+        banner = _comment(env.get_template("banner.j2").render(
+            context, file=file, source=f"template {template}"), style)
+        files[file] = env.get_template(template).render(context, file=file, banner=banner)
     options = ", ".join(f"{k}={v}" for k, v in sorted(kernel.options.items()))
     for file, text in ((kernel.c_name, kernel.c_text), (kernel.h_name, kernel.h_text)):
         banner = env.get_template("banner.j2").render(
             context, file=file, source=f"CasADi CodeGenerator ({options})")
-        files[file] = banner + text
+        files[file] = _comment(banner, "c") + text
     return files
+
+
+TEMPLATE_FILES = (  # template, file name, comment style
+    ("api.h.j2", "{p}.h", "c"),
+    ("api.c.j2", "{p}.c", "c"),
+    ("example_main.c.j2", EXAMPLE, "c"),
+    ("CMakeLists.txt.j2", "CMakeLists.txt", "hash"),
+    ("Makefile.j2", "Makefile", "hash"),
+    ("README.md.j2", "README.md", "markdown"),
+)
+
+
+def library_sources(files: dict[str, str]) -> list[str]:
+    """The C sources of the estimator library (every .c but the host example)."""
+    return sorted(n for n in files if n.endswith(".c") and n != EXAMPLE)
+
+
+def _comment(text: str, style: str) -> str:
+    """``text`` as a comment block of ``style`` ("c", "hash" or "markdown")."""
+    lines = text.rstrip("\n").split("\n")
+    if style == "c":
+        return "/*\n" + "".join(f" * {line}".rstrip() + "\n" for line in lines) + " */\n"
+    if style == "hash":
+        return "".join(f"# {line}".rstrip() + "\n" for line in lines)
+    return "<!--\n" + "\n".join(lines) + "\n-->\n"
 
 
 def _operation_counts(estimator: Estimator) -> dict[str, int]:

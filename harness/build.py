@@ -18,6 +18,7 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
+from codegen.generate import library_sources
 from harness.paths import cache_dir
 from model.estimator import Estimator
 
@@ -45,9 +46,11 @@ def runner_source(estimator: Estimator) -> str:
 
 def build_library(files: dict[str, str], extra_sources: dict[str, str], cc: str | None = None,
                   flags: tuple[str, ...] = ()) -> Path:
-    """Compile every ``.c`` of ``files`` and ``extra_sources`` into a cached shared library."""
+    """Compile the library sources of ``files`` and ``extra_sources`` into a cached shared library."""
     cc = cc or compiler()
-    all_files = {**files, **extra_sources}
+    all_files = {name: files[name] for name in library_sources(files)}
+    all_files.update({name: text for name, text in files.items() if name.endswith(".h")})
+    all_files.update(extra_sources)
     command_flags = (*WARNING_FLAGS, *LIBRARY_FLAGS, *flags)
     digest = hashlib.sha256()
     for name in sorted(all_files):

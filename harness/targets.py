@@ -23,6 +23,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from codegen.generate import library_sources
+
 COMMON_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-Wvla", "-O2",
                 "-ffunction-sections", "-fdata-sections", "-fstack-usage", "-fcallgraph-info=su")
 LIBM = ("acos", "asin", "atan", "atan2", "ceil", "copysign", "cos", "cosh", "erf", "exp", "fabs",
@@ -78,7 +80,7 @@ def build_for_target(files: dict[str, str], estimator: str, target: Target) -> T
         folder = Path(tmp)
         for name, text in files.items():
             (folder / name).write_text(text)
-        sources = sorted(n for n in files if n.endswith(".c"))
+        sources = library_sources(files)
         _run([target.compiler, *flags, "-c", *sources], folder, f"{target.name} compile")
         objects = [s[:-2] + ".o" for s in sources]
         keep = [f"-Wl,-u,{symbol}" for symbol in api]

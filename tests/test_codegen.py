@@ -8,6 +8,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import casadi as ca
+import numpy as np
 import pytest
 
 from codegen.generate import check, render, write
@@ -40,12 +42,14 @@ def test_checked_in_folder_is_fresh(config, files):
 
 
 def test_every_file_is_traceable_and_marked(config, files):
-    assert set(files) == {"vse_kf2dof.h", "vse_kf2dof.c", "vse_kf2dof_kernel.c", "vse_kf2dof_kernel.h"}
+    assert set(files) == {"vse_kf2dof.h", "vse_kf2dof.c", "vse_kf2dof_kernel.c", "vse_kf2dof_kernel.h",
+                          "CMakeLists.txt", "Makefile", "README.md", "example_main.c"}
     for name, text in files.items():
         head = text[:1500]
         assert "DO NOT EDIT" in head
         assert config.parameter_hash("kf2dof") in head
-        assert "Vehicle c_class" in head
+        assert "Vehicle c_class" in head and "Options: real=double, params=baked" in head
+        assert f"CasADi {ca.__version__}" in head
         assert re.search(r"Operations: step \d+, init \d+", head)
         assert "template " in head or "CasADi CodeGenerator" in head
         assert str(Path.home()) not in text and "/tmp" not in text and "/work" not in text
@@ -146,3 +150,33 @@ def test_check_reports_a_stale_file_with_a_diff(tmp_path, files):
     assert "--- out/vse_kf2dof.c" in edited and "-    pack_input(in, u); /* edit */" in edited
     write(files, tmp_path)
     assert check(files, tmp_path, "out") == []
+
+
+def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, files):
+    """make and cmake build the library and example; the example's output on a log equals the
+    harness's run of the same C (so a user can check the C without Python)."""
+    from harness.build import load_estimator
+    from harness.logs import write_log
+    from harness.scenarios import Case
+    from model.estimators import build
+
+    _require("make")
+    write(files, tmp_path)
+    result = subprocess.run(["make", "CFLAGS=-O2 -Werror"], cwd=tmp_path, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    log = Case.of("invalid_inputs").simulate(config, 100.0)
+    write_log(log, tmp_path / "log.csv")
+    with open(tmp_path / "log.csv") as stdin:
+        run = subprocess.run(["./vse_kf2dof_example"], cwd=tmp_path, stdin=stdin, capture_output=True,
+                             text=True, check=True)
+    lines = run.stdout.splitlines()
+    assert lines[0] == "t,beta,vy,r,status" and len(lines) == len(log) + 1
+    example = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    outputs, _ = load_estimator(build("kf2dof", config), files).run(log.matrix(("delta", "vx", "ay", "r")))
+    np.testing.assert_array_equal(example[:, 1:], outputs)
+    if shutil.which("cmake"):
+        build_dir = tmp_path / "cmake-build"
+        subprocess.run(["cmake", "-S", str(tmp_path), "-B", str(build_dir),
+                        "-DCMAKE_C_FLAGS=-Wall -Wextra -pedantic -Werror"], check=True, capture_output=True)
+        result = subprocess.run(["cmake", "--build", str(build_dir)], capture_output=True, text=True)
+        assert result.returncode == 0, result.stdout + result.stderr
