@@ -62,6 +62,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[st
         "vehicle": config.name,
         "sample_time": repr(config.sample_time),
         "sample_time_literal": literal(config.sample_time, real),
+        "zero": literal(0.0, real),
         "real": real,
         "params": "baked",
         "version": generator_version(),

@@ -3,7 +3,8 @@
 Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_int = int``,
 ``with_header``, ``static_aux`` and an explicit ``prefix``; never ``with_mem`` (malloc),
 ``thread_safe`` (pthread) or ``inline_aux``. The raw output leaves parameters unused (``iw``, ``w``,
-``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror.
+``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
+and :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4).
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
 loudly instead of emitting unreviewed code.
 """
@@ -56,7 +57,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()
         h_text = (Path(tmp) / f"{base}.h").read_text()
-    c_text = _mark_unused(c_text)
+    c_text = _include_own_header(_mark_unused(c_text), f"{base}.h")
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, _work_size(h_text), options)
@@ -75,6 +76,16 @@ _STATIC_BODY = re.compile(
     r"casadi_int\* iw, casadi_real\* w, int mem\) \{\n)"
 )
 _RELEASE = re.compile(r"(CASADI_SYMBOL_EXPORT void \w+_release\(int mem\) \{\n)")
+
+
+def _include_own_header(c_text: str, header: str) -> str:
+    """Include the kernel's header in its source, so every external definition has a visible
+    declaration (MISRA C:2012 Rule 8.4)."""
+    anchor = "#include <math.h>\n"
+    if c_text.count(anchor) != 1:
+        raise RuntimeError("CasADi's generated code no longer includes <math.h> once; review "
+                           "codegen/kernel.py")
+    return c_text.replace(anchor, f'{anchor}\n#include "{header}"\n')
 
 
 def _mark_unused(c_text: str) -> str:

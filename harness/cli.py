@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import sys
+from collections import Counter
 from pathlib import Path
 
 import click
@@ -18,7 +19,7 @@ from rich.table import Table
 
 from codegen import generate as codegen
 from harness.logs import LogError, read_estimates, read_log, write_log
-from harness.paths import DEFAULT_VEHICLE, GENERATED
+from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
 from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
 from model.estimators import BUILDERS
@@ -291,6 +292,38 @@ def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
     if failures:
         for failure in failures:
             click.echo(f"vsegen: {failure}", err=True)
+        sys.exit(1)
+
+
+@main.command()
+@click.option("--update-baseline", is_flag=True, help="Write the current counts as the new baseline.")
+@click.option("--out", type=click.Path(path_type=Path), default=REPORTS / "misra.md",
+              show_default="docs/misra.md", help="Deviation report to write.")
+@user_errors
+def misra(update_baseline: bool, out: Path) -> None:
+    """Run cppcheck's MISRA C:2012 addon on every generated estimator of the shipped vehicles;
+    write the deviation report; fail if a rule's count grew past the baseline."""
+    from harness import misra as checks
+    from harness.files import write_text_atomic
+
+    sections, total = [], Counter()
+    for path in shipped_vehicles():
+        config = load_vehicle(path)
+        for name in _estimators(config, ()):
+            for real in ("double", "float"):
+                counts = checks.findings(codegen.render(config, name, real))
+                sections.append((f"{config.name}/{name} ({real})", counts))
+                total.update(counts)
+    per_rule = checks.by_rule(total)
+    write_text_atomic(out, checks.report(sections))
+    if update_baseline:
+        checks.write_baseline(per_rule)
+    rules = ", ".join(f"{rule.removeprefix('misra-c2012-')}: {count}" for rule, count in per_rule.items())
+    console.print(f"wrote {out}: {sum(per_rule.values())} findings in {len(per_rule)} rules ({rules})")
+    problems = checks.regressions(per_rule, checks.load_baseline())
+    if problems:
+        for problem in problems:
+            click.echo(f"vsegen: MISRA regression: {problem}", err=True)
         sys.exit(1)
 
 

@@ -9,6 +9,7 @@ REPO = Path(__file__).resolve().parents[1]
 VEHICLES = REPO / "vehicles"
 GENERATED = REPO / "generated"
 DEFAULT_VEHICLE = VEHICLES / "c_class.toml"
+REPORTS = REPO / "docs"
 
 
 def cache_dir() -> Path:

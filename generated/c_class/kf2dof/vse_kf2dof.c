@@ -13,6 +13,10 @@
 #include "vse_kf2dof.h"
 #include "vse_kf2dof_kernel.h"
 
+/* The kernel's integer and real work vectors: SX kernels use neither (0 reals
+ * needed); real arrays are passed so that no null pointer constant is needed. */
+#define VSE_KF2DOF_WORK_REALS (1)
+
 static void pack_input(const vse_kf2dof_input *in, casadi_real u[4])
 {
     u[0] = in->delta;
@@ -24,27 +28,31 @@ static void pack_input(const vse_kf2dof_input *in, casadi_real u[4])
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
 {
     casadi_real u[4];
-    pack_input(first, u);
+    casadi_int iw[1] = {0};
+    casadi_real w[VSE_KF2DOF_WORK_REALS] = {0.0};
     const casadi_real *arg[1];
     casadi_real *res[1];
+    pack_input(first, u);
     arg[0] = u;
     res[0] = state->x;
-    (void)vse_kf2dof_kernel_init(arg, res, 0, 0, 0);
+    (void)vse_kf2dof_kernel_init(arg, res, iw, w, 0);
 }
 
 void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf2dof_output *out)
 {
     casadi_real u[4];
-    casadi_real y[4];
-    vse_kf2dof_state next;
-    pack_input(in, u);
+    casadi_real y[4] = {0.0, 0.0, 0.0, 0.0};
+    vse_kf2dof_state next = {{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}};
+    casadi_int iw[1] = {0};
+    casadi_real w[VSE_KF2DOF_WORK_REALS] = {0.0};
     const casadi_real *arg[2];
     casadi_real *res[2];
+    pack_input(in, u);
     arg[0] = state->x;
     arg[1] = u;
     res[0] = next.x;
     res[1] = y;
-    (void)vse_kf2dof_kernel_step(arg, res, 0, 0, 0);
+    (void)vse_kf2dof_kernel_step(arg, res, iw, w, 0);
     state->x[0] = next.x[0];
     state->x[1] = next.x[1];
     state->x[2] = next.x[2];

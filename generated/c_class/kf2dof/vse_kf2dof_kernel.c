@@ -32,6 +32,8 @@ extern "C" {
 
 #include <math.h>
 
+#include "vse_kf2dof_kernel.h"
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
