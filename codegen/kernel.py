@@ -30,8 +30,6 @@ class Kernel:
     h_name: str
     c_text: str
     h_text: str
-    work_reals: int
-    """Size of the work vector ``w`` the generated functions need (0 for straight-line SX code)."""
     options: dict
 
 
@@ -57,10 +55,13 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()
         h_text = (Path(tmp) / f"{base}.h").read_text()
+    if _work_size(h_text) != 0:
+        raise RuntimeError(f"{estimator.name}: the kernel needs a work vector; the API template "
+                           "supports straight-line SX kernels only")
     c_text = _include_own_header(_mark_unused(c_text), f"{base}.h")
     if real == "float":
         c_text = to_single(c_text)
-    return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, _work_size(h_text), options)
+    return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)
 
 
 def _work_size(h_text: str) -> int:

@@ -13,10 +13,6 @@
 #include "vse_kf2dof.h"
 #include "vse_kf2dof_kernel.h"
 
-/* The kernel's integer and real work vectors: SX kernels use neither (0 reals
- * needed); real arrays are passed so that no null pointer constant is needed. */
-#define VSE_KF2DOF_WORK_REALS (1)
-
 static void pack_input(const vse_kf2dof_input *in, casadi_real u[4])
 {
     u[0] = in->delta;
@@ -28,39 +24,44 @@ static void pack_input(const vse_kf2dof_input *in, casadi_real u[4])
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
 {
     casadi_real u[4];
-    casadi_int iw[1] = {0};
-    casadi_real w[VSE_KF2DOF_WORK_REALS] = {0.0};
+    casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
+    casadi_real w = 0.0;
     const casadi_real *arg[1];
     casadi_real *res[1];
     pack_input(first, u);
     arg[0] = u;
     res[0] = state->x;
-    (void)vse_kf2dof_kernel_init(arg, res, iw, w, 0);
+    (void)vse_kf2dof_kernel_init(arg, res, &iw, &w, 0);
 }
 
 void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf2dof_output *out)
 {
     casadi_real u[4];
-    casadi_real y[4] = {0.0, 0.0, 0.0, 0.0};
-    vse_kf2dof_state next = {{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0}};
-    casadi_int iw[1] = {0};
-    casadi_real w[VSE_KF2DOF_WORK_REALS] = {0.0};
+    casadi_real current[VSE_KF2DOF_N_STATE];
+    casadi_real y[4];
+    casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
+    casadi_real w = 0.0;
     const casadi_real *arg[2];
     casadi_real *res[2];
     pack_input(in, u);
-    arg[0] = state->x;
+    /* the kernel reads its arguments while it writes its results: step from a copy */
+    current[0] = state->x[0];
+    current[1] = state->x[1];
+    current[2] = state->x[2];
+    current[3] = state->x[3];
+    current[4] = state->x[4];
+    current[5] = state->x[5];
+    current[6] = state->x[6];
+    current[7] = state->x[7];
+    y[0] = 0.0;
+    y[1] = 0.0;
+    y[2] = 0.0;
+    y[3] = 0.0;
+    arg[0] = current;
     arg[1] = u;
-    res[0] = next.x;
+    res[0] = state->x;
     res[1] = y;
-    (void)vse_kf2dof_kernel_step(arg, res, iw, w, 0);
-    state->x[0] = next.x[0];
-    state->x[1] = next.x[1];
-    state->x[2] = next.x[2];
-    state->x[3] = next.x[3];
-    state->x[4] = next.x[4];
-    state->x[5] = next.x[5];
-    state->x[6] = next.x[6];
-    state->x[7] = next.x[7];
+    (void)vse_kf2dof_kernel_step(arg, res, &iw, &w, 0);
     out->beta = y[0];
     out->vy = y[1];
     out->r = y[2];
