@@ -45,13 +45,15 @@ def _environment() -> jinja2.Environment:
     return env
 
 
-def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[str, str]:
+def render(config: VehicleConfig, name: str, real: str | None = None,
+           params: str | None = None) -> dict[str, str]:
     """All files of ``generated/<vehicle>/<name>/`` as {file name: text}; ``real`` ("double" or
-    "float") defaults to the vehicle file's [codegen] setting."""
+    "float") and ``params`` ("baked" or "calibratable") default to the vehicle file's [codegen]."""
     real = real or config.codegen["real"]
+    params = params or config.codegen["params"]
     if real not in REALS:
         raise ValueError(f"real type {real!r}: expected one of {REALS}")
-    estimator = build(name, config)
+    estimator = build(name, config, params)
     kernel = generate_kernel(estimator, real)
     prefix = f"vse_{name}"
     context = {
@@ -64,7 +66,9 @@ def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[st
         "sample_time_literal": literal(config.sample_time, real),
         "zero": literal(0.0, real),
         "real": real,
-        "params": "baked",
+        "params": params,
+        "calibration": [(n, literal(v, real)) for n, v in zip(estimator.parameters.names,
+                                                              estimator.parameters.values)],
         "version": generator_version(),
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
@@ -74,7 +78,11 @@ def render(config: VehicleConfig, name: str, real: str | None = None) -> dict[st
     }
     env = _environment()
     files = {}
-    for template, file, style in TEMPLATE_FILES:
+    templates = TEMPLATE_FILES + (CALIBRATION_FILE if estimator.parameters.calibratable else ())
+    context["library_sources"] = sorted(
+        [kernel.c_name] + [file.format(p=prefix) for _, file, _ in templates
+                           if file.endswith(".c") and file != EXAMPLE])
+    for template, file, style in templates:
         file = file.format(p=prefix)
         banner = _comment(env.get_template("banner.j2").render(
             context, file=file, source=f"template {template}"), style)
@@ -95,6 +103,9 @@ TEMPLATE_FILES = (  # template, file name, comment style
     ("Makefile.j2", "Makefile", "hash"),
     ("README.md.j2", "README.md", "markdown"),
 )
+
+
+CALIBRATION_FILE = (("calibration.c.j2", "{p}_calibration.c", "c"),)
 
 
 def library_sources(files: dict[str, str]) -> list[str]:

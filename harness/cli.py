@@ -52,6 +52,9 @@ def user_errors(command):
 
 REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), default=None,
                            help="C floating-point type. Default: the vehicle file's [codegen] real.")
+PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratable"]), default=None,
+                             help="Parameters as constants or a const calibration struct. "
+                                  "Default: the vehicle file's [codegen] params.")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
                               show_default="vehicles/c_class.toml", help="Vehicle TOML.")
 
@@ -88,16 +91,17 @@ def main() -> None:
 @click.option("--check", "check_only", is_flag=True,
               help="Do not write: compare with --out and print a unified diff of what would change.")
 @REAL_OPTION
+@PARAMS_OPTION
 @user_errors
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
-             check_only: bool, real: str | None) -> None:
+             check_only: bool, real: str | None, params: str | None) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
     stale = []
     for path in vehicles or tuple(shipped_vehicles()):
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
             folder = out / config.name / name
-            files = codegen.render(config, name, real)
+            files = codegen.render(config, name, real, params)
             if check_only:
                 diffs = codegen.check(files, folder, _display(folder))
                 if diffs:
@@ -121,23 +125,26 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
 @REAL_OPTION
+@PARAMS_OPTION
 @user_errors
-def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | None) -> None:
+def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | None,
+           params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
     from harness.compare import TOLERANCES
     from harness.verify import verify_estimator
 
     config = load_vehicle(vehicle)
     real = real or config.codegen["real"]
+    params = params or config.codegen["params"]
     names = _estimators(config, estimators)
     results = []
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("verifying", total=len(names) * len(VERIFICATION_SET))
         for name in names:
-            results += verify_estimator(config, name, seed=seed, real=real,
+            results += verify_estimator(config, name, seed=seed, real=real, params=params,
                                         progress=lambda: progress.advance(task))
     table = Table(title=f"generated C vs NumPy reference, vehicle {config.name}, "
-                        f"T = {config.sample_time} s, {real}")
+                        f"T = {config.sample_time} s, {real}, {params} parameters")
     for column in ("estimator", "scenario", "samples", "signal", "max |diff|", "max rel diff",
                    "tolerance", "result"):
         table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
@@ -270,24 +277,25 @@ def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
 
     config = load_vehicle(vehicle)
     table = Table(title=f"resource budget, vehicle {config.name} (arm-none-eabi-gcc -O2, linked "
-                        f"with --gc-sections to the public API)")
-    for column in ("estimator", "target", "real", ".text", ".data", ".bss", "stack init",
-                   "stack step", "library calls (not counted)"):
-        table.add_column(column, justify="left" if column in ("estimator", "target", "real") or
-                         column.startswith("library") else "right")
+                        f"with --gc-sections to the public API; .text includes .rodata)")
+    for column in ("estimator", "target", "real", "params", ".text", ".data", ".bss",
+                   "stack init", "stack step", "library calls (not counted)"):
+        table.add_column(column, justify="left" if column in ("estimator", "target", "real", "params")
+                         or column.startswith("library") else "right")
     failures = []
     for name in _estimators(config, estimators):
         for target in TARGETS:
             if not available(target):
                 raise UserError(f"{target.compiler} not found: expected the Debian package "
                                 f"gcc-arm-none-eabi (run scripts/setup.sh)")
-            try:
-                r = build_for_target(codegen.render(config, name, target.real), name, target)
-            except TargetError as exc:
-                failures.append(f"{name} on {target.name}: {exc}")
-                continue
-            table.add_row(name, r.target, r.real, str(r.text), str(r.data), str(r.bss),
-                          str(r.stack_init), str(r.stack_step), ", ".join(r.library_calls))
+            for mode in ("baked", "calibratable"):
+                try:
+                    r = build_for_target(codegen.render(config, name, target.real, mode), name, target)
+                except TargetError as exc:
+                    failures.append(f"{name} on {target.name} ({mode}): {exc}")
+                    continue
+                table.add_row(name, r.target, r.real, mode, str(r.text), str(r.data), str(r.bss), str(r.stack_init), str(r.stack_step),
+                              ", ".join(r.library_calls))
     console.print(table)
     if failures:
         for failure in failures:
@@ -311,9 +319,10 @@ def misra(update_baseline: bool, out: Path) -> None:
         config = load_vehicle(path)
         for name in _estimators(config, ()):
             for real in ("double", "float"):
-                counts = checks.findings(codegen.render(config, name, real))
-                sections.append((f"{config.name}/{name} ({real})", counts))
-                total.update(counts)
+                for params in ("baked", "calibratable"):
+                    counts = checks.findings(codegen.render(config, name, real, params))
+                    sections.append((f"{config.name}/{name} ({real}, {params})", counts))
+                    total.update(counts)
     per_rule = checks.by_rule(total)
     write_text_atomic(out, checks.report(sections))
     if update_baseline:

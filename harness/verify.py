@@ -34,18 +34,20 @@ class CaseResult:
 
 
 def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
-                     seed: int = 1, real: str | None = None, progress=None) -> list[CaseResult]:
+                     seed: int = 1, real: str | None = None, params: str | None = None,
+                     progress=None) -> list[CaseResult]:
     """Build ``name`` for ``config``, run C and reference over ``cases``, compare step by step.
-    ``real`` defaults to the vehicle file's [codegen] setting."""
+    ``real`` and ``params`` default to the vehicle file's [codegen] settings."""
     real = real or config.codegen["real"]
-    estimator = build(name, config)
+    params = params or config.codegen["params"]
+    estimator = build(name, config, params)
     reference = REFERENCES[name]
     for label, model_layout, ref_names in (("inputs", estimator.inputs, reference.INPUTS),
                                            ("states", estimator.states, reference.STATES),
                                            ("outputs", estimator.outputs, reference.OUTPUTS)):
         if tuple(model_layout.names) != tuple(ref_names):
             raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
-    compiled = load_estimator(estimator, render(config, name, real))
+    compiled = load_estimator(estimator, render(config, name, real, params))
     tolerance = TOLERANCES[real]
     results = []
     for case in cases:

@@ -13,6 +13,7 @@ from typing import Mapping
 
 import casadi as ca
 
+from model.calibration import Parameters
 from model.layout import Layout
 
 
@@ -24,8 +25,10 @@ class Estimator:
         name: estimator name (``[estimator.<name>]``, C prefix ``vse_<name>_``).
         summary: one line: what it estimates and how.
         inputs, states, outputs: layouts of the flat vectors.
-        init: Function ``init(input) -> (state)``.
-        step: Function ``step(state, input) -> (state_next, output)``.
+        init: Function ``init(input[, params]) -> (state)``.
+        step: Function ``step(state, input[, params]) -> (state_next, output)``.
+        parameters: where the parameter values come from (``params`` is an input when they are
+            calibratable).
         notes: facts worth printing in generated files (e.g. discretisation error bound).
     """
 
@@ -36,15 +39,21 @@ class Estimator:
     outputs: Layout
     init: ca.Function
     step: ca.Function
+    parameters: Parameters
     notes: Mapping[str, str] = field(default_factory=dict)
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
-                   state_sym: ca.SX, init_state: ca.SX, next_state: ca.SX, output: ca.SX):
+                   state_sym: ca.SX, init_state: ca.SX, next_state: ca.SX, output: ca.SX,
+                   parameters: Parameters):
     """The ``init`` and ``step`` Functions with the naming every estimator uses."""
-    init = ca.Function(f"vse_{name}_kernel_init", [input_sym], [init_state], ["input"], ["state"])
-    step = ca.Function(f"vse_{name}_kernel_step", [state_sym, input_sym], [next_state, output],
-                       ["state", "input"], ["state_next", "output"])
+    extra = parameters.inputs()
+    extra_names = ["params"] * len(extra)
+    init = ca.Function(f"vse_{name}_kernel_init", [input_sym, *extra], [init_state],
+                       ["input", *extra_names], ["state"])
+    step = ca.Function(f"vse_{name}_kernel_step", [state_sym, input_sym, *extra],
+                       [next_state, output], ["state", "input", *extra_names],
+                       ["state_next", "output"])
     for fn, layout, label in ((init, states, "state"), (step, states, "state_next")):
         if fn.numel_out(label) != len(layout):
             raise ValueError(f"{name}: {label} has {fn.numel_out(label)} entries, layout {len(layout)}")

@@ -1,18 +1,20 @@
-"""Registry of estimators: name -> builder(VehicleConfig) -> Estimator."""
+"""Registry of estimators: name -> builder(Parameters) -> Estimator."""
 
 from __future__ import annotations
 
 from typing import Callable
 
+from model.calibration import Parameters, parameters
 from model.estimator import Estimator
 from model.estimators import kf2dof
 from model.params import VehicleConfig
 
-BUILDERS: dict[str, Callable[[VehicleConfig], Estimator]] = {
+BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
     kf2dof.NAME: kf2dof.build,
 }
 
 
-def build(name: str, config: VehicleConfig) -> Estimator:
-    """Build estimator ``name`` for ``config``; KeyError if no such estimator exists."""
-    return BUILDERS[name](config)
+def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
+    """Build estimator ``name`` for ``config`` with parameters ``params`` ("baked" or
+    "calibratable"); KeyError if no such estimator exists."""
+    return BUILDERS[name](parameters(config, name, params))

@@ -23,7 +23,7 @@ from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.estimator import Estimator, make_functions
 from model.guard import hold, input_guard
 from model.layout import Layout, Signal
-from model.params import VehicleConfig
+from model.calibration import Parameters, matrix
 
 NAME = "kf2dof"
 
@@ -52,22 +52,24 @@ OUTPUTS = Layout((
 ))
 
 
-def dynamic_update(config: VehicleConfig) -> ca.Function:
+def dynamic_update(params: Parameters) -> ca.Function:
     """One Kalman predict + update of the 2-DOF model, as a named CasADi Function.
 
     Inputs: ``x`` = [vy, r] (m/s, rad/s), ``P`` = packed covariance [P11, P12, P22],
     ``delta_prev`` (rad), ``vx_prev`` (m/s): the inputs held over the prediction (ZOH);
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
+    With calibratable parameters, a last input ``params`` carries them.
     Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad).
     Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
     are plausible. Reused by every estimator with a dynamic (KF) scheme.
     """
+    config = params.config
     vehicle, T = config.vehicle, config.sample_time
     settings = config.settings(NAME)
     vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
-    Qd = ca.SX(ca.DM(settings["process_noise"])) * T
-    R = ca.SX(ca.DM(settings["measurement_noise"]))
-    plan = discretize.plan_zoh(state_matrix_norm_bound(vehicle, vx_min, vx_max), T)
+    Qd = matrix(settings["process_noise"]) * T
+    R = matrix(settings["measurement_noise"])
+    plan = zoh_plan(params)
     x = ca.SX.sym("x", 2)
     P_packed = ca.SX.sym("P", kalman.packed_size(2))
     delta_prev, vx_prev, delta, vx, ay, r_meas = (
@@ -82,36 +84,47 @@ def dynamic_update(config: VehicleConfig) -> ca.Function:
                                     delta_prev, Qd)
     _, _, C, D = bicycle_matrices(vehicle, model_speed(vx))
     x_new, P_new, _ = kalman.update_joseph(x_pred, P_pred, ca.vertcat(ay, r_meas), C, D, delta, R)
+    names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
     return ca.Function(
         f"{NAME}_dynamic_update",
-        [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas],
+        [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
         [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx))],
-        ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"],
+        names + ["params"] * params.calibratable,
         ["x_next", "P_next", "beta"],
     )
 
 
-def zoh_note(config: VehicleConfig) -> dict[str, str]:
+def zoh_plan(params: Parameters) -> discretize.ZohPlan:
+    """The ZOH series plan for the generated parameter values (with the calibration margin)."""
+    numeric = params.numeric
+    settings = numeric.settings(NAME)
+    bound = state_matrix_norm_bound(numeric.vehicle, settings["vx_min"], numeric.limits["vx_max"])
+    return discretize.plan_zoh(bound * params.norm_margin, numeric.sample_time)
+
+
+def zoh_note(params: Parameters) -> dict[str, str]:
     """Notes for generated files: the discretisation and, for ZOH, the series' error bound."""
-    settings = config.settings(NAME)
+    numeric = params.numeric
+    settings = numeric.settings(NAME)
     notes = {"discretisation": settings["discretisation"]}
     if settings["discretisation"] == "zoh":
-        vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
-        plan = discretize.plan_zoh(state_matrix_norm_bound(config.vehicle, vx_min, vx_max),
-                                   config.sample_time)
+        plan = zoh_plan(params)
+        margin = f" x {params.norm_margin:g} (calibration margin)" if params.calibratable else ""
         notes["zoh_series"] = (f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
-                               f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e} for "
-                               f"{vx_min} <= vx <= {vx_max} m/s")
+                               f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e} for ||A|| up to "
+                               f"its bound over {settings['vx_min']} <= vx <= "
+                               f"{numeric.limits['vx_max']} m/s{margin}")
     return notes
 
 
-def build(config: VehicleConfig) -> Estimator:
-    """The kf2dof estimator for ``config`` (its [vehicle], [inputs] and [estimator.kf2dof])."""
+def build(params: Parameters) -> Estimator:
+    """The kf2dof estimator ([vehicle], [inputs] and [estimator.kf2dof]) with ``params``."""
+    config = params.config
     limits = config.limits
     settings = config.settings(NAME)
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
-    P0 = kalman.pack_symmetric(ca.SX(ca.DM(settings["initial_covariance"])))
-    update = dynamic_update(config)
+    P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
+    update = dynamic_update(params)
 
     state, s = STATES.symbols("state")
     inputs, u = INPUTS.symbols("input")
@@ -126,6 +139,7 @@ def build(config: VehicleConfig) -> Estimator:
         vx=hold(u["vx"], ok["vx"], vx_min),
         ay=hold(u["ay"], ok["ay"], 0),
         r_meas=hold(u["r"], ok["r"], 0),
+        **({"params": params.symbols} if params.calibratable else {}),
     )
     active = guard.active
     vy_next = ca.if_else(active, result["x_next"][0], 0)
@@ -156,6 +170,6 @@ def build(config: VehicleConfig) -> Estimator:
         "holding": ca.if_else(first.active, 0, 1),
     })
     init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
-                                next_state, output)
+                                next_state, output, params)
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
-                     INPUTS, STATES, OUTPUTS, init, step, zoh_note(config))
+                     INPUTS, STATES, OUTPUTS, init, step, params, zoh_note(params))

@@ -8,7 +8,7 @@
  * Parameter set SHA-256: b5e5db07e7040bfe75507367ef52267c302b118c19bf2185aeff6221bdc571ab
  * Operations: step 561, init 46 (CasADi SX instructions).
  * discretisation: zoh
- * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for 3.0 <= vx <= 90.0 m/s
+ * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
 #include "vse_kf2dof.h"
 #include "vse_kf2dof_kernel.h"
