@@ -89,13 +89,18 @@ def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
 
 
 @pytest.mark.parametrize("cc", COMPILERS)
-def test_template_code_passes_strict_warnings(tmp_path, files_real, cc):
-    real, files = files_real
+@pytest.mark.parametrize("params", ["baked", "calibratable"])
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real):
     compiler = _require(cc)
+    files = render(config, "kf2dof", real, params)
     write(files, tmp_path)
-    result = subprocess.run([compiler, *WARNING_FLAGS, *STRICT_TEMPLATE_FLAGS, "-c", "vse_kf2dof.c"],
-                            cwd=tmp_path, capture_output=True, text=True)
-    assert result.returncode == 0 and result.stderr == "", result.stderr
+    ours = [n for n in files if n.endswith(".c") and "_kernel" not in n]
+    assert ("vse_kf2dof_calibration.c" in ours) == (params == "calibratable")
+    for source in ours:
+        result = subprocess.run([compiler, *WARNING_FLAGS, *STRICT_TEMPLATE_FLAGS, "-c", source],
+                                cwd=tmp_path, capture_output=True, text=True)
+        assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
