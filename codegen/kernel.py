@@ -4,7 +4,9 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 ``with_header``, ``static_aux`` and an explicit ``prefix``; never ``with_mem`` (malloc),
 ``thread_safe`` (pthread) or ``inline_aux``. The raw output leaves parameters unused (``iw``, ``w``,
 ``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
-and :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4).
+:func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
+:func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
+pointers).
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
 loudly instead of emitting unreviewed code.
 """
@@ -58,7 +60,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     if _work_size(h_text) != 0:
         raise RuntimeError(f"{estimator.name}: the kernel needs a work vector; the API template "
                            "supports straight-line SX kernels only")
-    c_text = _include_own_header(_mark_unused(c_text), f"{base}.h")
+    c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)
@@ -77,6 +79,22 @@ _STATIC_BODY = re.compile(
     r"casadi_int\* iw, casadi_real\* w, int mem\) \{\n)"
 )
 _RELEASE = re.compile(r"(CASADI_SYMBOL_EXPORT void \w+_release\(int mem\) \{\n)")
+
+
+_ARG_CHECK = re.compile(r"arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0")
+_RES_CHECK = re.compile(r"if \(res\[(\d+)\]!=0\) res\[\1\]\[")
+
+
+def _drop_pointer_checks(c_text: str) -> str:
+    """Read arguments and write results without testing each pointer for null: the API template
+    always passes valid pointers (a documented contract of the kernel), so the tests are dead
+    weight on the hot path (and MISRA findings)."""
+    c_text, reads = _ARG_CHECK.subn(r"arg[\1][\2]", c_text)
+    c_text, writes = _RES_CHECK.subn(r"res[\1][", c_text)
+    if reads == 0 or writes == 0:
+        raise RuntimeError("CasADi's generated code no longer checks argument pointers the "
+                           "expected way; review codegen/kernel.py")
+    return c_text
 
 
 def _include_own_header(c_text: str, header: str) -> str:

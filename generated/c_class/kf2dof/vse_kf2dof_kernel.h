@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b5e5db07e7040bfe75507367ef52267c302b118c19bf2185aeff6221bdc571ab
- * Operations: step 561, init 46 (CasADi SX instructions).
+ * Operations: step 565, init 46 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */

@@ -1,0 +1,130 @@
+"""Measuring one step: callgrind instructions, wall time, host code size.
+
+Drivers are compiled from ``driver.c.j2`` around either a generated estimator (its public API) or
+the hand-written baseline; each runs init once and then step over a log's inputs.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import jinja2
+import numpy as np
+
+from codegen.generate import library_sources
+from model.discretize import plan_zoh
+from model.bicycle import state_matrix_norm_bound
+from model.estimator import Estimator
+from model.params import VehicleConfig
+
+HERE = Path(__file__).parent
+CC = "gcc"
+FLAGS = ("-std=c99", "-O2")
+HAND_SOURCES = ("kf2dof_hand.c",)
+
+
+@dataclass
+class Driver:
+    """A compiled benchmark driver in a kept temporary folder."""
+
+    folder: tempfile.TemporaryDirectory
+    exe: Path
+    step_function: str
+    text_bytes: int
+
+    def instructions_per_step(self, inputs_file: Path, steps: int) -> float:
+        """Callgrind: instructions executed inside the step function (inclusive), per step."""
+        out = Path(self.folder.name) / "callgrind.out"
+        subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                        f"--toggle-collect={self.step_function}", str(self.exe), str(inputs_file),
+                        "count"], check=True, capture_output=True)
+        totals = re.search(r"^(?:summary|totals): (\d+)", out.read_text(), flags=re.M)
+        return int(totals.group(1)) / steps
+
+    def ns_per_step(self, inputs_file: Path, passes: int = 51) -> float:
+        """Median wall time per step over ``passes`` passes of the log (noisy on shared machines)."""
+        result = subprocess.run([str(self.exe), str(inputs_file), "time", str(passes)], check=True,
+                                capture_output=True, text=True)
+        return float(result.stdout.split()[0])
+
+
+def write_inputs(inputs: np.ndarray, folder: Path) -> Path:
+    path = folder / "inputs.bin"
+    np.ascontiguousarray(inputs, dtype=np.float64).tofile(path)
+    return path
+
+
+def generated_driver(estimator: Estimator, files: dict[str, str], real: str) -> Driver:
+    p = f"vse_{estimator.name}"
+    set_inputs = "\n".join(f"            in.{s.name} = ({p}_real)u[{i}];"
+                           for i, s in enumerate(estimator.inputs.signals))
+    code = {
+        "includes": f'#include "{p}.h"',
+        "declarations": f"    {p}_state state;\n    {p}_input in;\n    {p}_output out;",
+        "init": "        {\n            const double *u = inputs;\n" + set_inputs +
+                f"\n            {p}_init(&state, &in);\n        }}",
+        "step": set_inputs + f"\n            {p}_step(&state, &in, &out);\n"
+                             "            checksum += (double)out.beta;",
+    }
+    sources = {n: files[n] for n in library_sources(files)}
+    headers = {n: t for n, t in files.items() if n.endswith(".h")}
+    return _compile(code, estimator.inputs, {**sources, **headers}, f"{p}_step",
+                    api=(f"{p}_init", f"{p}_step"))
+
+
+def hand_raw_parameters(config: VehicleConfig) -> list[float]:
+    """The hand-written baseline's parameter vector for ``config`` (same ZOH plan as generated)."""
+    v, s, lim = config.vehicle, config.settings("kf2dof"), config.limits
+    plan = plan_zoh(state_matrix_norm_bound(v, s["vx_min"], lim["vx_max"]), config.sample_time)
+    q, r, p0 = s["process_noise"], s["measurement_noise"], s["initial_covariance"]
+    return [v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"],
+            v["cornering_stiffness_front"], v["cornering_stiffness_rear"],
+            q[0][0], q[0][1], q[1][1], r[0][0], r[0][1], r[1][1], p0[0][0], p0[0][1], p0[1][1],
+            s["vx_min"], s["vx_resume"], lim["vx_max"], lim["delta_max"], lim["ay_max"],
+            lim["r_max"], config.sample_time, plan.terms, plan.squarings]
+
+
+def hand_driver(config: VehicleConfig, inputs_layout) -> Driver:
+    raw = ", ".join(repr(float(x)) for x in hand_raw_parameters(config))
+    code = {
+        "includes": '#include "kf2dof_hand.h"',
+        "declarations": f"    static const double raw[24] = {{{raw}}};\n    kf2dof_hand_params params;\n"
+                        "    kf2dof_hand_state state;\n    double y[4];\n"
+                        "    kf2dof_hand_setup(&params, raw);",
+        "init": "        kf2dof_hand_init(&state, &params, inputs);",
+        "step": "            kf2dof_hand_step(&state, &params, u, y);\n            checksum += y[0];",
+    }
+    files = {n: (HERE / "handwritten" / n).read_text() for n in (*HAND_SOURCES, "kf2dof_hand.h")}
+    return _compile(code, inputs_layout, files, "kf2dof_hand_step",
+                    api=("kf2dof_hand_init", "kf2dof_hand_step"))
+
+
+def _compile(code: dict[str, str], inputs_layout, files: dict[str, str], step: str,
+             api: tuple[str, ...]) -> Driver:
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE), undefined=jinja2.StrictUndefined)
+    driver = env.get_template("driver.c.j2").render(n_inputs=len(inputs_layout),
+                                                    fn_step=step, **code)
+    folder = tempfile.TemporaryDirectory(prefix="vsegen-bench-")
+    root = Path(folder.name)
+    for name, text in {**files, "driver.c": driver}.items():
+        (root / name).write_text(text)
+    library = sorted(n for n in files if n.endswith(".c"))
+    subprocess.run([CC, *FLAGS, "-o", "driver", "driver.c", *library, "-lm"], cwd=root, check=True,
+                   capture_output=True)
+    return Driver(folder, root / "driver", step, _text_size(root, library, api))
+
+
+def _text_size(root: Path, sources: list[str], api: tuple[str, ...]) -> int:
+    """Host .text of the library linked with --gc-sections to its API (x86-64, -O2)."""
+    subprocess.run([CC, *FLAGS, "-ffunction-sections", "-fdata-sections", "-c", *sources], cwd=root,
+                   check=True, capture_output=True)
+    objects = [s[:-2] + ".o" for s in sources]
+    keep = [f"-Wl,-u,{symbol}" for symbol in api]
+    subprocess.run([CC, "-no-pie", "-nostdlib", "-Wl,-r", "-Wl,--gc-sections", *keep, "-o", "linked.o",
+                    *objects], cwd=root, check=True, capture_output=True)
+    size = subprocess.run(["size", "linked.o"], cwd=root, check=True, capture_output=True, text=True)
+    return int(size.stdout.splitlines()[1].split()[0])
