@@ -77,15 +77,19 @@ def generated_driver(estimator: Estimator, files: dict[str, str], real: str) -> 
 
 
 def hand_raw_parameters(config: VehicleConfig) -> list[float]:
-    """The hand-written baseline's parameter vector for ``config`` (same ZOH plan as generated)."""
+    """The hand-written baseline's parameter vector for ``config``: the generated code's ZOH plan,
+    or no series terms and no squarings (Phi = I + A T, Gamma = B T) for forward Euler."""
     v, s, lim = config.vehicle, config.settings("kf2dof"), config.limits
+    if s["discretisation"] not in ("zoh", "euler"):
+        raise ValueError("the hand-written baseline implements the zoh and euler discretisations")
     plan = plan_zoh(state_matrix_norm_bound(v, s["vx_min"], lim["vx_max"]), config.sample_time)
+    terms, squarings = (plan.terms, plan.squarings) if s["discretisation"] == "zoh" else (0, 0)
     q, r, p0 = s["process_noise"], s["measurement_noise"], s["initial_covariance"]
     return [v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"],
             v["cornering_stiffness_front"], v["cornering_stiffness_rear"],
             q[0][0], q[0][1], q[1][1], r[0][0], r[0][1], r[1][1], p0[0][0], p0[0][1], p0[1][1],
             s["vx_min"], s["vx_resume"], lim["vx_max"], lim["delta_max"], lim["ay_max"],
-            lim["r_max"], config.sample_time, plan.terms, plan.squarings]
+            lim["r_max"], config.sample_time, terms, squarings]
 
 
 def hand_driver(config: VehicleConfig, inputs_layout) -> Driver:

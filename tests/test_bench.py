@@ -1,0 +1,52 @@
+"""The benchmark's hand-written baseline computes the same estimator (else the ratio means
+nothing), and the benchmark drivers measure what they claim. Timing itself is never asserted."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+import pytest
+
+from bench.measure import HERE, hand_raw_parameters
+from harness.build import build_library
+from harness.compare import TOLERANCES, difference
+from harness.reference import kf2dof as reference
+from harness.reference.run import run_reference
+from harness.scenarios import VERIFICATION_SET
+from model.params import parse_vehicle
+
+WRAPPER = """
+#include "kf2dof_hand.h"
+void hand_run(int n, const double *raw, const double *inputs, double *outputs);
+void hand_run(int n, const double *raw, const double *inputs, double *outputs)
+{
+    kf2dof_hand_params p;
+    kf2dof_hand_state s;
+    int k;
+    kf2dof_hand_setup(&p, raw);
+    kf2dof_hand_init(&s, &p, inputs);
+    for (k = 0; k < n; ++k) {
+        kf2dof_hand_step(&s, &p, inputs + 4 * k, outputs + 4 * k);
+    }
+}
+"""
+
+
+@pytest.mark.parametrize("method", ["zoh", "euler"])
+def test_handwritten_baseline_equals_the_reference(vehicle_text, method):
+    config = parse_vehicle(vehicle_text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
+                           "v.toml", "c_class")
+    sources = {n: (HERE / "handwritten" / n).read_text() for n in ("kf2dof_hand.c", "kf2dof_hand.h")}
+    library = ctypes.CDLL(str(build_library({}, {**sources, "wrap.c": WRAPPER})))
+    raw = np.array(hand_raw_parameters(config))
+    for case in VERIFICATION_SET:
+        inputs = np.ascontiguousarray(case.simulate(config, 100.0).matrix(reference.INPUTS))
+        outputs = np.zeros((len(inputs), 4))
+        pointer = ctypes.POINTER(ctypes.c_double)
+        library.hand_run(len(inputs), raw.ctypes.data_as(pointer), inputs.ctypes.data_as(pointer),
+                         outputs.ctypes.data_as(pointer))
+        expected, _ = run_reference(reference, config, inputs)
+        for i, name in enumerate(reference.OUTPUTS):
+            assert difference(name, outputs[:, i], expected[:, i], TOLERANCES["double"],
+                              integer=name == "status").ok, (case.label, name)

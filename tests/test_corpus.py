@@ -1,0 +1,62 @@
+"""Malformed-input corpus (tests/corpus): every bad vehicle file and bad log gives one clear line
+naming the file, a non-zero exit, no traceback, and no output left behind."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from harness.cli import main
+
+CORPUS = Path(__file__).parent / "corpus"
+EXPECTED = json.loads((CORPUS / "expected.json").read_text())
+
+
+def test_corpus_is_complete():
+    files = {str(p.relative_to(CORPUS)) for p in CORPUS.glob("*/*")}
+    assert files == set(EXPECTED)
+
+
+def invoke(args: list[str]):
+    return CliRunner().invoke(main, args, catch_exceptions=False)
+
+
+def assert_one_clear_line(result, path: Path, fragment: str) -> None:
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith(f"vsegen: error: {path}"), lines[0]
+    assert fragment in lines[0], lines[0]
+    assert "Traceback" not in result.output
+
+
+@pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("vehicles/")))
+def test_bad_vehicle_files(tmp_path, name):
+    path = CORPUS / name
+    out = tmp_path / "out"
+    assert_one_clear_line(invoke(["generate", "--vehicle", str(path), "--out", str(out)]), path,
+                          EXPECTED[name])
+    assert not out.exists()
+    assert_one_clear_line(invoke(["verify", "--vehicle", str(path)]), path, EXPECTED[name])
+    log = tmp_path / "log.csv"
+    assert_one_clear_line(invoke(["simulate", "dlc", "--vehicle", str(path), "--out", str(log)]),
+                          path, EXPECTED[name])
+    assert not log.exists()
+
+
+@pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("logs/")))
+def test_bad_logs(tmp_path, name):
+    path = CORPUS / name
+    est = tmp_path / "est.csv"
+    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+                          path, EXPECTED[name])
+    assert not est.exists() and list(tmp_path.iterdir()) == []
+    assert_one_clear_line(invoke(["score", "--log", str(path), "--est", str(path)]), path,
+                          EXPECTED[name])
+    figure = tmp_path / "fig.png"
+    assert_one_clear_line(invoke(["plot", "--log", str(path), "--est", str(path), "--out", str(figure)]),
+                          path, EXPECTED[name])
+    assert not figure.exists()
