@@ -52,52 +52,34 @@ def _number(value: Any) -> float:
     return value
 
 
-def positive(key: str, unit: str, doc: str = "") -> Field:
-    """A finite number > 0 in ``unit``."""
-    expected = f"a finite number > 0 ({unit})"
+def _number_field(key: str, expected: str, accept: Callable[[float], bool], doc: str) -> Field:
+    """A finite number for which ``accept`` holds."""
 
     def check(value: Any) -> float:
         try:
             number = _number(value)
         except Invalid:
             raise Invalid(expected) from None
-        if number <= 0.0:
+        if not accept(number):
             raise Invalid(expected)
         return number
 
     return Field(key, expected, check, doc)
+
+
+def positive(key: str, unit: str, doc: str = "") -> Field:
+    """A finite number > 0 in ``unit``."""
+    return _number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc)
 
 
 def nonnegative(key: str, unit: str, doc: str = "") -> Field:
     """A finite number >= 0 in ``unit``."""
-    expected = f"a finite number >= 0 ({unit})"
-
-    def check(value: Any) -> float:
-        try:
-            number = _number(value)
-        except Invalid:
-            raise Invalid(expected) from None
-        if number < 0.0:
-            raise Invalid(expected)
-        return number
-
-    return Field(key, expected, check, doc)
+    return _number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc)
 
 
 def fraction(key: str, doc: str = "") -> Field:
     """A number strictly between 0 and 1."""
-    expected = "a number between 0 and 1 (exclusive)"
-
-    def check(value: Any) -> float:
-        try:
-            number = _number(value)
-        except Invalid:
-            raise Invalid(expected) from None
-        if not 0.0 < number < 1.0:
-            raise Invalid(expected)
-        return number
-
-    return Field(key, expected, check, doc)
+    return _number_field(key, "a number between 0 and 1 (exclusive)", lambda x: 0.0 < x < 1.0, doc)
 
 
 def choice(key: str, options: tuple[str, ...], doc: str = "", default: str | None = None) -> Field:
