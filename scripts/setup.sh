@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(gcc g++ clang binutils gcc-arm-none-eabi libnewlib-arm-none-eabi cppcheck)
+packages=(gcc g++ clang binutils make cmake gcc-arm-none-eabi libnewlib-arm-none-eabi cppcheck valgrind)
 missing=()
 for package in "${packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")
