@@ -1,0 +1,108 @@
+"""Signal-processing building blocks (symbolic where they run per step, numeric where they are
+designed at generation time): second-order prefilter, median of a window, reliability check
+against a reference with hold-last-valid. Specified in shared/methods/000-switch-sideslip.md
+§2.2, §2.3 and §2.6.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import casadi as ca
+
+
+@dataclass(frozen=True)
+class Biquad:
+    """Discrete y[k] = n0 x[k] + n1 x[k-1] + n2 x[k-2] - d1 y[k-1] - d2 y[k-2]."""
+
+    n0: float
+    n1: float
+    n2: float
+    d1: float
+    d2: float
+
+    @property
+    def dc_gain(self) -> float:
+        return (self.n0 + self.n1 + self.n2) / (1.0 + self.d1 + self.d2)
+
+
+def lowpass_2nd(omega: float, damping: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Analog omega^2 / (s^2 + 2 damping omega s + omega^2) as (numerator, denominator)."""
+    return (omega * omega,), (1.0, 2.0 * damping * omega, omega * omega)
+
+
+def printed_prefilter() -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Seed 000's printed prefilter 10000 / (s^2 + 200 s + 10000) (critically damped, 100 rad/s)."""
+    return (10000.0,), (1.0, 200.0, 10000.0)
+
+
+def bessel_prefilter(omega: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Second-order Bessel low-pass, phase-normalised at ``omega`` rad/s:
+    omega^2 / (s^2 + sqrt(3) omega s + omega^2) (= scipy.signal.bessel(2, omega, analog=True,
+    norm='phase'))."""
+    return lowpass_2nd(omega, math.sqrt(3.0) / 2.0)
+
+
+def tustin_biquad(numerator: Sequence[float], denominator: Sequence[float], T: float) -> Biquad:
+    """Bilinear (Tustin) transform s = (2/T)(z - 1)/(z + 1) of b0 / (s^2 + a1 s + a0), where
+    ``numerator`` = (b0,) and ``denominator`` = (1, a1, a0)."""
+    (b0,), (one, a1, a0) = numerator, denominator
+    if one != 1.0:
+        raise ValueError("the denominator must be monic")
+    c = 2.0 / T
+    norm = c * c + a1 * c + a0
+    return Biquad(b0 / norm, 2.0 * b0 / norm, b0 / norm, (2.0 * a0 - 2.0 * c * c) / norm,
+                  (c * c - a1 * c + a0) / norm)
+
+
+def biquad_step(f: Biquad, x: ca.SX, x1: ca.SX, x2: ca.SX, y1: ca.SX, y2: ca.SX) -> ca.SX:
+    """y[k] from x[k], x[k-1], x[k-2], y[k-1], y[k-2]."""
+    return f.n0 * x + f.n1 * x1 + f.n2 * x2 - f.d1 * y1 - f.d2 * y2
+
+
+def median_window(samples_per_second: float, span: float) -> int:
+    """Odd window length covering ``span`` seconds: 2 round(span / (2 T)) + 1 (spec A2)."""
+    return 2 * round(span * samples_per_second / 2.0) + 1
+
+
+def median(values: Sequence[ca.SX]) -> ca.SX:
+    """Median of an odd number of values by a partial selection network of fmin/fmax
+    (branch-free; (n+1)/2 bubble passes put the median in place)."""
+    items = list(values)
+    n = len(items)
+    if n % 2 == 0:
+        raise ValueError("the median window must be odd")
+    middle = n // 2
+    for top in range(n - 1, middle - 1, -1):  # bubble the largest remaining value to `top`
+        for i in range(top):
+            low, high = ca.fmin(items[i], items[i + 1]), ca.fmax(items[i], items[i + 1])
+            items[i], items[i + 1] = low, high
+    return items[middle]
+
+
+@dataclass(frozen=True)
+class Checked:
+    """Result of a reliability check: the value to use, the new last-accepted value, the new
+    count of consecutive rejections, and whether the time-out forced acceptance."""
+
+    value: ca.SX
+    last: ca.SX
+    rejections: ca.SX
+    forced: ca.SX
+
+
+def reliability_check(measured: ca.SX, reference: ca.SX, band: float, last: ca.SX,
+                      rejections: ca.SX, timeout_steps: int) -> Checked:
+    """Accept ``measured`` if |measured - reference| <= band, else use ``last`` (hold last valid);
+    after ``timeout_steps`` consecutive rejections accept the measurement again (spec A6)."""
+    inside = ca.fabs(measured - reference) <= band
+    forced = ca.logic_and(ca.logic_not(inside), rejections + 1 >= timeout_steps)
+    accept = ca.logic_or(inside, forced)
+    return Checked(
+        value=ca.if_else(accept, measured, last),
+        last=ca.if_else(accept, measured, last),
+        rejections=ca.if_else(accept, 0, rejections + 1),
+        forced=forced,
+    )
