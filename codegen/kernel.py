@@ -52,7 +52,12 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     options = kernel_options(real, f"{base}_")
     generator = ca.CodeGenerator(f"{base}.c", options)
     generator.add(estimator.init)
-    generator.add(estimator.step)
+    if estimator.schemes is None:
+        generator.add(estimator.step)
+    else:
+        generator.add(estimator.schemes.select)
+        for _, function in estimator.schemes.branches:
+            generator.add(function)
     with tempfile.TemporaryDirectory(prefix="vsegen-kernel-") as tmp:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from codegen.generate import render
 from harness.build import load_estimator
 from harness.compare import TOLERANCES, Difference, as_seen_by, difference
@@ -27,10 +29,12 @@ class CaseResult:
     outputs: tuple[Difference, ...]
     states: Difference
     """Worst case over all state entries."""
+    stepwise: Difference
+    """Worst case over every step taken by the reference from the C's own state."""
 
     @property
     def ok(self) -> bool:
-        return self.states.ok and all(d.ok for d in self.outputs)
+        return self.states.ok and self.stepwise.ok and all(d.ok for d in self.outputs)
 
 
 def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
@@ -42,9 +46,9 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
     params = params or config.codegen["params"]
     estimator = build(name, config, params)
     reference = REFERENCES[name]
-    for label, model_layout, ref_names in (("inputs", estimator.inputs, reference.INPUTS),
-                                           ("states", estimator.states, reference.STATES),
-                                           ("outputs", estimator.outputs, reference.OUTPUTS)):
+    for label, model_layout, ref_names in zip(("inputs", "states", "outputs"),
+                                              (estimator.inputs, estimator.states, estimator.outputs),
+                                              reference.names(config)):
         if tuple(model_layout.names) != tuple(ref_names):
             raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
     compiled = load_estimator(estimator, render(config, name, real, params))
@@ -60,17 +64,26 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
             for i, s in enumerate(estimator.outputs.signals)
         )
         states = difference("state (all entries)", c_states, r_states, tolerance)
-        results.append(CaseResult(name, real, case.label, len(log), outputs, states))
+        stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance)
+        results.append(CaseResult(name, real, case.label, len(log), outputs, states, stepwise))
         if progress:
             progress()
     return results
+
+
+def _stepwise(reference, config, c_states, c_out, inputs, tolerance) -> Difference:
+    """Each reference step from the C's state k against the C's state k+1 and output k."""
+    expected = [np.concatenate(reference.step(config, c_states[k], row))
+                for k, row in enumerate(inputs)]
+    actual = np.hstack([c_states[1:], c_out])
+    return difference("step from the C state", actual, np.array(expected), tolerance)
 
 
 def worst(results: list[CaseResult]) -> dict[str, float]:
     """Worst relative difference per output name over all results (non-integer outputs)."""
     table: dict[str, float] = {}
     for result in results:
-        for d in (*result.outputs, result.states):
+        for d in (*result.outputs, result.states, result.stepwise):
             if not d.integer:
                 table[d.name] = max(table.get(d.name, 0.0), d.max_rel)
     return table

@@ -4,6 +4,11 @@
 
 ``init`` and ``step`` are CasADi SX Functions of flat vectors with named layouts, so codegen, the
 harness, equivalence checks and benchmarks are written once for all estimators.
+
+An estimator that switches between schemes (seed 000) also has :class:`Schemes`: a ``select``
+Function that updates the shared part of the state and picks a scheme, and one Function per
+scheme. The generated C then evaluates only the chosen scheme (CasADi's SX ``if_else`` would
+evaluate every branch); ``step`` is their composition, for Python.
 """
 
 from __future__ import annotations
@@ -15,6 +20,20 @@ import casadi as ca
 
 from model.calibration import Parameters
 from model.layout import Layout
+
+
+@dataclass(frozen=True)
+class Schemes:
+    """Only-one-scheme-per-step structure.
+
+    ``select(state, input[, params]) -> (state_mid, scratch)``; ``scratch[0]`` is the index of the
+    scheme to run. ``branches[i] = (label, fn)`` with
+    ``fn(state_mid, input, scratch[, params]) -> (state_next, output)``.
+    """
+
+    select: ca.Function
+    branches: tuple[tuple[str, ca.Function], ...]
+    scratch: Layout
 
 
 @dataclass(frozen=True)
@@ -41,6 +60,7 @@ class Estimator:
     step: ca.Function
     parameters: Parameters
     notes: Mapping[str, str] = field(default_factory=dict)
+    schemes: Schemes | None = None
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
@@ -60,3 +80,36 @@ def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, i
     if step.numel_out("output") != len(outputs) or step.numel_in("input") != len(inputs):
         raise ValueError(f"{name}: output or input size does not match its layout")
     return init, step
+
+
+def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, input_sym: ca.SX,
+                 mid_state: ca.SX, scratch_expr: ca.SX,
+                 branches: list[tuple[str, ca.SX, ca.SX, ca.SX, ca.SX, ca.SX]],
+                 parameters: Parameters) -> tuple[Schemes, ca.SX, ca.SX]:
+    """Functions of a switching step and the composed (next_state, output) expressions.
+
+    ``branches``: (label, mid symbol, scratch symbol, input symbol, next state, output) per scheme,
+    in index order; each branch's expressions use its own symbols.
+    """
+    extra = parameters.inputs()
+    extra_names = ["params"] * len(extra)
+    select = ca.Function(f"vse_{name}_kernel_select", [state_sym, input_sym, *extra],
+                         [mid_state, scratch_expr], ["state", "input", *extra_names],
+                         ["state_mid", "scratch"])
+    functions = []
+    for label, mid_sym, scratch_sym, input_b, next_state, output in branches:
+        functions.append((label, ca.Function(
+            f"vse_{name}_kernel_{label}", [mid_sym, input_b, scratch_sym, *extra],
+            [next_state, output], ["state_mid", "input", "scratch", *extra_names],
+            ["state_next", "output"])))
+    mid, scr = select(state_sym, input_sym, *extra)
+    composed_state, composed_output = None, None
+    for index in range(len(functions) - 1, -1, -1):
+        branch_state, branch_output = functions[index][1](mid, input_sym, scr, *extra)
+        if composed_state is None:
+            composed_state, composed_output = branch_state, branch_output
+        else:
+            chosen = scr[0] == index
+            composed_state = ca.if_else(chosen, branch_state, composed_state)
+            composed_output = ca.if_else(chosen, branch_output, composed_output)
+    return Schemes(select, tuple(functions), scratch), composed_state, composed_output

@@ -205,19 +205,34 @@ LOW_SPEED_FIELDS: tuple[Field, ...] = (
 )
 LOW_SPEED_RULES: tuple[Rule, ...] = (Rule("vx_resume", _resume_above_min),)
 
-KF2DOF = EstimatorSchema(
-    fields=(
-        choice("discretisation", DISCRETISATIONS, "method turning A, B into Phi, Gamma"),
-        spd_matrix("process_noise", 2, "continuous PSD of [vy, r]: (m/s^2)^2*s, (rad/s^2)^2*s",
-                   "Q_c; the discrete Q_d = Q_c*T"),
-        spd_matrix("measurement_noise", 2, "[ay, r]: (m/s^2)^2, (rad/s)^2", "R"),
-        spd_matrix("initial_covariance", 2, "[vy, r]: (m/s)^2, (rad/s)^2",
-                   "P_0, also the covariance after a low-speed or invalid-input hold"),
-        *LOW_SPEED_FIELDS,
-    ),
-    rules=LOW_SPEED_RULES,
+KF_FIELDS: tuple[Field, ...] = (
+    choice("discretisation", DISCRETISATIONS, "method turning A, B into Phi, Gamma"),
+    spd_matrix("process_noise", 2, "continuous PSD of [vy, r]: (m/s^2)^2*s, (rad/s^2)^2*s",
+               "Q_c; the discrete Q_d = Q_c*T"),
+    spd_matrix("measurement_noise", 2, "[ay, r]: (m/s^2)^2, (rad/s)^2", "R"),
+    spd_matrix("initial_covariance", 2, "[vy, r]: (m/s)^2, (rad/s)^2",
+               "P_0, also the covariance after a hold and at a kinematic-to-dynamic hand-off"),
+    *LOW_SPEED_FIELDS,
 )
+"""The 2-DOF Kalman filter's settings, shared by every estimator that runs it."""
+
+KF2DOF = EstimatorSchema(fields=KF_FIELDS, rules=LOW_SPEED_RULES)
+
+SEED000_FIELDS: tuple[Field, ...] = (
+    choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "
+           "10000/(s^2+200s+10000) or a phase-normalised 2nd-order Bessel at prefilter_omega"),
+    positive("prefilter_omega", "rad/s", "Bessel cut-off (prefilter = \"bessel\" only)"),
+    positive("median_span", "s", "median window span (odd length 2 round(span/2T) + 1)"),
+    positive("yaw_rate_band", "rad/s", "half-width of the credible band around r_ref"),
+    positive("lateral_acceleration_band", "m/s^2", "half-width of the band around vx r"),
+    positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
+    positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
+)
+"""Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
+
+SWITCHING = EstimatorSchema(fields=(*KF_FIELDS, *SEED000_FIELDS), rules=LOW_SPEED_RULES)
 
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
+    "switching": SWITCHING,
 }

@@ -6,4 +6,9 @@ LOW_SPEED = 1
 INVALID_INPUT = 2
 """An input was NaN, +-Inf or beyond its plausibility limit: estimator holds, the input is ignored."""
 
-STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT}
+REFERENCE_SUSPECT = 4
+"""A reliability check rejected its measurement for longer than its time-out and accepted it
+again: the reference (e.g. the steady-state yaw rate) is suspect."""
+
+STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT,
+               "REFERENCE_SUSPECT": REFERENCE_SUSPECT}

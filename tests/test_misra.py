@@ -3,6 +3,7 @@ template source clean."""
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 from collections import Counter
@@ -20,13 +21,13 @@ def counts(config):
             pytest.fail("cppcheck is required in CI (scripts/setup.sh installs it)")
         pytest.skip("cppcheck not installed")
     total = Counter()
-    for real in ("double", "float"):
-        for params in ("baked", "calibratable"):
-            found = misra.findings(render(config, "kf2dof", real, params))
-            dirty = [(f, rule) for f, rule in found if not f.startswith("vse_kf2dof_kernel")
-                     and rule != "misra-c2012-2.5" and rule != "misra-c2012-2.4"]
-            assert not dirty, f"template code not clean: {dirty}"
-            total.update(found)
+    for name, real, params in itertools.product(config.estimators, ("double", "float"),
+                                                ("baked", "calibratable")):
+        found = misra.findings(render(config, name, real, params))
+        dirty = [(f, rule) for f, rule in found if not f.startswith(f"vse_{name}_kernel")
+                 and rule != "misra-c2012-2.5" and rule != "misra-c2012-2.4"]
+        assert not dirty, f"template code not clean: {dirty}"
+        total.update(found)
     return total
 
 

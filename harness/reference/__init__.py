@@ -1,14 +1,15 @@
 """Independent NumPy reference estimators, written from shared/methods/, never importing casadi.
 
 Each reference module offers the estimator shape of design.md on NumPy vectors with the same
-named layouts as the symbolic model: ``init(config, u0) -> state`` and
-``step(config, state, u) -> (state, output)``; the harness checks the layout names agree.
+named layouts as the symbolic model: ``names(config) -> (inputs, states, outputs)``,
+``init(config, u0) -> state`` and ``step(config, state, u) -> (state, output)``; the harness
+checks the layout names agree.
 """
 
 from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import kf2dof
+from harness.reference import kf2dof, switching
 
-REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof}
+REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof, "switching": switching}

@@ -15,6 +15,11 @@ STATES = ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "hol
 OUTPUTS = ("beta", "vy", "r", "status")
 
 
+def names(config):
+    """(inputs, states, outputs) names of the flat vectors."""
+    return INPUTS, STATES, OUTPUTS
+
+
 def _settings(config):
     return config.settings("kf2dof")
 

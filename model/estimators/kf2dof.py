@@ -52,24 +52,25 @@ OUTPUTS = Layout((
 ))
 
 
-def dynamic_update(params: Parameters) -> ca.Function:
+def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     """One Kalman predict + update of the 2-DOF model, as a named CasADi Function.
 
     Inputs: ``x`` = [vy, r] (m/s, rad/s), ``P`` = packed covariance [P11, P12, P22],
     ``delta_prev`` (rad), ``vx_prev`` (m/s): the inputs held over the prediction (ZOH);
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
-    With calibratable parameters, a last input ``params`` carries them.
+    With calibratable parameters, a last input ``params`` carries them. ``table`` names the
+    [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
     Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad).
     Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
     are plausible. Reused by every estimator with a dynamic (KF) scheme.
     """
     config = params.config
     vehicle, T = config.vehicle, config.sample_time
-    settings = config.settings(NAME)
+    settings = config.settings(table)
     vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
     Qd = matrix(settings["process_noise"]) * T
     R = matrix(settings["measurement_noise"])
-    plan = zoh_plan(params)
+    plan = zoh_plan(params, table)
     x = ca.SX.sym("x", 2)
     P_packed = ca.SX.sym("P", kalman.packed_size(2))
     delta_prev, vx_prev, delta, vx, ay, r_meas = (
@@ -86,7 +87,7 @@ def dynamic_update(params: Parameters) -> ca.Function:
     x_new, P_new, _ = kalman.update_joseph(x_pred, P_pred, ca.vertcat(ay, r_meas), C, D, delta, R)
     names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
     return ca.Function(
-        f"{NAME}_dynamic_update",
+        f"{table}_dynamic_update",
         [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
         [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx))],
         names + ["params"] * params.calibratable,
@@ -94,21 +95,21 @@ def dynamic_update(params: Parameters) -> ca.Function:
     )
 
 
-def zoh_plan(params: Parameters) -> discretize.ZohPlan:
+def zoh_plan(params: Parameters, table: str = NAME) -> discretize.ZohPlan:
     """The ZOH series plan for the generated parameter values (with the calibration margin)."""
     numeric = params.numeric
-    settings = numeric.settings(NAME)
+    settings = numeric.settings(table)
     bound = state_matrix_norm_bound(numeric.vehicle, settings["vx_min"], numeric.limits["vx_max"])
     return discretize.plan_zoh(bound * params.norm_margin, numeric.sample_time)
 
 
-def zoh_note(params: Parameters) -> dict[str, str]:
+def zoh_note(params: Parameters, table: str = NAME) -> dict[str, str]:
     """Notes for generated files: the discretisation and, for ZOH, the series' error bound."""
     numeric = params.numeric
-    settings = numeric.settings(NAME)
+    settings = numeric.settings(table)
     notes = {"discretisation": settings["discretisation"]}
     if settings["discretisation"] == "zoh":
-        plan = zoh_plan(params)
+        plan = zoh_plan(params, table)
         margin = f" x {params.norm_margin:g} (calibration margin)" if params.calibratable else ""
         notes["zoh_series"] = (f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
                                f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e} for ||A|| up to "

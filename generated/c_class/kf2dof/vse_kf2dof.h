@@ -27,6 +27,7 @@ typedef double vse_kf2dof_real;
 #define VSE_KF2DOF_STATUS_OK (0)
 #define VSE_KF2DOF_STATUS_LOW_SPEED (1)
 #define VSE_KF2DOF_STATUS_INVALID_INPUT (2)
+#define VSE_KF2DOF_STATUS_REFERENCE_SUSPECT (4)
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
