@@ -1,0 +1,93 @@
+"""Seed 000's switching estimator: outlier rejection, hand-offs both ways, only the active scheme,
+time-out, low speed. Run on the generated C (double); equivalence to the reference is in verify."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.scenarios import Case
+from model import status
+from model.calibration import baked
+from model.estimators import build
+from model.estimators.kf2dof import dynamic_update
+from model.estimators.switching import DYN, KIN
+
+T = 0.01
+
+
+@pytest.fixture(scope="module")
+def estimator(config):
+    return build("switching", config)
+
+
+@pytest.fixture(scope="module")
+def compiled(config, estimator):
+    return load_estimator(estimator, render(config, "switching"))
+
+
+def run(compiled, estimator, config, case):
+    log = case.simulate(config, 100.0)
+    inputs = log.matrix(estimator.inputs.names)
+    outputs, states = compiled.run(inputs)
+    return log, inputs, outputs, states, {n: i for i, n in enumerate(estimator.states.names)}
+
+
+def test_gyro_outliers_are_rejected(config, estimator, compiled):
+    log, _, outputs, states, i = run(compiled, estimator, config,
+                                     Case.of("dlc", speed_kmh=120.0, outliers=True))
+    for k, spike in ((200, 0.47), (700, 0.84)):
+        assert log["r"][k] == spike
+        assert abs(outputs[k, 2] - spike) > 0.2               # the checked r is not the spike
+        assert outputs[k, 2] == states[k][i["r_last"]]         # hold last valid
+        assert states[k + 1][i["r_rejections"]] == 1 and states[k + 2][i["r_rejections"]] == 0
+
+
+def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(config, estimator, compiled):
+    _, inputs, outputs, states, i = run(compiled, estimator, config, Case.of("continuous_dlc"))
+    mode = outputs[:, 3].astype(int)
+    to_kin = [k for k in range(1, len(mode)) if mode[k - 1] == DYN and mode[k] == KIN]
+    to_dyn = [k for k in range(1, len(mode)) if mode[k - 1] == KIN and mode[k] == DYN]
+    assert len(to_kin) >= 3 and len(to_dyn) >= 3
+    for k in to_kin:  # [E25]: integration starts from the last KF vy; states[k] is before step k
+        before = states[k]
+        expected = before[i["vy"]] + T * (before[i["ay_prev"]] - before[i["r_prev"]] * before[i["vx_prev"]])
+        assert states[k + 1][i["vy_kin"]] == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    update = dynamic_update(baked(config), "switching")
+    P0 = config.settings("switching")["initial_covariance"]
+    for k in to_dyn:  # [E26]: the KF restarts from [vy_kin, r_prev] with P = P_0
+        before = states[k]
+        result = update(x=[before[i["vy_kin"]], before[i["r_prev"]]], P=[P0[0][0], P0[0][1], P0[1][1]],
+                        delta_prev=before[i["delta_prev"]], vx_prev=before[i["vx_prev"]],
+                        delta=inputs[k, 0], vx=inputs[k, 1], ay=inputs[k, 2], r_meas=outputs[k, 2])
+        np.testing.assert_allclose(states[k + 1][[i["vy"], i["r"]]],
+                                   np.array(result["x_next"]).ravel(), rtol=1e-12, atol=1e-15)
+    kf = [i["vy"], i["r"], i["P_vy_vy"], i["P_vy_r"], i["P_r_r"]]
+    for k in range(1, len(mode)):
+        if mode[k] == KIN and mode[k - 1] == KIN:  # the KF is not propagated in KIN
+            np.testing.assert_array_equal(states[k + 1][kf], states[k][kf])
+
+
+def test_only_the_active_scheme_is_compiled_into_the_step(config):
+    files = render(config, "switching")
+    api = files["vse_switching.c"]
+    assert "switch ((int)scratch[0])" in api
+    for label in ("dynamic", "kinematic", "hold"):
+        assert f"vse_switching_kernel_{label}(arg, res" in api
+    assert "vse_switching_kernel_step" not in api
+
+
+def test_reference_time_out_and_low_speed(config, estimator, compiled):
+    n = 100
+    steady = np.tile([0.0, 20.0, 0.0, 0.5], (n, 1))  # straight steer, yet a yaw rate of 0.5 rad/s
+    outputs, _ = compiled.run(steady)
+    suspect = outputs[:, 4].astype(int) & status.REFERENCE_SUSPECT
+    timeout = round(config.settings("switching")["reference_timeout"] / T)
+    first = int(np.argmax(suspect > 0))
+    assert first == timeout - 1 and outputs[first, 2] == 0.5
+    slow = np.tile([0.01, 2.0, 0.2, 0.01], (20, 1))
+    outputs, states = compiled.run(slow)
+    assert np.all(outputs[:, 4].astype(int) == status.LOW_SPEED)
+    assert np.all(outputs[:, 0] == 0.0) and np.all(outputs[:, 3] == DYN)
