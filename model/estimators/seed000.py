@@ -1,0 +1,185 @@
+"""Seed 000's shared machinery for the switching and fusion estimators: the state layout, the
+pre-processing (shared/methods/000-switch-sideslip.md §2.2, §2.3, §2.6: prefilter, reliability
+checks with hold-last-valid and time-out, median), the initial state (§2.9) and the hold rule
+(§2.10). Each estimator adds its schemes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from model import filters, kalman, status
+from model.bicycle import stability_factor
+from model.calibration import Parameters, matrix
+from model.estimators import kf2dof
+from model.guard import Guard, hold, input_guard
+from model.layout import Layout, Signal
+
+INPUTS = kf2dof.INPUTS
+COVARIANCE = kalman.packed_names("P", ("vy", "r"))
+DYN, KIN = 0, 1
+
+
+def window(params: Parameters, table: str) -> int:
+    """Median window length N (odd) at the configured sample time."""
+    numeric = params.numeric
+    return filters.median_window(1.0 / numeric.sample_time, numeric.settings(table)["median_span"])
+
+
+def states(n_median: int) -> Layout:
+    return Layout((
+        Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
+        Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
+        Signal("ay_b_1", "m/s^2", "prefilter output one sample back"),
+        Signal("ay_b_2", "m/s^2", "prefilter output two samples back"),
+        *(Signal(f"ay_b_hist_{i}", "m/s^2", f"median buffer: a_y,b {i} samples back")
+          for i in range(1, n_median)),
+        Signal("r_last", "rad/s", "last accepted yaw rate"),
+        Signal("ay_last", "m/s^2", "last accepted a_y,b"),
+        Signal("r_rejections", "-", "consecutive yaw-rate rejections"),
+        Signal("ay_rejections", "-", "consecutive a_y rejections"),
+        Signal("mode", "-", "0 dynamic, 1 kinematic"),
+        Signal("vy_kin", "m/s", "kinematic integrator"),
+        Signal("vy", "m/s", "KF lateral velocity"),
+        Signal("r", "rad/s", "KF yaw rate"),
+        *(Signal(n, "SI", "KF covariance entry (upper triangle, row by row)") for n in COVARIANCE),
+        Signal("delta_prev", "rad", "last plausible steer angle"),
+        Signal("vx_prev", "m/s", "last plausible speed"),
+        Signal("ay_prev", "m/s^2", "checked a_y of the previous sample"),
+        Signal("r_prev", "rad/s", "checked yaw rate of the previous sample"),
+        Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+    ))
+
+
+def prefilter(params: Parameters, table: str) -> filters.Biquad:
+    """The configured a_y prefilter, Tustin-discretised at the sample time."""
+    settings = params.numeric.settings(table)
+    design = (filters.printed_prefilter() if settings["prefilter"] == "printed"
+              else filters.bessel_prefilter(settings["prefilter_omega"]))
+    return filters.tustin_biquad(*design, params.numeric.sample_time)
+
+
+def reference_yaw_rate(params: Parameters, delta, vx):
+    """r_ref = delta vx / (l (1 + K_s vx^2)) [E7]."""
+    vehicle = params.config.vehicle
+    l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
+    return delta * vx / (l * (1 + stability_factor(vehicle) * vx * vx))
+
+
+@dataclass(frozen=True)
+class Preprocessed:
+    """One sample of shared pre-processing."""
+
+    guard: Guard
+    ay_checked: ca.SX
+    r_checked: ca.SX
+    ay_filtered: ca.SX
+    """a_y,f: median of the prefiltered a_y (the switching signal)."""
+    status: ca.SX
+    updates: dict[str, ca.SX]
+    """New values of the pre-processing state entries (held while not active)."""
+
+
+class Seed000:
+    """Layout, settings and helpers of one seed-000 estimator table."""
+
+    def __init__(self, params: Parameters, table: str) -> None:
+        self.params = params
+        self.table = table
+        self.settings = params.config.settings(table)
+        self.T = params.config.sample_time
+        self.n_median = window(params, table)
+        self.layout = states(self.n_median)
+        self.biquad = prefilter(params, table)
+        self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
+        self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
+        self.vx_max = params.config.limits["vx_max"]
+        self.P0 = kalman.pack_symmetric(matrix(self.settings["initial_covariance"]))
+
+    def speed(self, vx):
+        """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""
+        return ca.fmin(ca.fmax(vx, self.vx_min), self.vx_max)
+
+    def preprocess(self, s: dict, u: dict) -> Preprocessed:
+        settings, limits = self.settings, self.params.config.limits
+        guard = input_guard(u, limits, self.vx_min, self.vx_resume, s["holding"])
+        ok, active = guard.plausible, guard.active
+        ay_m = hold(u["ay"], ok["ay"], s["ay_m_1"])
+        ay_b = filters.biquad_step(self.biquad, ay_m, s["ay_m_1"], s["ay_m_2"], s["ay_b_1"],
+                                   s["ay_b_2"])
+        vx = self.speed(hold(u["vx"], ok["vx"], self.vx_min))
+        r_m = hold(u["r"], ok["r"], s["r_last"])
+        r_ref = reference_yaw_rate(self.params, hold(u["delta"], ok["delta"], 0), vx)
+        r_check = filters.reliability_check(r_m, r_ref, settings["yaw_rate_band"], s["r_last"],
+                                            s["r_rejections"], self.timeout)
+        ay_check = filters.reliability_check(ay_b, vx * r_check.value,
+                                             settings["lateral_acceleration_band"], s["ay_last"],
+                                             s["ay_rejections"], self.timeout)
+        history = [ay_b] + [s[f"ay_b_hist_{i}"] for i in range(1, self.n_median)]
+        suspect = ca.logic_or(r_check.forced, ay_check.forced)
+        code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
+
+        def keep(name, value):
+            return ca.if_else(active, value, s[name])
+
+        updates = {
+            "ay_m_1": keep("ay_m_1", ay_m), "ay_m_2": keep("ay_m_2", s["ay_m_1"]),
+            "ay_b_1": keep("ay_b_1", ay_b), "ay_b_2": keep("ay_b_2", s["ay_b_1"]),
+            **{f"ay_b_hist_{i}": keep(f"ay_b_hist_{i}", history[i - 1])
+               for i in range(1, self.n_median)},
+            "r_last": keep("r_last", r_check.last), "ay_last": keep("ay_last", ay_check.last),
+            "r_rejections": keep("r_rejections", r_check.rejections),
+            "ay_rejections": keep("ay_rejections", ay_check.rejections),
+        }
+        return Preprocessed(guard, ay_check.value, r_check.value, filters.median(history), code,
+                            updates)
+
+    def held(self, m: dict, v: dict) -> dict:
+        """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last
+        plausible previous inputs kept; pre-processing buffers held by ``preprocess``."""
+        plausible = input_guard(v, self.params.config.limits, self.vx_min, self.vx_resume,
+                                ca.SX(1)).plausible
+        new = dict(m)
+        new.update({"vy_kin": ca.SX(0), "vy": ca.SX(0), "mode": ca.SX(DYN), "holding": ca.SX(1),
+                    **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
+                    "delta_prev": hold(v["delta"], plausible["delta"], m["delta_prev"]),
+                    "vx_prev": hold(v["vx"], plausible["vx"], m["vx_prev"])})
+        return new
+
+    def advanced(self, m: dict, v: dict, ay_checked, r_checked, changes: dict) -> dict:
+        """State after an active step: ``changes`` plus this sample stored as the previous one."""
+        new = dict(m)
+        new.update(changes)
+        new.update({"delta_prev": v["delta"], "vx_prev": v["vx"], "ay_prev": ay_checked,
+                    "r_prev": r_checked, "holding": ca.SX(0)})
+        return new
+
+    def initial_state(self, u: dict) -> ca.SX:
+        """§2.9: filters at their DC steady state for sample 0, r_last = r_0 if inside the band of
+        r_ref,0 else r_ref,0, KF at [0, r_0] with P_0, previous inputs = sample 0."""
+        first = input_guard(u, self.params.config.limits, self.vx_resume, self.vx_resume, ca.SX(1))
+        ay0 = hold(u["ay"], first.plausible["ay"], 0)
+        r0 = hold(u["r"], first.plausible["r"], 0)
+        delta0 = hold(u["delta"], first.plausible["delta"], 0)
+        vx0 = hold(u["vx"], first.plausible["vx"], self.vx_min)
+        r_ref0 = reference_yaw_rate(self.params, delta0, self.speed(vx0))
+        r_last0 = ca.if_else(ca.fabs(r0 - r_ref0) <= self.settings["yaw_rate_band"], r0, r_ref0)
+        ay_b0 = ay0 * self.biquad.dc_gain
+        return self.layout.pack({
+            "ay_m_1": ay0, "ay_m_2": ay0, "ay_b_1": ay_b0, "ay_b_2": ay_b0,
+            **{f"ay_b_hist_{i}": ay_b0 for i in range(1, self.n_median)},
+            "r_last": r_last0, "ay_last": ay_b0, "r_rejections": ca.SX(0),
+            "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
+            "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
+            "delta_prev": delta0, "vx_prev": vx0, "ay_prev": ay_b0, "r_prev": r_last0,
+            "holding": ca.if_else(first.active, 0, 1),
+        })
+
+    def notes(self) -> dict[str, str]:
+        b = self.biquad
+        return {**kf2dof.zoh_note(self.params, self.table),
+                "median_window": f"{self.n_median} samples",
+                "prefilter": f"{self.params.numeric.settings(self.table)['prefilter']}, Tustin: "
+                             f"n = [{b.n0:.6g}, {b.n1:.6g}, {b.n2:.6g}], d = [1, {b.d1:.6g}, {b.d2:.6g}]"}
