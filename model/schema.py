@@ -231,8 +231,14 @@ SEED000_FIELDS: tuple[Field, ...] = (
 """Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
 
 SWITCHING = EstimatorSchema(fields=(*KF_FIELDS, *SEED000_FIELDS), rules=LOW_SPEED_RULES)
+FUSION = EstimatorSchema(
+    fields=(*KF_FIELDS, *SEED000_FIELDS,
+            positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
+                     "integrator towards the KF")),
+    rules=LOW_SPEED_RULES)
 
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
     "switching": SWITCHING,
+    "fusion": FUSION,
 }

@@ -10,6 +10,6 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import kf2dof, switching
+from harness.reference import fusion, kf2dof, switching
 
-REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof, "switching": switching}
+REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof, "switching": switching, "fusion": fusion}

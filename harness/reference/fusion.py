@@ -1,0 +1,47 @@
+"""Reference fusion estimator: seed 000's comparison method (§4.4 stand-in). Both schemes every
+sample, integral correction k_c of the integrator towards the KF, weighted output
+beta = w beta_kin + (1 - w) beta_KF with w = clamp(|a_y,f| / (2 a_yT), 0, 1)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from harness.reference import blocks, seed000
+from harness.reference.seed000 import DYN, INPUTS, REFERENCE_SUSPECT
+
+TABLE = "fusion"
+OUTPUTS = ("beta", "vy", "r", "weight", "status")
+
+
+def names(config):
+    return INPUTS, seed000.state_names(config, TABLE), OUTPUTS
+
+
+def init(config, u0):
+    return seed000.init(config, TABLE, u0)
+
+
+def step(config, state, u):
+    s = config.settings(TABLE)
+    T = config.sample_time
+    names_ = seed000.state_names(config, TABLE)
+    x = dict(zip(names_, state))
+    inputs = dict(zip(INPUTS, u))
+    active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                          x["holding"] > 0.5)
+    if not active:
+        new = seed000.held(config, TABLE, x, inputs, ok)
+        return np.array([new[k] for k in names_]), np.array([0.0, 0.0, x["r_last"], 0.0, status])
+    updates, r_k, ay_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
+    status += REFERENCE_SUSPECT if suspect else 0
+    P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
+    xk, P = seed000.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
+    vy_kin = (x["vy_kin"] + T * (x["ay_prev"] - x["r_prev"] * x["vx_prev"])
+              + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
+    w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
+    beta = w * seed000.beta(config, TABLE, vy_kin, u[1]) + (1 - w) * seed000.beta(config, TABLE, xk[0], u[1])
+    new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
+           "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
+           "ay_prev": ay_k, "r_prev": r_k, "holding": 0.0, "mode": DYN}
+    return (np.array([new[k] for k in names_]),
+            np.array([beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]))

@@ -1,0 +1,129 @@
+"""Reference machinery shared by seed 000's switching and fusion estimators (000-switch-sideslip.md
+§2.2, §2.3, §2.6, §2.9, §2.10), in NumPy/SciPy."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.signal
+
+from harness.reference import blocks
+
+INPUTS = ("delta", "vx", "ay", "r")
+DYN, KIN = 0, 1
+REFERENCE_SUSPECT = 4
+
+
+def median_length(config, table) -> int:
+    return 2 * round(config.settings(table)["median_span"] / config.sample_time / 2) + 1
+
+
+def state_names(config, table) -> tuple[str, ...]:
+    n = median_length(config, table)
+    return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
+            *(f"ay_b_hist_{i}" for i in range(1, n)),
+            "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
+            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "ay_prev", "r_prev", "holding")
+
+
+def prefilter(config, table):
+    """(b, a) of the Tustin-discretised prefilter, scipy.signal.bilinear."""
+    s = config.settings(table)
+    if s["prefilter"] == "printed":
+        num, den = [10000.0], [1.0, 200.0, 10000.0]
+    else:
+        num, den = scipy.signal.bessel(2, s["prefilter_omega"], analog=True, norm="phase")
+    bz, az = scipy.signal.bilinear(num, den, fs=1.0 / config.sample_time)
+    return bz / az[0], az / az[0]
+
+
+def reference_yaw_rate(config, delta, vx):
+    v = config.vehicle
+    l = v["cg_to_front_axle"] + v["cg_to_rear_axle"]
+    ks = v["mass"] / l**2 * (v["cg_to_rear_axle"] / v["cornering_stiffness_front"]
+                             - v["cg_to_front_axle"] / v["cornering_stiffness_rear"])
+    return delta * vx / (l * (1 + ks * vx * vx))
+
+
+def clamp(config, table, vx):
+    return min(max(vx, config.settings(table)["vx_min"]), config.limits["vx_max"])
+
+
+def check(measured, reference, band, last, rejections, timeout):
+    """(value, last, rejections, forced) of a reliability check ([E10], A6)."""
+    if abs(measured - reference) <= band:
+        return measured, measured, 0.0, False
+    if rejections + 1 >= timeout:
+        return measured, measured, 0.0, True
+    return last, last, rejections + 1, False
+
+
+def init(config, table, u0):
+    s = config.settings(table)
+    ok = {n: blocks.plausible(config.limits, n, v) for n, v in zip(INPUTS, u0)}
+    delta, vx, ay, r = (v if ok[n] else d for n, v, d in
+                        zip(INPUTS, u0, (0.0, s["vx_min"], 0.0, 0.0)))
+    active, _, _ = blocks.hold_rule(config.limits, dict(zip(INPUTS, u0)), s["vx_resume"],
+                                    s["vx_resume"], True)
+    b, a = prefilter(config, table)
+    ay_b = ay * b.sum() / a.sum()  # DC steady state of the prefilter
+    r_ref = reference_yaw_rate(config, delta, clamp(config, table, vx))
+    r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] else r_ref
+    P0 = np.array(s["initial_covariance"])
+    n = median_length(config, table)
+    return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, ay_b, r_last,
+                     0.0 if active else 1.0])
+
+
+def held(config, table, x, inputs, ok):
+    """State while holding (§2.10)."""
+    P0 = np.array(config.settings(table)["initial_covariance"])
+    new = dict(x)
+    new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0, P_vy_vy=P0[0, 0], P_vy_r=P0[0, 1],
+               P_r_r=P0[1, 1])
+    if ok["delta"]:
+        new["delta_prev"] = inputs["delta"]
+    if ok["vx"]:
+        new["vx_prev"] = inputs["vx"]
+    return new
+
+
+def preprocess(config, table, x, u):
+    """Prefilter, checks and median of an active sample: (new entries, r_k, a_y,k, a_y,f, suspect)."""
+    s = config.settings(table)
+    delta, vx_raw, ay_m, r_m = u
+    vx = clamp(config, table, vx_raw)
+    b, a = prefilter(config, table)
+    ay_b = (b[0] * ay_m + b[1] * x["ay_m_1"] + b[2] * x["ay_m_2"]
+            - a[1] * x["ay_b_1"] - a[2] * x["ay_b_2"])
+    timeout = max(1, round(s["reference_timeout"] / config.sample_time))
+    r_k, r_last, r_rej, r_forced = check(r_m, reference_yaw_rate(config, delta, vx),
+                                         s["yaw_rate_band"], x["r_last"], x["r_rejections"], timeout)
+    ay_k, ay_last, ay_rej, ay_forced = check(ay_b, vx * r_k, s["lateral_acceleration_band"],
+                                             x["ay_last"], x["ay_rejections"], timeout)
+    n = median_length(config, table)
+    history = [ay_b] + [x[f"ay_b_hist_{i}"] for i in range(1, n)]
+    new = dict(ay_m_1=ay_m, ay_m_2=x["ay_m_1"], ay_b_1=ay_b, ay_b_2=x["ay_b_1"], r_last=r_last,
+               ay_last=ay_last, r_rejections=r_rej, ay_rejections=ay_rej)
+    for i in range(1, n):
+        new[f"ay_b_hist_{i}"] = history[i - 1]
+    return new, r_k, ay_k, float(np.median(history)), r_forced or ay_forced
+
+
+def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
+    """The 2-DOF KF: predict with the previous inputs, update with [a_y,m, r_k]."""
+    s = config.settings(table)
+    T = config.sample_time
+    A, B, _, _ = blocks.bicycle(config.vehicle, clamp(config, table, vx_prev))
+    Phi, Gamma = blocks.discretise(s["discretisation"], A, B, T)
+    xk, P = blocks.kf_predict(np.array([vy, r]), P, Phi, Gamma, np.array([delta_prev]),
+                              np.array(s["process_noise"]) * T)
+    _, _, C, D = blocks.bicycle(config.vehicle, clamp(config, table, u[1]))
+    return blocks.kf_update(xk, P, np.array([u[2], r_k]), C, D, np.array([u[0]]),
+                            np.array(s["measurement_noise"]))
+
+
+def beta(config, table, vy, vx):
+    return math.atan2(vy, clamp(config, table, vx))

@@ -1,0 +1,69 @@
+"""fusion: the comparison method of seed 000 (§4.4, a reconstructed stand-in for its ref. [14]).
+
+Both schemes run at every sample on the shared seed-000 pre-processing: the KF (kf2dof's
+``dynamic_update``, this table's settings) and the kinematic integrator with an integral correction
+towards the KF, vy_kin += T (a_y,k-1 - r_k-1 vx_k-1) + T k_c (vy_KF,k-1 - vy_kin,k-1). The output
+is the weighted fusion beta = w beta_kin + (1 - w) beta_KF (and likewise vy), with
+w = clamp(|a_y,f| / (2 a_yT), 0, 1). Hold rule as the switching estimator.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model.calibration import Parameters
+from model.estimator import Estimator, make_functions
+from model.estimators import kf2dof
+from model.estimators.seed000 import COVARIANCE, INPUTS, Seed000
+from model.guard import hold
+from model.layout import Layout, Signal
+
+NAME = "fusion"
+
+OUTPUTS = Layout((
+    Signal("beta", "rad", "sideslip angle at the CG, weighted fusion of both schemes"),
+    Signal("vy", "m/s", "lateral velocity, weighted fusion"),
+    Signal("r", "rad/s", "yaw rate after the reliability check"),
+    Signal("weight", "-", "weight w of the kinematic scheme"),
+    Signal("status", "-", "status bits (model.status)", integer=True),
+))
+
+
+def build(params: Parameters) -> Estimator:
+    """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
+    seed = Seed000(params, NAME)
+    layout, T = seed.layout, seed.T
+    state, s = layout.symbols("state")
+    inputs, u = INPUTS.symbols("input")
+    pre = seed.preprocess(s, u)
+    active = pre.guard.active
+    weight = ca.fmin(ca.fmax(ca.fabs(pre.ay_filtered) / (2 * seed.settings["threshold"]), 0), 1)
+
+    ok = pre.guard.plausible  # the KF runs every sample: feed it plausible values only
+    result = kf2dof.dynamic_update(params, NAME)(
+        x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
+        delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),
+        vx=hold(u["vx"], ok["vx"], seed.vx_min), ay=hold(u["ay"], ok["ay"], 0), r_meas=pre.r_checked,
+        **({"params": params.symbols} if params.calibratable else {}))
+    vy_kf = result["x_next"][0]
+    vy_kin = s["vy_kin"] + T * (s["ay_prev"] - s["r_prev"] * s["vx_prev"]) \
+        + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
+    vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
+    beta = weight * ca.atan2(vy_kin, vx) + (1 - weight) * result["beta"]
+    running = seed.advanced({**s, **pre.updates}, u, pre.ay_checked, pre.r_checked, {
+        "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
+        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}})
+    holding = seed.held({**s, **pre.updates}, u)
+    next_state = ca.if_else(active, layout.pack(running), layout.pack(holding))
+    output = OUTPUTS.pack({
+        "beta": ca.if_else(active, beta, 0),
+        "vy": ca.if_else(active, weight * vy_kin + (1 - weight) * vy_kf, 0),
+        "r": ca.if_else(active, pre.r_checked, s["r_last"]),
+        "weight": ca.if_else(active, weight, 0),
+        "status": pre.status,
+    })
+    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
+                                seed.initial_state(u), next_state, output, params)
+    return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
+                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, step, params,
+                     seed.notes())
