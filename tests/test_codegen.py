@@ -91,23 +91,29 @@ def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
 @pytest.mark.parametrize("real", ["double", "float"])
-def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real):
+@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
+def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real, name):
     compiler = _require(cc)
-    files = render(config, "kf2dof", real, params)
+    files = render(config, name, real, params)
     write(files, tmp_path)
+    for source in [n for n in files if n.endswith(".c")]:  # the kernel: the standard flags
+        result = subprocess.run([compiler, *WARNING_FLAGS, "-c", source], cwd=tmp_path,
+                                capture_output=True, text=True)
+        assert result.returncode == 0 and result.stderr == "", result.stderr
     ours = [n for n in files if n.endswith(".c") and "_kernel" not in n]
-    assert ("vse_kf2dof_calibration.c" in ours) == (params == "calibratable")
+    assert (f"vse_{name}_calibration.c" in ours) == (params == "calibratable")
     for source in ours:
         result = subprocess.run([compiler, *WARNING_FLAGS, *STRICT_TEMPLATE_FLAGS, "-c", source],
                                 cwd=tmp_path, capture_output=True, text=True)
         assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
+@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
-def test_cross_builds_within_budget(config, target):
+def test_cross_builds_within_budget(config, target, name):
     if not available(target):
         _require(target.compiler)
-    report = build_for_target(render(config, "kf2dof", target.real), "kf2dof", target)
+    report = build_for_target(render(config, name, target.real), name, target)
     assert set(report.undefined) <= ALLOWED[target.real]
     assert not any(s.startswith("__aeabi_d") for s in report.undefined)
     assert 0 < report.text < 16384 and report.data == 0 and report.bss == 0

@@ -18,9 +18,10 @@ from harness.reference import kf2dof as reference
 STEPS = 1_000_000
 
 
+@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
 @pytest.mark.parametrize("real", ["double", "float"])
-def test_a_million_adversarial_steps(config, real):
-    report = fuzz_estimator(config, "kf2dof", real, STEPS, seed=7)
+def test_a_million_adversarial_steps(config, name, real):
+    report = fuzz_estimator(config, name, real, STEPS, seed=7)
     assert report.ok, report.message
     assert report.steps == STEPS and 0 < report.rejected < STEPS
 

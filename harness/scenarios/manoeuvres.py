@@ -158,11 +158,19 @@ def _constant(mu: float) -> FrictionProfile:
     return FrictionProfile((mu,))
 
 
+_RUNS: dict[tuple, Run] = {}
+"""Truth runs by (vehicle, rate, course, speed, duration, friction): the plant is deterministic,
+only the sensor noise depends on the seed, so Monte-Carlo runs simulate the plant once."""
+
+
 def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress) -> Log:
-    dt = 1.0 / (rate_hz * substeps(rate_hz))
-    steer = PathFollower(config.vehicle, course.centre_line, dt)
-    hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-    run = simulate(config, rate_hz, duration, speed, steer, hold, mu, progress=progress)
+    key = (config.fingerprint(), rate_hz, course, speed, duration, mu)
+    if key not in _RUNS:
+        dt = 1.0 / (rate_hz * substeps(rate_hz))
+        steer = PathFollower(config.vehicle, course.centre_line, dt)
+        hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
+        _RUNS[key] = simulate(config, rate_hz, duration, speed, steer, hold, mu, progress=progress)
+    run = _RUNS[key]
     hit = course.outside(run.state("X"), run.state("Y"), _width(config))
     return _log(config, run, seed, outliers, bias, hit)
 
