@@ -104,3 +104,10 @@ def test_friction_by_distance(config):
     assert np.all(log["mu"][travelled < 295] == 0.85)
     assert np.all(log["mu"][(travelled > 305) & (travelled < 595)] == 0.5)
     assert np.all(log["mu"][travelled > 605] == 0.35)
+
+
+def test_logs_do_not_share_memory_with_cached_runs(config):
+    first = Case.of("dlc", speed_kmh=90.0).simulate(config, 100.0, seed=5)
+    first.columns["delta"][:] = np.nan
+    again = Case.of("dlc", speed_kmh=90.0).simulate(config, 100.0, seed=6)
+    assert np.all(np.isfinite(again["delta"]))

@@ -20,7 +20,8 @@ SPIN_BETA = np.deg2rad(15.0)
 
 @dataclass
 class Run:
-    """Truth at the log rate: time, plant states, inputs and algebraic truth, one row per sample."""
+    """Truth at the log rate: time, plant states, inputs and algebraic truth, one row per sample.
+    Runs are cached and shared, so the accessors return copies."""
 
     t: np.ndarray
     states: np.ndarray
@@ -28,13 +29,13 @@ class Run:
     truth: np.ndarray
 
     def state(self, name: str) -> np.ndarray:
-        return self.states[:, STATE.index(name)]
+        return self.states[:, STATE.index(name)].copy()
 
     def input(self, name: str) -> np.ndarray:
-        return self.inputs[:, INPUT.index(name)]
+        return self.inputs[:, INPUT.index(name)].copy()
 
     def truth_of(self, name: str) -> np.ndarray:
-        return self.truth[:, TRUTH.index(name)]
+        return self.truth[:, TRUTH.index(name)].copy()
 
     @property
     def beta(self) -> np.ndarray:
