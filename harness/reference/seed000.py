@@ -127,3 +127,19 @@ def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
 
 def beta(config, table, vy, vx):
     return math.atan2(vy, clamp(config, table, vx))
+
+
+def begin(config, table, state, u):
+    """Start of a step: (state names, state by name, active, status, held outcome or None).
+    When not active the held outcome is (state vector, output [0, 0, r_last, 0, status])."""
+    s = config.settings(table)
+    names = state_names(config, table)
+    x = dict(zip(names, state))
+    inputs = dict(zip(INPUTS, u))
+    active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                          x["holding"] > 0.5)
+    if active:
+        return names, x, status, None
+    new = held(config, table, x, inputs, ok)
+    return names, x, status, (np.array([new[k] for k in names]),
+                              np.array([0.0, 0.0, x["r_last"], DYN, status]))

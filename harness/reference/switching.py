@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.reference import blocks, seed000
+from harness.reference import seed000
 from harness.reference.seed000 import DYN, INPUTS, KIN, REFERENCE_SUSPECT
 
 TABLE = "switching"
@@ -23,14 +23,9 @@ def init(config, u0):
 
 def step(config, state, u):
     s = config.settings(TABLE)
-    names_ = seed000.state_names(config, TABLE)
-    x = dict(zip(names_, state))
-    inputs = dict(zip(INPUTS, u))
-    active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                          x["holding"] > 0.5)
-    if not active:
-        new = seed000.held(config, TABLE, x, inputs, ok)
-        return np.array([new[k] for k in names_]), np.array([0.0, 0.0, x["r_last"], DYN, status])
+    names_, x, status, held = seed000.begin(config, TABLE, state, u)
+    if held is not None:
+        return held
     updates, r_k, ay_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
     status += REFERENCE_SUSPECT if suspect else 0
     mode = KIN if abs(ay_f) > s["threshold"] else DYN
