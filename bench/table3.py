@@ -3,9 +3,12 @@ Table 2 noise, biases compensated) over N seeds; |delta beta| max / mean / RMSE 
 mean ± standard deviation over the seeds, for the kinematic scheme alone, the KF alone, the
 switching estimator and the fusion comparison method; then the outlier and the residual-bias
 scenarios. The kinematic-only and KF-only rows are the switching estimator with its threshold
-forced to 0 and to infinity (same pre-processing)."""
+forced to 0 and to infinity (same pre-processing); the "literal a_y" rows switch off the roll
+compensation of the accelerometer (roll_gradient = 0), as the paper does."""
 
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
@@ -28,10 +31,15 @@ def methods(vehicle_text: str, source: str, name: str):
         return parse_vehicle(vehicle_text.replace(marker, f"threshold = {value}"), source, name)
 
     base = parse_vehicle(vehicle_text, source, name)
+    plant, estimators = vehicle_text.split("[estimator.switching]", 1)  # keep the plant's roll
+    literal = parse_vehicle(plant + "[estimator.switching]" + re.sub(
+        r"(?m)^roll_gradient = [0-9.e-]+", "roll_gradient = 0.0", estimators), source, name)
     return (("kinematic only", threshold("1e-9"), "switching"),
             ("KF only", threshold("1e9"), "switching"),
             ("switching", base, "switching"),
-            ("fusion (comparison)", base, "fusion"))
+            ("fusion (comparison)", base, "fusion"),
+            ("switching, literal a_y (no roll compensation)", literal, "switching"),
+            ("fusion, literal a_y", literal, "fusion"))
 
 
 def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
@@ -48,7 +56,7 @@ def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
                 rows.append((beta.max, beta.mean, beta.rmse))
             values = np.array(rows)
             cells = [f"{m:.3f} ± {s:.3f}" for m, s in zip(values.mean(axis=0), values.std(axis=0))]
-            key = "switching" if label == "switching" else "fusion" if label.startswith("fusion") else ""
+            key = "switching" if label == "switching" else "fusion" if label == "fusion (comparison)" else ""
             paper = " / ".join(f"{v:.3f}" for v in PAPER[key]) if key and title.endswith("(Table 3)") else "-"
             lines.append(f"| {label} | {' | '.join(cells)} | {paper} |")
         lines.append("")

@@ -227,6 +227,9 @@ SEED000_FIELDS: tuple[Field, ...] = (
     positive("lateral_acceleration_band", "m/s^2", "half-width of the band around vx r"),
     positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
+    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
+                "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
+                "0 = no compensation (the paper's literal behaviour)"),
 )
 """Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
 

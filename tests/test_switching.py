@@ -58,11 +58,13 @@ def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(config, estimator, c
         assert states[k + 1][i["vy_kin"]] == pytest.approx(expected, rel=1e-12, abs=1e-15)
     update = dynamic_update(baked(config), "switching")
     P0 = config.settings("switching")["initial_covariance"]
+    roll_factor = 1 + 9.81 * config.settings("switching")["roll_gradient"]  # the KF sees a_y at the CG
     for k in to_dyn:  # [E26]: the KF restarts from [vy_kin, r_prev] with P = P_0
         before = states[k]
         result = update(x=[before[i["vy_kin"]], before[i["r_prev"]]], P=[P0[0][0], P0[0][1], P0[1][1]],
                         delta_prev=before[i["delta_prev"]], vx_prev=before[i["vx_prev"]],
-                        delta=inputs[k, 0], vx=inputs[k, 1], ay=inputs[k, 2], r_meas=outputs[k, 2])
+                        delta=inputs[k, 0], vx=inputs[k, 1], ay=inputs[k, 2] / roll_factor,
+                        r_meas=outputs[k, 2])
         np.testing.assert_allclose(states[k + 1][[i["vy"], i["r"]]],
                                    np.array(result["x_next"]).ravel(), rtol=1e-12, atol=1e-15)
     kf = [i["vy"], i["r"], i["P_vy_vy"], i["P_vy_r"], i["P_r_r"]]
@@ -92,3 +94,25 @@ def test_reference_time_out_and_low_speed(config, estimator, compiled):
     outputs, states = compiled.run(slow)
     assert np.all(outputs[:, 4].astype(int) == status.LOW_SPEED)
     assert np.all(outputs[:, 0] == 0.0) and np.all(outputs[:, 3] == DYN)
+
+
+def test_roll_compensation_recovers_the_cg_acceleration(config, estimator, compiled, vehicle_text):
+    """With the car's roll gradient the prefiltered a_y matches vx r in a steady turn; with 0
+    (the paper's literal a_y) it carries the gravity component of body roll."""
+    from model.params import parse_vehicle
+
+    plant, tables = vehicle_text.split("[estimator.switching]", 1)
+    literal = parse_vehicle(plant + "[estimator.switching]" + tables.replace(
+        "roll_gradient = 0.0082 ", "roll_gradient = 0.0    "), "literal.toml", "c_class")
+    assert literal.settings("switching")["roll_gradient"] == 0.0
+    log = Case.of("step_steer").simulate(config, 100.0)
+    steady = slice(400, 600)
+    truth = np.mean(log["vx_ref"][steady] * log["r_ref"][steady])
+    for cfg, expected_error in ((config, 0.02), (literal, None)):
+        est = build("switching", cfg)
+        _, states = load_estimator(est, render(cfg, "switching")).run(log.matrix(est.inputs.names))
+        ay_b = np.mean(states[steady, est.states.index("ay_b_1")])
+        if expected_error:
+            assert ay_b == pytest.approx(truth, rel=expected_error)
+        else:
+            assert ay_b > truth * 1.05  # about 8 % high: g sin(phi) on top of a_y

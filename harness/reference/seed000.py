@@ -15,6 +15,15 @@ DYN, KIN = 0, 1
 REFERENCE_SUSPECT = 4
 
 
+GRAVITY = 9.81
+
+
+def roll_corrected(config, table, ay_measured):
+    """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
+    to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""
+    return ay_measured / (1.0 + GRAVITY * config.settings(table)["roll_gradient"])
+
+
 def median_length(config, table) -> int:
     return 2 * round(config.settings(table)["median_span"] / config.sample_time / 2) + 1
 
@@ -64,6 +73,7 @@ def init(config, table, u0):
     ok = {n: blocks.plausible(config.limits, n, v) for n, v in zip(INPUTS, u0)}
     delta, vx, ay, r = (v if ok[n] else d for n, v, d in
                         zip(INPUTS, u0, (0.0, s["vx_min"], 0.0, 0.0)))
+    ay = roll_corrected(config, table, ay)
     active, _, _ = blocks.hold_rule(config.limits, dict(zip(INPUTS, u0)), s["vx_resume"],
                                     s["vx_resume"], True)
     b, a = prefilter(config, table)
@@ -93,7 +103,8 @@ def held(config, table, x, inputs, ok):
 def preprocess(config, table, x, u):
     """Prefilter, checks and median of an active sample: (new entries, r_k, a_y,k, a_y,f, suspect)."""
     s = config.settings(table)
-    delta, vx_raw, ay_m, r_m = u
+    delta, vx_raw, ay_raw, r_m = u
+    ay_m = roll_corrected(config, table, ay_raw)
     vx = clamp(config, table, vx_raw)
     b, a = prefilter(config, table)
     ay_b = (b[0] * ay_m + b[1] * x["ay_m_1"] + b[2] * x["ay_m_2"]
@@ -121,7 +132,8 @@ def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
     xk, P = blocks.kf_predict(np.array([vy, r]), P, Phi, Gamma, np.array([delta_prev]),
                               np.array(s["process_noise"]) * T)
     _, _, C, D = blocks.bicycle(config.vehicle, clamp(config, table, u[1]))
-    return blocks.kf_update(xk, P, np.array([u[2], r_k]), C, D, np.array([u[0]]),
+    return blocks.kf_update(xk, P, np.array([roll_corrected(config, table, u[2]), r_k]), C, D,
+                            np.array([u[0]]),
                             np.array(s["measurement_noise"]))
 
 

@@ -43,7 +43,8 @@ def build(params: Parameters) -> Estimator:
     result = kf2dof.dynamic_update(params, NAME)(
         x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),
-        vx=hold(u["vx"], ok["vx"], seed.vx_min), ay=hold(u["ay"], ok["ay"], 0), r_meas=pre.r_checked,
+        vx=hold(u["vx"], ok["vx"], seed.vx_min), ay=hold(seed.roll_corrected(u["ay"]), ok["ay"], 0),
+        r_meas=pre.r_checked,
         **({"params": params.symbols} if params.calibratable else {}))
     vy_kf = result["x_next"][0]
     vy_kin = s["vy_kin"] + T * (s["ay_prev"] - s["r_prev"] * s["vx_prev"]) \

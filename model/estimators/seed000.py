@@ -1,7 +1,8 @@
 """Seed 000's shared machinery for the switching and fusion estimators: the state layout, the
 pre-processing (shared/methods/000-switch-sideslip.md §2.2, §2.3, §2.6: prefilter, reliability
 checks with hold-last-valid and time-out, median), the initial state (§2.9) and the hold rule
-(§2.10). Each estimator adds its schemes.
+(§2.10). Each estimator adds its schemes. Beyond the paper, a measured a_y can be corrected for
+body roll (``roll_gradient``; design.md: body-fixed sensors), for every use of a_y.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from model.layout import Layout, Signal
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 DYN, KIN = 0, 1
+GRAVITY = 9.81
 
 
 def window(params: Parameters, table: str) -> int:
@@ -98,6 +100,11 @@ class Seed000:
         self.vx_max = params.config.limits["vx_max"]
         self.P0 = kalman.pack_symmetric(matrix(self.settings["initial_covariance"]))
 
+    def roll_corrected(self, ay_measured):
+        """a_y at the CG from a body-fixed accelerometer: a_y,m = a_y cos(phi) + g sin(phi) with
+        phi = k a_y gives, to first order, a_y = a_y,m / (1 + g k) (k = roll_gradient)."""
+        return ay_measured / (1.0 + GRAVITY * self.settings["roll_gradient"])
+
     def speed(self, vx):
         """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""
         return ca.fmin(ca.fmax(vx, self.vx_min), self.vx_max)
@@ -106,7 +113,7 @@ class Seed000:
         settings, limits = self.settings, self.params.config.limits
         guard = input_guard(u, limits, self.vx_min, self.vx_resume, s["holding"])
         ok, active = guard.plausible, guard.active
-        ay_m = hold(u["ay"], ok["ay"], s["ay_m_1"])
+        ay_m = hold(self.roll_corrected(u["ay"]), ok["ay"], s["ay_m_1"])
         ay_b = filters.biquad_step(self.biquad, ay_m, s["ay_m_1"], s["ay_m_2"], s["ay_b_1"],
                                    s["ay_b_2"])
         vx = self.speed(hold(u["vx"], ok["vx"], self.vx_min))
@@ -160,7 +167,7 @@ class Seed000:
         """§2.9: filters at their DC steady state for sample 0, r_last = r_0 if inside the band of
         r_ref,0 else r_ref,0, KF at [0, r_0] with P_0, previous inputs = sample 0."""
         first = input_guard(u, self.params.config.limits, self.vx_resume, self.vx_resume, ca.SX(1))
-        ay0 = hold(u["ay"], first.plausible["ay"], 0)
+        ay0 = hold(self.roll_corrected(u["ay"]), first.plausible["ay"], 0)
         r0 = hold(u["r"], first.plausible["r"], 0)
         delta0 = hold(u["delta"], first.plausible["delta"], 0)
         vx0 = hold(u["vx"], first.plausible["vx"], self.vx_min)

@@ -79,7 +79,8 @@ def build(params: Parameters) -> Estimator:
                        ca.if_else(from_kin, m["r_prev"], m["r"]))
         P = ca.if_else(from_kin, seed.P0, ca.vertcat(*[m[n] for n in COVARIANCE]))
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
-                        delta=v["delta"], vx=v["vx"], ay=v["ay"], r_meas=c["r_checked"],
+                        delta=v["delta"], vx=v["vx"], ay=seed.roll_corrected(v["ay"]),
+                        r_meas=c["r_checked"],
                         **({"params": params.symbols} if params.calibratable else {}))
         vy = result["x_next"][0]
         changes = {"vy": vy, "r": result["x_next"][1],
