@@ -40,7 +40,7 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
         vx_min, vx_resume: low-speed limit and resume speed (m/s).
         holding: 1 if the estimator held at the previous sample, else 0.
     """
-    plausible = {name: ca.fabs(value) <= limits[LIMIT_KEYS[name]] for name, value in inputs.items()}
+    plausible = plausibility(inputs, limits)
     all_plausible = _all(plausible.values())
     vx = inputs["vx"]
     low_speed = ca.logic_and(plausible["vx"],
@@ -49,6 +49,11 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
     code = (ca.if_else(all_plausible, 0, status.INVALID_INPUT)
             + ca.if_else(low_speed, status.LOW_SPEED, 0))
     return Guard(plausible, active, code)
+
+
+def plausibility(inputs: Mapping[str, ca.SX], limits: Mapping[str, float]) -> dict[str, ca.SX]:
+    """|value| <= its [inputs] limit, per input (false for NaN and +-Inf)."""
+    return {name: ca.fabs(value) <= limits[LIMIT_KEYS[name]] for name, value in inputs.items()}
 
 
 def hold(value: ca.SX, accept: ca.SX, previous: ca.SX) -> ca.SX:
@@ -61,3 +66,25 @@ def _all(flags) -> ca.SX:
     for flag in flags:
         result = flag if result is None else ca.logic_and(result, flag)
     return result
+
+
+NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0}
+"""What an implausible input of the first sample is replaced by (vx: the low-speed limit)."""
+
+
+def first_sample(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
+                 vx_resume: float) -> tuple[dict[str, ca.SX], ca.SX]:
+    """Sample 0 for an estimator's ``init``: every implausible input replaced by a neutral value
+    (vx by vx_min), and the initial ``holding`` flag: 0 only if every input is plausible and
+    vx >= vx_resume (an estimator starts only above the resume speed)."""
+    guard = input_guard(inputs, limits, vx_resume, vx_resume, ca.SX(1))
+    values = {name: hold(value, guard.plausible[name], vx_min if name == "vx" else NEUTRAL[name])
+              for name, value in inputs.items()}
+    return values, ca.if_else(guard.active, 0, 1)
+
+
+def previous_inputs(inputs: Mapping[str, ca.SX], plausible: Mapping[str, ca.SX],
+                    previous: Mapping[str, ca.SX]) -> dict[str, ca.SX]:
+    """New ``delta_prev`` and ``vx_prev``: this sample's value where plausible, else the old one."""
+    return {f"{name}_prev": hold(inputs[name], plausible[name], previous[f"{name}_prev"])
+            for name in ("delta", "vx")}

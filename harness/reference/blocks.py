@@ -75,3 +75,17 @@ def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: flo
     low = ok["vx"] and (vx < vx_min or (holding and vx < vx_resume))
     status = (0 if all(ok.values()) else INVALID_INPUT) | (LOW_SPEED if low else 0)
     return all(ok.values()) and not low, status, ok
+
+
+def first_sample(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float):
+    """(inputs with each implausible one replaced by 0, or vx by vx_min; initial holding flag):
+    an estimator starts active only if every input is plausible and vx >= vx_resume."""
+    active, _, ok = hold_rule(limits, inputs, vx_resume, vx_resume, True)
+    values = {n: v if ok[n] else (vx_min if n == "vx" else 0.0) for n, v in inputs.items()}
+    return values, 0.0 if active else 1.0
+
+
+def kept_previous(inputs: Mapping[str, float], ok: Mapping[str, bool], delta_prev: float,
+                  vx_prev: float) -> tuple[float, float]:
+    """(delta_prev, vx_prev) after a sample: the new value where plausible, else the old one."""
+    return (inputs["delta"] if ok["delta"] else delta_prev, inputs["vx"] if ok["vx"] else vx_prev)

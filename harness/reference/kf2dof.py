@@ -26,17 +26,11 @@ def _settings(config):
 
 def init(config, u0) -> np.ndarray:
     s = _settings(config)
-    inputs = dict(zip(INPUTS, u0))
-    active, _, ok = blocks.hold_rule(config.limits, inputs, s["vx_resume"], s["vx_resume"], True)
+    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+                                         s["vx_resume"])
     P0 = np.array(s["initial_covariance"])
-    return np.array([
-        0.0,
-        inputs["r"] if ok["r"] else 0.0,
-        P0[0, 0], P0[0, 1], P0[1, 1],
-        inputs["delta"] if ok["delta"] else 0.0,
-        inputs["vx"] if ok["vx"] else s["vx_min"],
-        0.0 if active else 1.0,
-    ])
+    return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
+                     holding])
 
 
 def step(config, state, u):
@@ -47,8 +41,7 @@ def step(config, state, u):
     vy, r, p11, p12, p22, delta_prev, vx_prev, holding = state
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                          holding > 0.5)
-    delta_keep = inputs["delta"] if ok["delta"] else delta_prev
-    vx_keep = inputs["vx"] if ok["vx"] else vx_prev
+    delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])
         new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep, 1.0])

@@ -70,12 +70,10 @@ def check(measured, reference, band, last, rejections, timeout):
 
 def init(config, table, u0):
     s = config.settings(table)
-    ok = {n: blocks.plausible(config.limits, n, v) for n, v in zip(INPUTS, u0)}
-    delta, vx, ay, r = (v if ok[n] else d for n, v, d in
-                        zip(INPUTS, u0, (0.0, s["vx_min"], 0.0, 0.0)))
-    ay = roll_corrected(config, table, ay)
-    active, _, _ = blocks.hold_rule(config.limits, dict(zip(INPUTS, u0)), s["vx_resume"],
-                                    s["vx_resume"], True)
+    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+                                         s["vx_resume"])
+    delta, vx, r = first["delta"], first["vx"], first["r"]
+    ay = roll_corrected(config, table, first["ay"])
     b, a = prefilter(config, table)
     ay_b = ay * b.sum() / a.sum()  # DC steady state of the prefilter
     r_ref = reference_yaw_rate(config, delta, clamp(config, table, vx))
@@ -83,8 +81,7 @@ def init(config, table, u0):
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, ay_b, r_last,
-                     0.0 if active else 1.0])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, ay_b, r_last, holding])
 
 
 def held(config, table, x, inputs, ok):
@@ -93,10 +90,8 @@ def held(config, table, x, inputs, ok):
     new = dict(x)
     new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0, P_vy_vy=P0[0, 0], P_vy_r=P0[0, 1],
                P_r_r=P0[1, 1])
-    if ok["delta"]:
-        new["delta_prev"] = inputs["delta"]
-    if ok["vx"]:
-        new["vx_prev"] = inputs["vx"]
+    new["delta_prev"], new["vx_prev"] = blocks.kept_previous(inputs, ok, x["delta_prev"],
+                                                             x["vx_prev"])
     return new
 
 

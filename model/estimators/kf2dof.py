@@ -21,7 +21,7 @@ import casadi as ca
 from model import discretize, kalman
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.estimator import Estimator, make_functions
-from model.guard import hold, input_guard
+from model.guard import first_sample, hold, input_guard, previous_inputs
 from model.layout import Layout, Signal
 from model.calibration import Parameters, matrix
 
@@ -150,8 +150,7 @@ def build(params: Parameters) -> Estimator:
         "vy": vy_next,
         "r": r_next,
         **{name: P_next[i] for i, name in enumerate(_COVARIANCE)},
-        "delta_prev": hold(u["delta"], ok["delta"], s["delta_prev"]),
-        "vx_prev": hold(u["vx"], ok["vx"], s["vx_prev"]),
+        **previous_inputs(u, ok, s),
         "holding": ca.if_else(active, 0, 1),
     })
     output = OUTPUTS.pack({
@@ -161,14 +160,14 @@ def build(params: Parameters) -> Estimator:
         "status": guard.status,
     })
 
-    first = input_guard(u, limits, vx_resume, vx_resume, ca.SX(1))
+    first, holding = first_sample(u, limits, vx_min, vx_resume)
     init_state = STATES.pack({
         "vy": ca.SX(0),
-        "r": hold(u["r"], first.plausible["r"], 0),
+        "r": first["r"],
         **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
-        "delta_prev": hold(u["delta"], first.plausible["delta"], 0),
-        "vx_prev": hold(u["vx"], first.plausible["vx"], vx_min),
-        "holding": ca.if_else(first.active, 0, 1),
+        "delta_prev": first["delta"],
+        "vx_prev": first["vx"],
+        "holding": holding,
     })
     init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)

@@ -15,7 +15,8 @@ from model import filters, kalman, status
 from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
-from model.guard import Guard, hold, input_guard
+from model.guard import (Guard, first_sample, hold, input_guard, plausibility,
+                         previous_inputs)
 from model.layout import Layout, Signal
 
 INPUTS = kf2dof.INPUTS
@@ -146,13 +147,10 @@ class Seed000:
     def held(self, m: dict, v: dict) -> dict:
         """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last
         plausible previous inputs kept; pre-processing buffers held by ``preprocess``."""
-        plausible = input_guard(v, self.params.config.limits, self.vx_min, self.vx_resume,
-                                ca.SX(1)).plausible
         new = dict(m)
         new.update({"vy_kin": ca.SX(0), "vy": ca.SX(0), "mode": ca.SX(DYN), "holding": ca.SX(1),
                     **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
-                    "delta_prev": hold(v["delta"], plausible["delta"], m["delta_prev"]),
-                    "vx_prev": hold(v["vx"], plausible["vx"], m["vx_prev"])})
+                    **previous_inputs(v, plausibility(v, self.params.config.limits), m)})
         return new
 
     def advanced(self, m: dict, v: dict, ay_checked, r_checked, changes: dict) -> dict:
@@ -166,11 +164,8 @@ class Seed000:
     def initial_state(self, u: dict) -> ca.SX:
         """§2.9: filters at their DC steady state for sample 0, r_last = r_0 if inside the band of
         r_ref,0 else r_ref,0, KF at [0, r_0] with P_0, previous inputs = sample 0."""
-        first = input_guard(u, self.params.config.limits, self.vx_resume, self.vx_resume, ca.SX(1))
-        ay0 = hold(self.roll_corrected(u["ay"]), first.plausible["ay"], 0)
-        r0 = hold(u["r"], first.plausible["r"], 0)
-        delta0 = hold(u["delta"], first.plausible["delta"], 0)
-        vx0 = hold(u["vx"], first.plausible["vx"], self.vx_min)
+        first, holding = first_sample(u, self.params.config.limits, self.vx_min, self.vx_resume)
+        ay0, r0, delta0, vx0 = self.roll_corrected(first["ay"]), first["r"], first["delta"], first["vx"]
         r_ref0 = reference_yaw_rate(self.params, delta0, self.speed(vx0))
         r_last0 = ca.if_else(ca.fabs(r0 - r_ref0) <= self.settings["yaw_rate_band"], r0, r_ref0)
         ay_b0 = ay0 * self.biquad.dc_gain
@@ -181,7 +176,7 @@ class Seed000:
             "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0, "ay_prev": ay_b0, "r_prev": r_last0,
-            "holding": ca.if_else(first.active, 0, 1),
+            "holding": holding,
         })
 
     def notes(self) -> dict[str, str]:

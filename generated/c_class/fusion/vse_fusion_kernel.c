@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0a804b17306644a7abf7e10b234e9503d9ae31402eeb21436f69eea74b5280f6
- * Operations: step 828, init 87 (CasADi SX instructions).
+ * Operations: step 828, init 86 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -121,14 +121,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a01=casadi_fabs(a00);
   a02=30.;
   a01=(a01<=a02);
+  a00=(a01?a00:0);
   a02=1.0804420000000001e+00;
   a00=(a00/a02);
-  a02=(a01?a00:0);
-  res[0][0]=a02;
-  res[0][1]=a02;
+  res[0][0]=a00;
+  res[0][1]=a00;
   a02=9.9999999999999989e-01;
   a02=(a02*a00);
-  a02=(a01?a02:0);
   res[0][2]=a02;
   res[0][3]=a02;
   res[0][4]=a02;
