@@ -55,6 +55,10 @@ class Parameters:
         """Extra Function inputs: [params] when calibratable, else none."""
         return [self.symbols] if self.calibratable else []
 
+    def keyword(self) -> dict[str, ca.SX]:
+        """The ``params`` keyword argument for calling a Function built with :meth:`inputs`."""
+        return {"params": self.symbols} if self.calibratable else {}
+
 
 def baked(config: VehicleConfig) -> Parameters:
     return Parameters(config, config)

@@ -45,7 +45,7 @@ def build(params: Parameters) -> Estimator:
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),
         vx=hold(u["vx"], ok["vx"], seed.vx_min), ay=hold(seed.roll_corrected(u["ay"]), ok["ay"], 0),
         r_meas=pre.r_checked,
-        **({"params": params.symbols} if params.calibratable else {}))
+        **params.keyword())
     vy_kf = result["x_next"][0]
     vy_kin = s["vy_kin"] + T * (s["ay_prev"] - s["r_prev"] * s["vx_prev"]) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])

@@ -140,7 +140,7 @@ def build(params: Parameters) -> Estimator:
         vx=hold(u["vx"], ok["vx"], vx_min),
         ay=hold(u["ay"], ok["ay"], 0),
         r_meas=hold(u["r"], ok["r"], 0),
-        **({"params": params.symbols} if params.calibratable else {}),
+        **params.keyword(),
     )
     active = guard.active
     vy_next = ca.if_else(active, result["x_next"][0], 0)

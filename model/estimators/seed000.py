@@ -104,7 +104,7 @@ class Seed000:
     def roll_corrected(self, ay_measured):
         """a_y at the CG from a body-fixed accelerometer: a_y,m = a_y cos(phi) + g sin(phi) with
         phi = k a_y gives, to first order, a_y = a_y,m / (1 + g k) (k = roll_gradient)."""
-        return ay_measured / (1.0 + GRAVITY * self.settings["roll_gradient"])
+        return ay_measured * (1.0 / (1.0 + GRAVITY * self.settings["roll_gradient"]))
 
     def speed(self, vx):
         """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""

@@ -81,7 +81,7 @@ def build(params: Parameters) -> Estimator:
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
                         delta=v["delta"], vx=v["vx"], ay=seed.roll_corrected(v["ay"]),
                         r_meas=c["r_checked"],
-                        **({"params": params.symbols} if params.calibratable else {}))
+                        **params.keyword())
         vy = result["x_next"][0]
         changes = {"vy": vy, "r": result["x_next"][1],
                    **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}}

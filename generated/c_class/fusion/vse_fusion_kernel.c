@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0a804b17306644a7abf7e10b234e9503d9ae31402eeb21436f69eea74b5280f6
- * Operations: step 828, init 86 (CasADi SX instructions).
+ * Operations: step 828, init 87 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -121,13 +121,14 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a01=casadi_fabs(a00);
   a02=30.;
   a01=(a01<=a02);
-  a00=(a01?a00:0);
-  a02=1.0804420000000001e+00;
-  a00=(a00/a02);
-  res[0][0]=a00;
-  res[0][1]=a00;
-  a02=9.9999999999999989e-01;
+  a02=9.2554713719014980e-01;
   a02=(a02*a00);
+  a02=(a01?a02:0);
+  res[0][0]=a02;
+  res[0][1]=a02;
+  a02=9.2554713719014969e-01;
+  a02=(a02*a00);
+  a02=(a01?a02:0);
   res[0][2]=a02;
   res[0][3]=a02;
   res[0][4]=a02;
@@ -314,8 +315,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a12=(a04&&a12);
   a13=(!a12);
   a13=(a06&&a13);
-  a14=1.0804420000000001e+00;
-  a15=(a07/a14);
+  a14=9.2554713719014980e-01;
+  a15=(a14*a07);
   a15=(a08?a15:0);
   a16=(!a08);
   a17=arg[0][0];
@@ -919,9 +920,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a45=(a45/a55);
   a47=(a54*a45);
   a46=(a46-a47);
-  a07=(a07/a14);
-  a08=(a08?a07:0);
-  a07=(a18*a57);
+  a14=(a14*a07);
+  a08=(a08?a14:0);
+  a14=(a18*a57);
   a58=(a58*a34);
   a52=(a52*a24);
   a58=(a58+a52);
@@ -932,8 +933,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a35=(a35*a42);
   a58=(a58+a35);
   a35=(a51*a58);
-  a07=(a07+a35);
-  a08=(a08-a07);
+  a14=(a14+a35);
+  a08=(a08-a14);
   a41=(a41*a00);
   a01=(a01?a41:0);
   a08=(a08-a01);
