@@ -53,6 +53,8 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
     current[5] = state->x[5];
     current[6] = state->x[6];
     current[7] = state->x[7];
+    /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
+     * initialised data without a suppression in user builds (a few stores per step) */
     y[0] = 0.0;
     y[1] = 0.0;
     y[2] = 0.0;
