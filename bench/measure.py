@@ -16,6 +16,7 @@ import jinja2
 import numpy as np
 
 from codegen.generate import library_sources
+from harness.targets import link_to_api
 from model.discretize import plan_zoh
 from model.bicycle import state_matrix_norm_bound
 from model.estimator import Estimator
@@ -126,9 +127,4 @@ def _text_size(root: Path, sources: list[str], api: tuple[str, ...]) -> int:
     """Host .text of the library linked with --gc-sections to its API (x86-64, -O2)."""
     subprocess.run([CC, *FLAGS, "-ffunction-sections", "-fdata-sections", "-c", *sources], cwd=root,
                    check=True, capture_output=True)
-    objects = [s[:-2] + ".o" for s in sources]
-    keep = [f"-Wl,-u,{symbol}" for symbol in api]
-    subprocess.run([CC, "-no-pie", "-nostdlib", "-Wl,-r", "-Wl,--gc-sections", *keep, "-o", "linked.o",
-                    *objects], cwd=root, check=True, capture_output=True)
-    size = subprocess.run(["size", "linked.o"], cwd=root, check=True, capture_output=True, text=True)
-    return int(size.stdout.splitlines()[1].split()[0])
+    return link_to_api(root, [s[:-2] + ".o" for s in sources], api, CC)[0]

@@ -82,11 +82,8 @@ def build_for_target(files: dict[str, str], estimator: str, target: Target) -> T
             (folder / name).write_text(text)
         sources = library_sources(files)
         _run([target.compiler, *flags, "-c", *sources], folder, f"{target.name} compile")
-        objects = [s[:-2] + ".o" for s in sources]
-        keep = [f"-Wl,-u,{symbol}" for symbol in api]
-        _run([target.compiler, *target.flags, "-nostdlib", "-Wl,-r", "-Wl,--gc-sections", *keep,
-              "-o", "linked.o", *objects], folder, f"{target.name} link")
-        size = _run([target.tools_prefix + "size", "linked.o"], folder, "size").splitlines()[1].split()
+        size = link_to_api(folder, [s[:-2] + ".o" for s in sources], api, target.compiler,
+                           target.flags, target.tools_prefix)
         undefined = tuple(sorted(line.split()[-1] for line in _run(
             [target.tools_prefix + "nm", "-u", "linked.o"], folder, "nm").splitlines() if line.strip()))
         graph, frames = _call_graph([(folder / (s[:-2] + ".ci")).read_text() for s in sources])
@@ -96,8 +93,20 @@ def build_for_target(files: dict[str, str], estimator: str, target: Target) -> T
                           f"{', '.join(not_allowed)}")
     stacks = [_worst_stack(graph, frames, root, ()) for root in api]
     library = sorted({callee for callees in graph.values() for callee in callees if callee not in frames})
-    return TargetReport(target.name, target.real, int(size[0]), int(size[1]), int(size[2]),
+    return TargetReport(target.name, target.real, *size,
                         stacks[0], stacks[1], tuple(library), undefined)
+
+
+def link_to_api(folder: Path, objects: list[str], api: tuple[str, ...], compiler: str,
+                flags: tuple[str, ...] = (), tools_prefix: str = "") -> tuple[int, int, int]:
+    """Link ``objects`` partially into ``linked.o`` keeping only what ``api`` needs
+    (``--gc-sections``, objects compiled with -ffunction-sections -fdata-sections); returns its
+    (.text, .data, .bss) in bytes: what an application links."""
+    keep = [f"-Wl,-u,{symbol}" for symbol in api]
+    _run([compiler, *flags, "-no-pie", "-nostdlib",
+          "-Wl,-r", "-Wl,--gc-sections", *keep, "-o", "linked.o", *objects], folder, "link")
+    size = _run([tools_prefix + "size", "linked.o"], folder, "size").splitlines()[1].split()
+    return int(size[0]), int(size[1]), int(size[2])
 
 
 def _run(command: list[str], cwd: Path, what: str) -> str:
