@@ -77,13 +77,3 @@ def _stepwise(reference, config, c_states, c_out, inputs, tolerance) -> Differen
                 for k, row in enumerate(inputs)]
     actual = np.hstack([c_states[1:], c_out])
     return difference("step from the C state", actual, np.array(expected), tolerance)
-
-
-def worst(results: list[CaseResult]) -> dict[str, float]:
-    """Worst relative difference per output name over all results (non-integer outputs)."""
-    table: dict[str, float] = {}
-    for result in results:
-        for d in (*result.outputs, result.states, result.stepwise):
-            if not d.integer:
-                table[d.name] = max(table.get(d.name, 0.0), d.max_rel)
-    return table

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.logs import Log, LogError, read_log, write_log
+from harness.logs import LogError, read_log, write_log
 from harness.scenarios import Case
 
 

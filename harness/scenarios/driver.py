@@ -8,6 +8,8 @@ from typing import Callable, Mapping
 
 import numpy as np
 
+from harness.plant.two_track import AIR_DENSITY, GRAVITY
+
 BANDWIDTH = 2.0
 """Natural frequency of the driver's closed-loop lateral error (rad/s)."""
 DAMPING = 0.8
@@ -76,8 +78,8 @@ class SpeedHold:
         error = self.target(t) - vx
         self.integral += error * self.dt
         m, radius = self.vehicle["mass"], self.vehicle["wheel_radius"]
-        drag = 0.5 * 1.2 * self.plant["drag_area"] * vx * abs(vx) + \
-            self.plant["rolling_resistance"] * m * 9.81
+        drag = 0.5 * AIR_DENSITY * self.plant["drag_area"] * vx * abs(vx) + \
+            self.plant["rolling_resistance"] * m * GRAVITY
         torque = (m * (self.kp * error + self.ki * self.integral) + drag) * radius
         if torque >= 0:
             front = self.plant["driven_axle"] == "front"

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.logs import Log
+from harness.plant.two_track import GRAVITY
 from harness.scenarios import course as courses
 from harness.scenarios import sensors
 from harness.scenarios.driver import PathFollower, SpeedHold
@@ -22,7 +23,6 @@ RUN_OUT = 60.0
 """Straight road after a course (m), at least."""
 MIN_DLC_DURATION = 10.0
 """A DLC log lasts at least this long (s): seed 000's Fig. 6 run has an outlier at 7 s."""
-GRAVITY = 9.81
 
 
 def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,

@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.plant.two_track import GRAVITY
 from harness.scenarios.simulate import Run
 from model.params import ParameterError, VehicleConfig
 
-GRAVITY = 9.81
 GYRO_OUTLIERS = ((2.0, 0.47), (7.0, 0.84))
 """Seed 000 Fig. 6b: (time s, value rad/s) of single-sample yaw-rate spikes."""
 WHEELS = ("fl", "fr", "rl", "rr")
