@@ -54,14 +54,14 @@ def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(config, estimator, c
     assert len(to_kin) >= 3 and len(to_dyn) >= 3
     for k in to_kin:  # [E25]: integration starts from the last KF vy; states[k] is before step k
         before = states[k]
-        expected = before[i["vy"]] + T * (before[i["ay_prev"]] - before[i["r_prev"]] * before[i["vx_prev"]])
+        expected = before[i["vy"]] + T * (before[i["ay_last"]] - before[i["r_last"]] * before[i["vx_prev"]])
         assert states[k + 1][i["vy_kin"]] == pytest.approx(expected, rel=1e-12, abs=1e-15)
     update = dynamic_update(baked(config), "switching")
     P0 = config.settings("switching")["initial_covariance"]
     roll_factor = 1 + 9.81 * config.settings("switching")["roll_gradient"]  # the KF sees a_y at the CG
-    for k in to_dyn:  # [E26]: the KF restarts from [vy_kin, r_prev] with P = P_0
+    for k in to_dyn:  # [E26]: the KF restarts from [vy_kin, r_k-1] with P = P_0
         before = states[k]
-        result = update(x=[before[i["vy_kin"]], before[i["r_prev"]]], P=[P0[0][0], P0[0][1], P0[1][1]],
+        result = update(x=[before[i["vy_kin"]], before[i["r_last"]]], P=[P0[0][0], P0[0][1], P0[1][1]],
                         delta_prev=before[i["delta_prev"]], vx_prev=before[i["vx_prev"]],
                         delta=inputs[k, 0], vx=inputs[k, 1], ay=inputs[k, 2] / roll_factor,
                         r_meas=outputs[k, 2])

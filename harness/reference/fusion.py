@@ -27,16 +27,16 @@ def step(config, state, u):
     names_, x, status, held = seed000.begin(config, TABLE, state, u)
     if held is not None:
         return held
-    updates, r_k, ay_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
+    updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
     status += REFERENCE_SUSPECT if suspect else 0
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
     xk, P = seed000.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
-    vy_kin = (x["vy_kin"] + T * (x["ay_prev"] - x["r_prev"] * x["vx_prev"])
+    vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
     beta = w * seed000.beta(config, TABLE, vy_kin, u[1]) + (1 - w) * seed000.beta(config, TABLE, xk[0], u[1])
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
-           "ay_prev": ay_k, "r_prev": r_k, "holding": 0.0, "mode": DYN}
+           "holding": 0.0, "mode": DYN}
     return (np.array([new[k] for k in names_]),
             np.array([beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]))

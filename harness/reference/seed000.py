@@ -33,7 +33,7 @@ def state_names(config, table) -> tuple[str, ...]:
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
-            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "ay_prev", "r_prev", "holding")
+            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding")
 
 
 def prefilter(config, table):
@@ -81,7 +81,7 @@ def init(config, table, u0):
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, ay_b, r_last, holding])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding])
 
 
 def held(config, table, x, inputs, ok):
@@ -96,7 +96,8 @@ def held(config, table, x, inputs, ok):
 
 
 def preprocess(config, table, x, u):
-    """Prefilter, checks and median of an active sample: (new entries, r_k, a_y,k, a_y,f, suspect)."""
+    """Prefilter, checks and median of an active sample: (new entries, r_k, a_y,f, suspect);
+    the checked a_y,k is the new ``ay_last``."""
     s = config.settings(table)
     delta, vx_raw, ay_raw, r_m = u
     ay_m = roll_corrected(config, table, ay_raw)
@@ -107,7 +108,7 @@ def preprocess(config, table, x, u):
     timeout = max(1, round(s["reference_timeout"] / config.sample_time))
     r_k, r_last, r_rej, r_forced = check(r_m, reference_yaw_rate(config, delta, vx),
                                          s["yaw_rate_band"], x["r_last"], x["r_rejections"], timeout)
-    ay_k, ay_last, ay_rej, ay_forced = check(ay_b, vx * r_k, s["lateral_acceleration_band"],
+    _, ay_last, ay_rej, ay_forced = check(ay_b, vx * r_k, s["lateral_acceleration_band"],
                                              x["ay_last"], x["ay_rejections"], timeout)
     n = median_length(config, table)
     history = [ay_b] + [x[f"ay_b_hist_{i}"] for i in range(1, n)]
@@ -115,7 +116,7 @@ def preprocess(config, table, x, u):
                ay_last=ay_last, r_rejections=r_rej, ay_rejections=ay_rej)
     for i in range(1, n):
         new[f"ay_b_hist_{i}"] = history[i - 1]
-    return new, r_k, ay_k, float(np.median(history)), r_forced or ay_forced
+    return new, r_k, float(np.median(history)), r_forced or ay_forced
 
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):

@@ -26,23 +26,23 @@ def step(config, state, u):
     names_, x, status, held = seed000.begin(config, TABLE, state, u)
     if held is not None:
         return held
-    updates, r_k, ay_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
+    updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
     status += REFERENCE_SUSPECT if suspect else 0
     mode = KIN if abs(ay_f) > s["threshold"] else DYN
     new = {**x, **updates, "mode": mode}
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]
-        vy_kin += config.sample_time * (x["ay_prev"] - x["r_prev"] * x["vx_prev"])    # [E14]
+        vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"])    # [E14]
         new["vy_kin"] = vy = vy_kin
     else:
         if x["mode"] == KIN:                                                           # [E26]
-            vy0, r0, P = x["vy_kin"], x["r_prev"], np.array(s["initial_covariance"])
+            vy0, r0, P = x["vy_kin"], x["r_last"], np.array(s["initial_covariance"])
         else:
             vy0, r0 = x["vy"], x["r"]
             P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
         xk, P = seed000.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
-    new.update(delta_prev=u[0], vx_prev=u[1], ay_prev=ay_k, r_prev=r_k, holding=0.0)
+    new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)
     return (np.array([new[k] for k in names_]),
             np.array([seed000.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]))

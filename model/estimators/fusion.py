@@ -47,11 +47,11 @@ def build(params: Parameters) -> Estimator:
         r_meas=pre.r_checked,
         **params.keyword())
     vy_kf = result["x_next"][0]
-    vy_kin = s["vy_kin"] + T * (s["ay_prev"] - s["r_prev"] * s["vx_prev"]) \
+    vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"]) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta = weight * ca.atan2(vy_kin, vx) + (1 - weight) * result["beta"]
-    running = seed.advanced({**s, **pre.updates}, u, pre.ay_checked, pre.r_checked, {
+    running = seed.advanced({**s, **pre.updates}, u, {
         "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
         **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}})
     holding = seed.held({**s, **pre.updates}, u)

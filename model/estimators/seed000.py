@@ -39,8 +39,8 @@ def states(n_median: int) -> Layout:
         Signal("ay_b_2", "m/s^2", "prefilter output two samples back"),
         *(Signal(f"ay_b_hist_{i}", "m/s^2", f"median buffer: a_y,b {i} samples back")
           for i in range(1, n_median)),
-        Signal("r_last", "rad/s", "last accepted yaw rate"),
-        Signal("ay_last", "m/s^2", "last accepted a_y,b"),
+        Signal("r_last", "rad/s", "last accepted yaw rate (= the checked r of the last sample)"),
+        Signal("ay_last", "m/s^2", "last accepted a_y,b (= the checked a_y of the last sample)"),
         Signal("r_rejections", "-", "consecutive yaw-rate rejections"),
         Signal("ay_rejections", "-", "consecutive a_y rejections"),
         Signal("mode", "-", "0 dynamic, 1 kinematic"),
@@ -50,8 +50,6 @@ def states(n_median: int) -> Layout:
         *(Signal(n, "SI", "KF covariance entry (upper triangle, row by row)") for n in COVARIANCE),
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
-        Signal("ay_prev", "m/s^2", "checked a_y of the previous sample"),
-        Signal("r_prev", "rad/s", "checked yaw rate of the previous sample"),
         Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
     ))
 
@@ -76,7 +74,6 @@ class Preprocessed:
     """One sample of shared pre-processing."""
 
     guard: Guard
-    ay_checked: ca.SX
     r_checked: ca.SX
     ay_filtered: ca.SX
     """a_y,f: median of the prefiltered a_y (the switching signal)."""
@@ -141,8 +138,7 @@ class Seed000:
             "r_rejections": keep("r_rejections", r_check.rejections),
             "ay_rejections": keep("ay_rejections", ay_check.rejections),
         }
-        return Preprocessed(guard, ay_check.value, r_check.value, filters.median(history), code,
-                            updates)
+        return Preprocessed(guard, r_check.value, filters.median(history), code, updates)
 
     def held(self, m: dict, v: dict) -> dict:
         """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last
@@ -153,12 +149,12 @@ class Seed000:
                     **previous_inputs(v, plausibility(v, self.params.config.limits), m)})
         return new
 
-    def advanced(self, m: dict, v: dict, ay_checked, r_checked, changes: dict) -> dict:
-        """State after an active step: ``changes`` plus this sample stored as the previous one."""
+    def advanced(self, m: dict, v: dict, changes: dict) -> dict:
+        """State after an active step: ``changes`` plus this sample's inputs kept for the next
+        prediction. (The checked a_y and r of this sample are ``ay_last`` and ``r_last``.)"""
         new = dict(m)
         new.update(changes)
-        new.update({"delta_prev": v["delta"], "vx_prev": v["vx"], "ay_prev": ay_checked,
-                    "r_prev": r_checked, "holding": ca.SX(0)})
+        new.update({"delta_prev": v["delta"], "vx_prev": v["vx"], "holding": ca.SX(0)})
         return new
 
     def initial_state(self, u: dict) -> ca.SX:
@@ -175,7 +171,7 @@ class Seed000:
             "r_last": r_last0, "ay_last": ay_b0, "r_rejections": ca.SX(0),
             "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
-            "delta_prev": delta0, "vx_prev": vx0, "ay_prev": ay_b0, "r_prev": r_last0,
+            "delta_prev": delta0, "vx_prev": vx0,
             "holding": holding,
         })
 

@@ -38,7 +38,8 @@ OUTPUTS = Layout((
 SCRATCH = Layout((
     Signal("scheme", "-", "scheme to run: 0 dynamic, 1 kinematic, 2 hold"),
     Signal("r_checked", "rad/s", "reliability-checked yaw rate of this sample"),
-    Signal("ay_checked", "m/s^2", "reliability-checked, prefiltered a_y of this sample"),
+    Signal("r_prev", "rad/s", "checked yaw rate of the previous sample"),
+    Signal("ay_prev", "m/s^2", "checked a_y of the previous sample"),
     Signal("mode_prev", "-", "mode of the previous sample"),
     Signal("status", "-", "status bits of this sample"),
 ))
@@ -57,8 +58,8 @@ def build(params: Parameters) -> Estimator:
     mode = ca.if_else(ca.fabs(pre.ay_filtered) > seed.settings["threshold"], KIN, DYN)
     mid = {**s, **pre.updates, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
-                            "ay_checked": pre.ay_checked, "mode_prev": s["mode"],
-                            "status": pre.status})
+                            "r_prev": s["r_last"], "ay_prev": s["ay_last"],
+                            "mode_prev": s["mode"], "status": pre.status})
 
     # ---- the three schemes, each from the select's outputs -------------------------------------
     update = kf2dof.dynamic_update(params, NAME)
@@ -76,7 +77,7 @@ def build(params: Parameters) -> Estimator:
     def dynamic(m, c, v):
         from_kin = c["mode_prev"] == KIN
         x = ca.vertcat(ca.if_else(from_kin, m["vy_kin"], m["vy"]),
-                       ca.if_else(from_kin, m["r_prev"], m["r"]))
+                       ca.if_else(from_kin, c["r_prev"], m["r"]))
         P = ca.if_else(from_kin, seed.P0, ca.vertcat(*[m[n] for n in COVARIANCE]))
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
                         delta=v["delta"], vx=v["vx"], ay=seed.roll_corrected(v["ay"]),
@@ -85,13 +86,13 @@ def build(params: Parameters) -> Estimator:
         vy = result["x_next"][0]
         changes = {"vy": vy, "r": result["x_next"][1],
                    **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}}
-        return (seed.advanced(m, v, c["ay_checked"], c["r_checked"], changes),
+        return (seed.advanced(m, v, changes),
                 output(result["beta"], vy, c["r_checked"], DYN, c["status"]))
 
     def kinematic(m, c, v):
         start = ca.if_else(c["mode_prev"] == DYN, m["vy"], m["vy_kin"])
-        vy_kin = start + T * (m["ay_prev"] - m["r_prev"] * m["vx_prev"])
-        return (seed.advanced(m, v, c["ay_checked"], c["r_checked"], {"vy_kin": vy_kin}),
+        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"])
+        return (seed.advanced(m, v, {"vy_kin": vy_kin}),
                 output(ca.atan2(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))
 

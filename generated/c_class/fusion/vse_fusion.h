@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0a804b17306644a7abf7e10b234e9503d9ae31402eeb21436f69eea74b5280f6
- * Operations: step 828, init 87 (CasADi SX instructions).
+ * Operations: step 814, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -49,7 +49,7 @@ typedef struct {
 } vse_fusion_output;
 
 /** Number of state entries. */
-#define VSE_FUSION_N_STATE (24)
+#define VSE_FUSION_N_STATE (22)
 
 /** Index of each entry of vse_fusion_state.x. */
 enum {
@@ -61,8 +61,8 @@ enum {
     VSE_FUSION_STATE_AY_B_HIST_2 = 5, /* m/s^2: median buffer: a_y,b 2 samples back */
     VSE_FUSION_STATE_AY_B_HIST_3 = 6, /* m/s^2: median buffer: a_y,b 3 samples back */
     VSE_FUSION_STATE_AY_B_HIST_4 = 7, /* m/s^2: median buffer: a_y,b 4 samples back */
-    VSE_FUSION_STATE_R_LAST = 8, /* rad/s: last accepted yaw rate */
-    VSE_FUSION_STATE_AY_LAST = 9, /* m/s^2: last accepted a_y,b */
+    VSE_FUSION_STATE_R_LAST = 8, /* rad/s: last accepted yaw rate (= the checked r of the last sample) */
+    VSE_FUSION_STATE_AY_LAST = 9, /* m/s^2: last accepted a_y,b (= the checked a_y of the last sample) */
     VSE_FUSION_STATE_R_REJECTIONS = 10, /* -: consecutive yaw-rate rejections */
     VSE_FUSION_STATE_AY_REJECTIONS = 11, /* -: consecutive a_y rejections */
     VSE_FUSION_STATE_MODE = 12, /* -: 0 dynamic, 1 kinematic */
@@ -74,9 +74,7 @@ enum {
     VSE_FUSION_STATE_P_R_R = 18, /* SI: KF covariance entry (upper triangle, row by row) */
     VSE_FUSION_STATE_DELTA_PREV = 19, /* rad: last plausible steer angle */
     VSE_FUSION_STATE_VX_PREV = 20, /* m/s: last plausible speed */
-    VSE_FUSION_STATE_AY_PREV = 21, /* m/s^2: checked a_y of the previous sample */
-    VSE_FUSION_STATE_R_PREV = 22, /* rad/s: checked yaw rate of the previous sample */
-    VSE_FUSION_STATE_HOLDING = 23 /* -: 1 while holding (low speed or invalid input), else 0 */
+    VSE_FUSION_STATE_HOLDING = 21 /* -: 1 while holding (low speed or invalid input), else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0a804b17306644a7abf7e10b234e9503d9ae31402eeb21436f69eea74b5280f6
- * Operations: step 828, init 87 (CasADi SX instructions).
+ * Operations: step 814, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

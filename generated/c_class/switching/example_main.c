@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 841cc35b10a53e48aa76a4fab36ddf90ec4d46869dd10a885fdd46e1f35f00c5
- * Operations: step 926, init 87 (CasADi SX instructions).
+ * Operations: step 906, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

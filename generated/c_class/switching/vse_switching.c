@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 841cc35b10a53e48aa76a4fab36ddf90ec4d46869dd10a885fdd46e1f35f00c5
- * Operations: step 926, init 87 (CasADi SX instructions).
+ * Operations: step 906, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -41,7 +41,7 @@ void vse_switching_step(vse_switching_state *state, const vse_switching_input *i
     casadi_real u[4];
     casadi_real mid[VSE_SWITCHING_N_STATE];
     casadi_real y[5];
-    casadi_real scratch[5];
+    casadi_real scratch[6];
     const casadi_real *select_arg[2];
     casadi_real *select_res[2];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
@@ -62,6 +62,7 @@ void vse_switching_step(vse_switching_state *state, const vse_switching_input *i
     scratch[2] = 0.0;
     scratch[3] = 0.0;
     scratch[4] = 0.0;
+    scratch[5] = 0.0;
     select_arg[0] = state->x;
     select_arg[1] = u;
     select_res[0] = mid;

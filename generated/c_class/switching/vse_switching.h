@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 841cc35b10a53e48aa76a4fab36ddf90ec4d46869dd10a885fdd46e1f35f00c5
- * Operations: step 926, init 87 (CasADi SX instructions).
+ * Operations: step 906, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -49,7 +49,7 @@ typedef struct {
 } vse_switching_output;
 
 /** Number of state entries. */
-#define VSE_SWITCHING_N_STATE (24)
+#define VSE_SWITCHING_N_STATE (22)
 
 /** Index of each entry of vse_switching_state.x. */
 enum {
@@ -61,8 +61,8 @@ enum {
     VSE_SWITCHING_STATE_AY_B_HIST_2 = 5, /* m/s^2: median buffer: a_y,b 2 samples back */
     VSE_SWITCHING_STATE_AY_B_HIST_3 = 6, /* m/s^2: median buffer: a_y,b 3 samples back */
     VSE_SWITCHING_STATE_AY_B_HIST_4 = 7, /* m/s^2: median buffer: a_y,b 4 samples back */
-    VSE_SWITCHING_STATE_R_LAST = 8, /* rad/s: last accepted yaw rate */
-    VSE_SWITCHING_STATE_AY_LAST = 9, /* m/s^2: last accepted a_y,b */
+    VSE_SWITCHING_STATE_R_LAST = 8, /* rad/s: last accepted yaw rate (= the checked r of the last sample) */
+    VSE_SWITCHING_STATE_AY_LAST = 9, /* m/s^2: last accepted a_y,b (= the checked a_y of the last sample) */
     VSE_SWITCHING_STATE_R_REJECTIONS = 10, /* -: consecutive yaw-rate rejections */
     VSE_SWITCHING_STATE_AY_REJECTIONS = 11, /* -: consecutive a_y rejections */
     VSE_SWITCHING_STATE_MODE = 12, /* -: 0 dynamic, 1 kinematic */
@@ -74,9 +74,7 @@ enum {
     VSE_SWITCHING_STATE_P_R_R = 18, /* SI: KF covariance entry (upper triangle, row by row) */
     VSE_SWITCHING_STATE_DELTA_PREV = 19, /* rad: last plausible steer angle */
     VSE_SWITCHING_STATE_VX_PREV = 20, /* m/s: last plausible speed */
-    VSE_SWITCHING_STATE_AY_PREV = 21, /* m/s^2: checked a_y of the previous sample */
-    VSE_SWITCHING_STATE_R_PREV = 22, /* rad/s: checked yaw rate of the previous sample */
-    VSE_SWITCHING_STATE_HOLDING = 23 /* -: 1 while holding (low speed or invalid input), else 0 */
+    VSE_SWITCHING_STATE_HOLDING = 21 /* -: 1 while holding (low speed or invalid input), else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 841cc35b10a53e48aa76a4fab36ddf90ec4d46869dd10a885fdd46e1f35f00c5
- * Operations: step 926, init 87 (CasADi SX instructions).
+ * Operations: step 906, init 85 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -56,6 +56,7 @@ extern "C" {
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
 #define casadi_s2 CASADI_PREFIX(s2)
+#define casadi_s3 CASADI_PREFIX(s3)
 #define casadi_sq CASADI_PREFIX(sq)
 
 /* Symbol visibility in DLLs */
@@ -112,10 +113,11 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel__casadi_int_size(void) { return (i
 CASADI_SYMBOL_EXPORT int vse_switching_kernel__casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
 static const casadi_int casadi_s0[3] = {4, 1, 1};
-static const casadi_int casadi_s1[3] = {24, 1, 1};
-static const casadi_int casadi_s2[3] = {5, 1, 1};
+static const casadi_int casadi_s1[3] = {22, 1, 1};
+static const casadi_int casadi_s2[3] = {6, 1, 1};
+static const casadi_int casadi_s3[3] = {5, 1, 1};
 
-/* vse_switching_kernel_init:(input[4])->(state[24]) */
+/* vse_switching_kernel_init:(input[4])->(state[22]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -176,23 +178,21 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a13+a12);
   res[0][8]=a13;
   res[0][9]=a02;
-  a12=0.;
-  res[0][10]=a12;
-  res[0][11]=a12;
-  res[0][12]=a12;
-  res[0][13]=a12;
-  res[0][14]=a12;
+  a02=0.;
+  res[0][10]=a02;
+  res[0][11]=a02;
+  res[0][12]=a02;
+  res[0][13]=a02;
+  res[0][14]=a02;
   res[0][15]=a00;
   a00=8.9999999999999997e-02;
   res[0][16]=a00;
-  res[0][17]=a12;
-  a12=4.0000000000000002e-04;
-  res[0][18]=a12;
+  res[0][17]=a02;
+  a02=4.0000000000000002e-04;
+  res[0][18]=a02;
   a05=(a06?a05:0);
   res[0][19]=a05;
   res[0][20]=a11;
-  res[0][21]=a02;
-  res[0][22]=a13;
   a06=(a06&&a09);
   a06=(a06&&a01);
   a06=(a06&&a03);
@@ -206,7 +206,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=(a06&&a09);
   a06=(!a06);
   a06=(a06?a07:0);
-  res[0][23]=a06;
+  res[0][21]=a06;
   return 0;
 }
 
@@ -282,11 +282,11 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel_init_work_bytes(casadi_int *sz_arg
   return 0;
 }
 
-/* vse_switching_kernel_select:(state[24],input[4])->(state_mid[24],scratch[5]) */
+/* vse_switching_kernel_select:(state[22],input[4])->(state_mid[22],scratch[6]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
   a02=1.;
@@ -307,7 +307,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=(a10<=a11);
   a06=(a06&&a10);
   a12=(a03<a11);
-  a13=arg[0][23];
+  a13=arg[0][21];
   a14=3.5000000000000000e+00;
   a14=(a03<a14);
   a14=(a13&&a14);
@@ -430,21 +430,21 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=casadi_fabs(a03);
   a04=4.;
   a03=(a03<=a04);
-  a16=(!a03);
-  a10=arg[0][11];
-  a08=(a10+a02);
-  a05=(a05<=a08);
-  a16=(a16&&a05);
-  a03=(a03||a16);
+  a10=(!a03);
+  a08=arg[0][11];
+  a20=(a08+a02);
+  a05=(a05<=a20);
+  a10=(a10&&a05);
+  a03=(a03||a10);
   a05=(a03?a15:0);
-  a08=(!a03);
-  a20=arg[0][9];
-  a08=(a08?a20:0);
-  a05=(a05+a08);
+  a20=(!a03);
+  a21=arg[0][9];
+  a20=(a20?a21:0);
+  a05=(a05+a20);
   a05=(a14?a05:0);
-  a08=(!a14);
-  a08=(a08?a20:0);
-  a05=(a05+a08);
+  a20=(!a14);
+  a20=(a20?a21:0);
+  a05=(a05+a20);
   res[0][9]=a05;
   a01=(!a01);
   a05=(a11+a02);
@@ -454,78 +454,71 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=(a05?a11:0);
   a01=(a01+a05);
   res[0][10]=a01;
-  a01=(!a03);
-  a05=(a10+a02);
-  a01=(a01?a05:0);
-  a01=(a14?a01:0);
-  a05=(!a14);
-  a05=(a05?a10:0);
-  a01=(a01+a05);
-  res[0][11]=a01;
-  a01=1.5000000000000000e+00;
-  a05=casadi_fmin(a15,a17);
-  a17=casadi_fmax(a15,a17);
-  a10=casadi_fmin(a17,a07);
-  a11=casadi_fmin(a05,a10);
-  a05=casadi_fmax(a05,a10);
-  a17=casadi_fmax(a17,a07);
-  a07=casadi_fmin(a17,a18);
-  a10=casadi_fmin(a05,a07);
-  a11=casadi_fmax(a11,a10);
-  a05=casadi_fmax(a05,a07);
-  a17=casadi_fmax(a17,a18);
-  a17=casadi_fmin(a17,a19);
-  a05=casadi_fmin(a05,a17);
-  a11=casadi_fmax(a11,a05);
-  a11=casadi_fabs(a11);
-  a01=(a01<a11);
-  a01=(a01?a02:0);
-  a11=(a14?a01:0);
-  res[0][12]=a11;
-  a11=arg[0][13];
-  res[0][13]=a11;
-  a11=arg[0][14];
-  res[0][14]=a11;
-  a11=arg[0][15];
-  res[0][15]=a11;
-  a11=arg[0][16];
-  res[0][16]=a11;
-  a11=arg[0][17];
-  res[0][17]=a11;
-  a11=arg[0][18];
-  res[0][18]=a11;
-  a11=arg[0][19];
-  res[0][19]=a11;
-  a11=arg[0][20];
-  res[0][20]=a11;
-  a11=arg[0][21];
-  res[0][21]=a11;
-  a11=arg[0][22];
-  res[0][22]=a11;
-  res[0][23]=a13;
-  a01=(a14?a01:0);
-  a13=(!a14);
-  a11=2.;
-  a13=(a13?a11:0);
-  a01=(a01+a13);
-  res[1][0]=a01;
-  res[1][1]=a09;
-  a15=(a03?a15:0);
   a03=(!a03);
-  a03=(a03?a20:0);
-  a15=(a15+a03);
-  res[1][2]=a15;
-  a15=arg[0][12];
-  res[1][3]=a15;
+  a01=(a08+a02);
+  a03=(a03?a01:0);
+  a03=(a14?a03:0);
+  a01=(!a14);
+  a01=(a01?a08:0);
+  a03=(a03+a01);
+  res[0][11]=a03;
+  a03=1.5000000000000000e+00;
+  a01=casadi_fmin(a15,a17);
+  a15=casadi_fmax(a15,a17);
+  a17=casadi_fmin(a15,a07);
+  a08=casadi_fmin(a01,a17);
+  a01=casadi_fmax(a01,a17);
+  a15=casadi_fmax(a15,a07);
+  a07=casadi_fmin(a15,a18);
+  a17=casadi_fmin(a01,a07);
+  a08=casadi_fmax(a08,a17);
+  a01=casadi_fmax(a01,a07);
+  a15=casadi_fmax(a15,a18);
+  a15=casadi_fmin(a15,a19);
+  a01=casadi_fmin(a01,a15);
+  a08=casadi_fmax(a08,a01);
+  a08=casadi_fabs(a08);
+  a03=(a03<a08);
+  a03=(a03?a02:0);
+  a08=(a14?a03:0);
+  res[0][12]=a08;
+  a08=arg[0][13];
+  res[0][13]=a08;
+  a08=arg[0][14];
+  res[0][14]=a08;
+  a08=arg[0][15];
+  res[0][15]=a08;
+  a08=arg[0][16];
+  res[0][16]=a08;
+  a08=arg[0][17];
+  res[0][17]=a08;
+  a08=arg[0][18];
+  res[0][18]=a08;
+  a08=arg[0][19];
+  res[0][19]=a08;
+  a08=arg[0][20];
+  res[0][20]=a08;
+  res[0][21]=a13;
+  a03=(a14?a03:0);
+  a13=(!a14);
+  a08=2.;
+  a13=(a13?a08:0);
+  a03=(a03+a13);
+  res[1][0]=a03;
+  res[1][1]=a09;
+  res[1][2]=a16;
+  res[1][3]=a21;
+  a21=arg[0][12];
+  res[1][4]=a21;
   a06=(!a06);
-  a06=(a06?a11:0);
+  a06=(a06?a08:0);
   a12=(a12?a02:0);
   a06=(a06+a12);
-  a00=(a00||a16);
+  a00=(a00||a10);
   a14=(a14&&a00);
   a14=(a14?a04:0);
   a06=(a06+a14);
-  res[1][4]=a06;
+  res[1][5]=a06;
   return 0;
 }
 
@@ -605,7 +598,7 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel_select_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* vse_switching_kernel_dynamic:(state_mid[24],input[4],scratch[5])->(state_next[24],output[5]) */
+/* vse_switching_kernel_dynamic:(state_mid[22],input[4],scratch[6])->(state_next[22],output[5]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -939,7 +932,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a04=(a04+a30);
   a30=(a25*a04);
   a28=(a28+a30);
-  a30=arg[2][3];
+  a30=arg[2][4];
   a30=(a30==a01);
   a00=(a30?a00:0);
   a10=(!a30);
@@ -953,7 +946,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a12=(a12+a13);
   a13=(a25*a12);
   a11=(a11+a13);
-  a13=arg[0][22];
+  a13=arg[2][2];
   a13=(a30?a13:0);
   a14=(!a30);
   a15=arg[0][15];
@@ -1163,11 +1156,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][18]=a17;
   res[0][19]=a21;
   res[0][20]=a02;
-  a21=arg[2][2];
-  res[0][21]=a21;
-  res[0][22]=a18;
   a21=0.;
-  res[0][23]=a21;
+  res[0][21]=a21;
   a02=casadi_fmax(a02,a05);
   a02=casadi_fmin(a02,a06);
   a02=atan2(a10,a02);
@@ -1175,7 +1165,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][1]=a10;
   res[1][2]=a18;
   res[1][3]=a21;
-  a21=arg[2][4];
+  a21=arg[2][5];
   res[1][4]=a21;
   return 0;
 }
@@ -1237,7 +1227,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_dynamic_sparsity_in(
 CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_dynamic_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s1;
-    case 1: return casadi_s2;
+    case 1: return casadi_s3;
     default: return 0;
   }
 }
@@ -1258,7 +1248,7 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel_dynamic_work_bytes(casadi_int *sz_
   return 0;
 }
 
-/* vse_switching_kernel_kinematic:(state_mid[24],input[4],scratch[5])->(state_next[24],output[5]) */
+/* vse_switching_kernel_kinematic:(state_mid[22],input[4],scratch[6])->(state_next[22],output[5]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6;
@@ -1288,7 +1278,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][11]=a0;
   a0=arg[0][12];
   res[0][12]=a0;
-  a0=arg[2][3];
+  a0=arg[2][4];
   a1=0.;
   a0=(a0==a1);
   a2=arg[0][14];
@@ -1298,8 +1288,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a0=(a0?a4:0);
   a3=(a3+a0);
   a0=1.0000000000000000e-02;
-  a4=arg[0][21];
-  a5=arg[0][22];
+  a4=arg[2][3];
+  a5=arg[2][2];
   a6=arg[0][20];
   a5=(a5*a6);
   a4=(a4-a5);
@@ -1319,11 +1309,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][19]=a2;
   a2=arg[1][1];
   res[0][20]=a2;
-  a0=arg[2][2];
-  res[0][21]=a0;
-  a0=arg[2][1];
-  res[0][22]=a0;
-  res[0][23]=a1;
+  res[0][21]=a1;
   a1=3.;
   a2=casadi_fmax(a2,a1);
   a1=90.;
@@ -1331,11 +1317,12 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a2=atan2(a3,a2);
   res[1][0]=a2;
   res[1][1]=a3;
-  res[1][2]=a0;
-  a0=1.;
-  res[1][3]=a0;
-  a0=arg[2][4];
-  res[1][4]=a0;
+  a3=arg[2][1];
+  res[1][2]=a3;
+  a3=1.;
+  res[1][3]=a3;
+  a3=arg[2][5];
+  res[1][4]=a3;
   return 0;
 }
 
@@ -1396,7 +1383,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_kinematic_sparsity_i
 CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_kinematic_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s1;
-    case 1: return casadi_s2;
+    case 1: return casadi_s3;
     default: return 0;
   }
 }
@@ -1417,7 +1404,7 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel_kinematic_work_bytes(casadi_int *s
   return 0;
 }
 
-/* vse_switching_kernel_hold:(state_mid[24],input[4],scratch[5])->(state_next[24],output[5]) */
+/* vse_switching_kernel_hold:(state_mid[22],input[4],scratch[6])->(state_next[22],output[5]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5;
@@ -1476,16 +1463,12 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a3=(a3?a5:0);
   a2=(a2+a3);
   res[0][20]=a2;
-  a2=arg[0][21];
-  res[0][21]=a2;
-  a2=arg[0][22];
-  res[0][22]=a2;
-  res[0][23]=a4;
+  res[0][21]=a4;
   res[1][0]=a1;
   res[1][1]=a1;
   res[1][2]=a0;
   res[1][3]=a1;
-  a1=arg[2][4];
+  a1=arg[2][5];
   res[1][4]=a1;
   return 0;
 }
@@ -1547,7 +1530,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_hold_sparsity_in(cas
 CASADI_SYMBOL_EXPORT const casadi_int* vse_switching_kernel_hold_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s1;
-    case 1: return casadi_s2;
+    case 1: return casadi_s3;
     default: return 0;
   }
 }
