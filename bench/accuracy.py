@@ -41,10 +41,15 @@ def _cell(values: list[float]) -> str:
     return f"{np.mean(values):.3f}" if len(values) == 1 else f"{np.mean(values):.3f} ± {np.std(values):.3f}"
 
 
-def _figure(config, case: Case, names: list[str]) -> str:
-    """Plot every estimator on ``case`` (seed 1); returns the Markdown line embedding it."""
+FIG8 = ("switching_continuous_dlc", Case.of("continuous_dlc"), ("switching",))
+"""Seed 000 Fig. 8: the switching estimator on the continuous DLC (file stem, case, estimators)."""
+
+
+def _figure(config, case: Case, names: list[str], stem: str | None = None) -> str:
+    """Plot ``names`` on ``case`` (seed 1) into docs/figures/<stem>.png (the case's label by
+    default); returns the Markdown line embedding it."""
     log = case.simulate(config, 1.0 / config.sample_time, 1)
-    slug = case.label.replace("(", "_").replace(")", "").replace(",", "_").replace("=", "")
+    slug = stem or case.label.replace("(", "_").replace(")", "").replace(",", "_").replace("=", "")
     figure = REPO / "docs" / "figures" / f"{slug}.png"
     plot(log, {name: run_estimator(config, name, log) for name in names}, figure,
          title=f"{case.label}, vehicle {config.name}, seed 1")
@@ -57,13 +62,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seeds", type=int, default=1, help="sensor-noise seeds 1..N")
     parser.add_argument("--table3-seeds", type=int, default=50,
                         help="seeds of the seed-000 Table 3 reproduction")
+    parser.add_argument("--hysteresis-seeds", type=int, default=10,
+                        help="seeds of the hysteresis comparison (beyond the paper)")
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "accuracy.md")
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
     names = list(config.estimators)
     rows = ["| scenario | stayed in cones | spun | estimator | β max (°) | β mean (°) | β RMSE (°) "
             "| v_y RMSE (m/s) | r RMSE (°/s) |", "|---|---|---|---|---|---|---|---|---|"]
-    figures = []
+    figures = [_figure(config, FIG8[1], list(FIG8[2]), FIG8[0])]
     for case in track(SCORING_SET, description="scoring", console=Console(stderr=True)):
         stats: dict[str, dict[str, list[float]]] = {n: {} for n in names}
         for seed in range(1, args.seeds + 1):
@@ -95,6 +102,10 @@ def main(argv: list[str] | None = None) -> None:
         "## Seed 000 Table 3 reproduced",
         "",
         *table3.table(args.vehicle.read_text(), str(args.vehicle), config.name, args.table3_seeds),
+        "## Beyond the paper: hysteresis on the switching threshold (A7)",
+        "",
+        *table3.hysteresis_table(args.vehicle.read_text(), str(args.vehicle), config.name,
+                                 args.hysteresis_seeds),
         "## Plots (seed 1)",
         "",
         *figures,

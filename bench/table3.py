@@ -42,6 +42,53 @@ def methods(vehicle_text: str, source: str, name: str):
             ("fusion, literal a_y", literal, "fusion"))
 
 
+HYSTERESIS_CASES = (("HIL-like, μ 0.85", Case.of("hil_sine", mu=0.85)),
+                    ("HIL-like, μ 0.35", Case.of("hil_sine", mu=0.35)),
+                    ("continuous DLC", Case.of("continuous_dlc")))
+HYSTERESIS = (0.1, 0.2, 0.3)
+"""Hysteresis values (m/s^2) compared with the paper's single threshold (beyond the paper, A7)."""
+
+
+def _statistics(config, estimator: str, case: Case, seeds: int) -> np.ndarray:
+    """(max, mean, RMSE) of |delta beta| in degrees for seeds 1..N, one row per seed."""
+    rows = []
+    for seed in range(1, seeds + 1):
+        log = case.simulate(config, 1.0 / config.sample_time, seed)
+        beta = score(log, run_estimator(config, estimator, log))[0]
+        rows.append((beta.max, beta.mean, beta.rmse))
+    return np.array(rows)
+
+
+def _cells(values: np.ndarray) -> list[str]:
+    return [f"{m:.3f} ± {s:.3f}" for m, s in zip(values.mean(axis=0), values.std(axis=0))]
+
+
+def hysteresis_table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
+    """Beyond the paper: the switching estimator with hysteresis on the threshold, on the
+    HIL-like scenario (seed 000 §4.3: pedal held, growing sine steering) at μ 0.85 and 0.35 and
+    on the continuous DLC; the change of the worst-case error against the literal single
+    threshold."""
+    marker = "hysteresis = 0.0 "
+    configs = [(f"switching, hysteresis {h} m/s²",
+                parse_vehicle(vehicle_text.replace(marker, f"hysteresis = {h} "), source, name))
+               for h in HYSTERESIS]
+    base = parse_vehicle(vehicle_text, source, name)
+    lines = []
+    for title, case in HYSTERESIS_CASES:
+        lines += [f"### {title}, {seeds} seeds", "",
+                  "| method | β max (°) | β mean (°) | β RMSE (°) | max vs literal |",
+                  "|---|---|---|---|---|"]
+        literal = _statistics(base, "switching", case, seeds)
+        rows = [("switching (literal, paper)", literal),
+                ("fusion (comparison)", _statistics(base, "fusion", case, seeds))]
+        rows += [(label, _statistics(config, "switching", case, seeds)) for label, config in configs]
+        for label, values in rows:
+            change = values[:, 0].mean() / literal[:, 0].mean() - 1
+            lines.append(f"| {label} | {' | '.join(_cells(values))} | {change:+.1%} |")
+        lines.append("")
+    return lines
+
+
 def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
     lines = []
     for title, case in CASES:
@@ -49,13 +96,7 @@ def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
                   "| method | β max (°) | β mean (°) | β RMSE (°) | paper max / mean / RMSE (°) |",
                   "|---|---|---|---|---|"]
         for label, config, estimator in methods(vehicle_text, source, name):
-            rows = []
-            for seed in range(1, seeds + 1):
-                log = case.simulate(config, 1.0 / config.sample_time, seed)
-                beta = score(log, run_estimator(config, estimator, log))[0]
-                rows.append((beta.max, beta.mean, beta.rmse))
-            values = np.array(rows)
-            cells = [f"{m:.3f} ± {s:.3f}" for m, s in zip(values.mean(axis=0), values.std(axis=0))]
+            cells = _cells(_statistics(config, estimator, case, seeds))
             key = "switching" if label == "switching" else "fusion" if label == "fusion (comparison)" else ""
             paper = " / ".join(f"{v:.3f}" for v in PAPER[key]) if key and title.endswith("(Table 3)") else "-"
             lines.append(f"| {label} | {' | '.join(cells)} | {paper} |")

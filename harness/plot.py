@@ -1,5 +1,5 @@
 """Seed 000 Fig. 8 style plot: beta against the reference, |delta beta| over time, background
-shaded where a switching estimator used its kinematic scheme (``mode`` = 1)."""
+shaded where a switching estimator used its dynamic scheme, the KF (``mode`` = 0)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 
 from harness.logs import Log  # noqa: E402
 
-KINEMATIC = 1
+DYNAMIC = 0
 
 
 def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> None:
@@ -29,8 +29,8 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
     for est in estimates.values():
         if "mode" in est:
             for axis in (top, bottom):
-                _shade(axis, t, est["mode"] == KINEMATIC)
-            top.fill_between([], [], color="tab:orange", alpha=0.15, label="kinematic scheme")
+                _shade(axis, t, est["mode"] == DYNAMIC)
+            top.fill_between([], [], color="tab:green", alpha=0.12, label="dynamic scheme (KF)")
             break
     if "off_course" in log and log["off_course"].any():
         first = t[np.argmax(log["off_course"] > 0)]
@@ -57,4 +57,4 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
 def _shade(axis, t: np.ndarray, mask: np.ndarray) -> None:
     edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(int), [0]))))
     for start, stop in zip(edges[::2], edges[1::2]):
-        axis.axvspan(t[start], t[min(stop, len(t) - 1)], color="tab:orange", alpha=0.15, lw=0)
+        axis.axvspan(t[start], t[min(stop, len(t) - 1)], color="tab:green", alpha=0.12, lw=0)

@@ -52,7 +52,8 @@ def _number(value: Any) -> float:
     return value
 
 
-def _number_field(key: str, expected: str, accept: Callable[[float], bool], doc: str) -> Field:
+def _number_field(key: str, expected: str, accept: Callable[[float], bool], doc: str,
+                  default: float | None = None) -> Field:
     """A finite number for which ``accept`` holds."""
 
     def check(value: Any) -> float:
@@ -64,7 +65,7 @@ def _number_field(key: str, expected: str, accept: Callable[[float], bool], doc:
             raise Invalid(expected)
         return number
 
-    return Field(key, expected, check, doc)
+    return Field(key, expected, check, doc, default)
 
 
 def positive(key: str, unit: str, doc: str = "") -> Field:
@@ -72,9 +73,9 @@ def positive(key: str, unit: str, doc: str = "") -> Field:
     return _number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc)
 
 
-def nonnegative(key: str, unit: str, doc: str = "") -> Field:
-    """A finite number >= 0 in ``unit``."""
-    return _number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc)
+def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
+    """A finite number >= 0 in ``unit`` (optional when ``default`` is given)."""
+    return _number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default)
 
 
 def fraction(key: str, doc: str = "") -> Field:
@@ -233,7 +234,21 @@ SEED000_FIELDS: tuple[Field, ...] = (
 )
 """Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
 
-SWITCHING = EstimatorSchema(fields=(*KF_FIELDS, *SEED000_FIELDS), rules=LOW_SPEED_RULES)
+
+
+def _hysteresis_below_threshold(settings: Mapping[str, Any]) -> str:
+    if settings["hysteresis"] >= settings["threshold"]:
+        return (f"hysteresis = {settings['hysteresis']!r}: expected a number >= 0 below "
+                f"threshold = {settings['threshold']!r} m/s^2")
+    return ""
+
+
+SWITCHING = EstimatorSchema(
+    fields=(*KF_FIELDS, *SEED000_FIELDS,
+            nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
+                        "scheme above threshold + hysteresis, leave it below threshold - "
+                        "hysteresis; 0 = the paper's single threshold", default=0.0)),
+    rules=(*LOW_SPEED_RULES, Rule("hysteresis", _hysteresis_below_threshold)))
 FUSION = EstimatorSchema(
     fields=(*KF_FIELDS, *SEED000_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "

@@ -45,6 +45,20 @@ def test_continuous_dlc_friction_steps(config):
     assert log["vx_ref"].min() > 32.5  # speed held at 120 km/h
 
 
+@pytest.mark.parametrize("mu", [0.85, 0.35])
+def test_hil_sine_speed_rises_and_steering_grows(config, mu):
+    """Seed 000 §4.3 reconstructed: vx from 12.5 m/s upwards, growing sine-like demand up to
+    0.7 mu g (the lateral acceleration follows it: below the limit, no spin)."""
+    log = Case.of("hil_sine", mu=mu).simulate(config, 100.0)
+    vx, t = log["vx_ref"], log["t"]
+    assert vx[0] == pytest.approx(12.5, abs=0.05) and vx[-1] > 25.0
+    assert np.all(np.diff(vx[t > 2.0]) > -1e-3)  # the pedal is held: vx never falls
+    ay = np.abs(log["vx_ref"] * log["r_ref"])
+    early, late = ay[(t > 1) & (t < 9)].max(), ay[t > 32].max()
+    assert late > 2.5 * early and late > 0.5 * mu * 9.81
+    assert np.all(log["mu"] == mu) and log.notes["spun"] == "no"
+
+
 def test_sensor_noise_is_seeded(config):
     a = Case.of("sine_steer").simulate(config, 100.0, seed=3)
     b = Case.of("sine_steer").simulate(config, 100.0, seed=3)

@@ -116,3 +116,52 @@ def test_roll_compensation_recovers_the_cg_acceleration(config, estimator, compi
             assert ay_b == pytest.approx(truth, rel=expected_error)
         else:
             assert ay_b > truth * 1.05  # about 8 % high: g sin(phi) on top of a_y
+
+
+def with_hysteresis(vehicle_text, value):
+    from model.params import parse_vehicle
+
+    text = vehicle_text.replace("hysteresis = 0.0 ", f"hysteresis = {value} ")
+    config = parse_vehicle(text, "hysteresis.toml", "c_class")
+    assert config.settings("switching")["hysteresis"] == value
+    return config
+
+
+@pytest.mark.parametrize("params", ["baked", "calibratable"])
+def test_hysteresis_option_is_equivalent_to_the_reference(vehicle_text, params):
+    """A7 beyond the paper: the C with hysteresis matches the reference step by step and in the
+    mode sequence, on the HIL-like scenario and the continuous DLC."""
+    from harness.verify import verify_estimator
+
+    config = with_hysteresis(vehicle_text, 0.2)
+    cases = (Case.of("hil_sine", duration=20.0), Case.of("continuous_dlc"))
+    for result in verify_estimator(config, "switching", cases, params=params):
+        assert result.ok, result
+
+
+def test_hysteresis_enters_above_and_leaves_below_the_band(vehicle_text):
+    h = 0.2
+    config = with_hysteresis(vehicle_text, h)
+    est = build("switching", config)
+    log = Case.of("continuous_dlc").simulate(config, 100.0)
+    outputs, states = load_estimator(est, render(config, "switching")).run(
+        log.matrix(est.inputs.names))
+    mode = outputs[:, 3].astype(int)
+    history = [est.states.index("ay_b_1")] + [est.states.index(f"ay_b_hist_{i}") for i in range(1, 5)]
+    ay_f = np.abs(np.median(states[1:, history], axis=1))   # the median this step switched on
+    threshold = config.settings("switching")["threshold"]
+    entered = [k for k in range(1, len(mode)) if mode[k - 1] == DYN and mode[k] == KIN]
+    left = [k for k in range(1, len(mode)) if mode[k - 1] == KIN and mode[k] == DYN]
+    assert entered and left
+    assert all(ay_f[k] > threshold + h for k in entered)
+    assert all(ay_f[k] <= threshold - h for k in left)
+    kept = [k for k in range(1, len(mode)) if mode[k - 1] == KIN and mode[k] == KIN]
+    assert any(ay_f[k] < threshold for k in kept)  # in the band, the mode is kept
+
+
+def test_hysteresis_must_be_below_the_threshold(vehicle_text):
+    from model.params import ParameterError, parse_vehicle
+
+    with pytest.raises(ParameterError, match=r"hysteresis = 1.5: expected .* below threshold"):
+        parse_vehicle(vehicle_text.replace("hysteresis = 0.0 ", "hysteresis = 1.5 "), "h.toml",
+                      "c_class")

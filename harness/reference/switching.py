@@ -28,7 +28,8 @@ def step(config, state, u):
         return held
     updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
     status += REFERENCE_SUSPECT if suspect else 0
-    mode = KIN if abs(ay_f) > s["threshold"] else DYN
+    hysteresis = s["hysteresis"] if x["mode"] == KIN else -s["hysteresis"]        # A7 option
+    mode = KIN if abs(ay_f) > s["threshold"] - hysteresis else DYN
     new = {**x, **updates, "mode": mode}
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]

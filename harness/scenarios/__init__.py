@@ -39,6 +39,10 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
               **_NOISE}),
     Scenario("fishhook", "seed 002: NHTSA-style fishhook", manoeuvres.fishhook,
              {"speed_kmh": 96.0, "mu": 0.8, "amplitude": 0.06, "duration": 7.0, **_NOISE}),
+    Scenario("hil_sine", "seed 000 HIL-like: pedal held (vx rising from 12.5 m/s), sine steering "
+             "of growing amplitude", manoeuvres.hil_sine,
+             {"mu": 0.85, "v_start": 12.5, "v_end": 30.0, "speed_tau": 15.0, "frequency": 0.25,
+              "ay_start": 0.1, "ay_end": 0.7, "duration": 40.0, "outliers": False, **_NOISE}),
     Scenario("low_speed", "slow down to a stop, reverse briefly, drive off again (low-speed hold)",
              manoeuvres.low_speed),
     Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range samples in every input",
@@ -115,6 +119,7 @@ VERIFICATION_SET: tuple[Case, ...] = (
     Case.of("sine_steer"),
     Case.of("fishhook"),
     Case.of("dlc", speed_kmh=120.0, mu=0.5),
+    Case.of("hil_sine", mu=0.85),
     Case.of("low_speed"),
     Case.of("invalid_inputs"),
 )

@@ -93,6 +93,37 @@ def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
     return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
 
 
+def hil_sine(config: VehicleConfig, rate_hz: float, seed: int, mu: float, v_start: float,
+             v_end: float, speed_tau: float, frequency: float, ay_start: float, ay_end: float,
+             duration: float, outliers: bool, bias: bool, progress=None) -> Log:
+    """Seed 000 scenario C (HIL with a driver), reconstructed: the pedal is held, so vx rises
+    from ``v_start`` towards ``v_end`` (m/s) as v_end - (v_end - v_start) exp(-t / speed_tau);
+    the steering is a sine of ``frequency`` Hz whose amplitude grows so that the steady-state
+    lateral acceleration it asks for rises linearly from ``ay_start`` to ``ay_end`` times mu g
+    over ``duration`` s (*assumptions*: the paper shows the driver's input only in figures).
+    The steer angle for a demand a_y at speed vx is a_y l (1 + K_s vx^2) / vx^2."""
+    vehicle = config.vehicle
+    l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
+    ks = vehicle["mass"] / l**2 * (vehicle["cg_to_rear_axle"] / vehicle["cornering_stiffness_front"]
+                                   - vehicle["cg_to_front_axle"] / vehicle["cornering_stiffness_rear"])
+
+    def target(t: float) -> float:
+        return v_end - (v_end - v_start) * np.exp(-t / speed_tau)
+
+    def steer(t: float, state: np.ndarray) -> float:
+        if t < 1.0:
+            return 0.0
+        demand = mu * GRAVITY * (ay_start + (ay_end - ay_start) * t / duration)
+        vx = target(t)
+        return demand * l * (1 + ks * vx**2) / vx**2 * np.sin(2 * np.pi * frequency * (t - 1.0))
+
+    dt = 1.0 / (rate_hz * substeps(rate_hz))
+    hold = SpeedHold(config.vehicle, config.plant, target, dt)
+    run = simulate(config, rate_hz, duration, v_start, steer, hold, _constant(mu),
+                   progress=progress)
+    return _log(config, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool))
+
+
 def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
     """Synthetic steady-state cornering while the speed falls 12 -> 0 -> -1 (reverse) -> 12 m/s;
     exercises the estimators' low-speed hold (no plant: the plant needs |v| > 3.5 m/s)."""
