@@ -23,6 +23,9 @@ from harness.files import read_user_text, write_text_atomic
 REQUIRED = ("t", "delta", "vx", "ax", "ay", "r")
 """Required input columns (design.md)."""
 OPTIONAL_INPUTS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr", "mz")
+ABSENT_MEANS = {"mz": 0.0}
+"""Optional inputs an estimator may read from a log without them, and the value they then have
+(no direct yaw moment applied: mz = 0)."""
 TRUTH = ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu", "off_course")
 """Optional ground truth, used only for scoring. ``off_course`` is 1 where a simulated run touched
 a cone or had spun (latched), else 0."""
@@ -70,9 +73,16 @@ class Log:
         t = self.columns["t"]
         return float((t[-1] - t[0]) / (len(t) - 1))
 
+    def missing(self, names: tuple[str, ...]) -> list[str]:
+        """The ``names`` this log cannot provide (absent and without an ABSENT_MEANS value)."""
+        return [n for n in names if n not in self.columns and n not in ABSENT_MEANS]
+
     def matrix(self, names: tuple[str, ...]) -> np.ndarray:
-        """The named columns side by side, shape (samples, len(names))."""
-        return np.column_stack([self.columns[n] for n in names]).astype(float)
+        """The named columns side by side, shape (samples, len(names)); an absent optional input
+        of ABSENT_MEANS is a constant column of its value."""
+        samples = len(self.columns["t"])
+        return np.column_stack([self.columns[n] if n in self.columns
+                                else np.full(samples, ABSENT_MEANS[n]) for n in names]).astype(float)
 
 
 def write_log(log: Log, path: Path) -> None:

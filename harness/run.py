@@ -26,7 +26,7 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
     """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs."""
     config = config_for_log(config, log)
     estimator = build(name, config)
-    missing = [n for n in estimator.inputs.names if n not in log]
+    missing = log.missing(estimator.inputs.names)
     if missing:
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {name} needs "
                        f"{', '.join(estimator.inputs.names)}")

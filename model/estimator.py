@@ -69,6 +69,8 @@ def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, i
     """The ``init`` and ``step`` Functions with the naming every estimator uses."""
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
+    # dense: the C copies flat vectors, so a structural zero (e.g. of SX.eye) must be stored too
+    init_state, next_state, output = (ca.densify(e) for e in (init_state, next_state, output))
     init = ca.Function(f"vse_{name}_kernel_init", [input_sym, *extra], [init_state],
                        ["input", *extra_names], ["state"])
     step = ca.Function(f"vse_{name}_kernel_step", [state_sym, input_sym, *extra],
@@ -94,13 +96,15 @@ def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, i
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
     select = ca.Function(f"vse_{name}_kernel_select", [state_sym, input_sym, *extra],
-                         [mid_state, scratch_expr], ["state", "input", *extra_names],
+                         [ca.densify(mid_state), ca.densify(scratch_expr)],
+                         ["state", "input", *extra_names],
                          ["state_mid", "scratch"])
     functions = []
     for label, mid_sym, scratch_sym, input_b, next_state, output in branches:
         functions.append((label, ca.Function(
             f"vse_{name}_kernel_{label}", [mid_sym, input_b, scratch_sym, *extra],
-            [next_state, output], ["state_mid", "input", "scratch", *extra_names],
+            [ca.densify(next_state), ca.densify(output)],
+            ["state_mid", "input", "scratch", *extra_names],
             ["state_next", "output"])))
     mid, scr = select(state_sym, input_sym, *extra)
     composed_state, composed_output = None, None

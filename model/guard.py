@@ -19,7 +19,8 @@ import casadi as ca
 
 from model import status
 
-LIMIT_KEYS = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max"}
+LIMIT_KEYS = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
+              "mz": "mz_max"}
 """Which ``[inputs]`` limit bounds which log column."""
 
 
@@ -28,6 +29,7 @@ class Guard:
     plausible: dict[str, ca.SX]
     active: ca.SX
     status: ca.SX
+    low_speed: ca.SX
 
 
 def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
@@ -48,7 +50,7 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
     active = ca.logic_and(all_plausible, ca.logic_not(low_speed))
     code = (ca.if_else(all_plausible, 0, status.INVALID_INPUT)
             + ca.if_else(low_speed, status.LOW_SPEED, 0))
-    return Guard(plausible, active, code)
+    return Guard(plausible, active, code, low_speed)
 
 
 def plausibility(inputs: Mapping[str, ca.SX], limits: Mapping[str, float]) -> dict[str, ca.SX]:
@@ -68,7 +70,7 @@ def _all(flags) -> ca.SX:
     return result
 
 
-NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0}
+NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0, "mz": 0.0}
 """What an implausible input of the first sample is replaced by (vx: the low-speed limit)."""
 
 

@@ -68,9 +68,9 @@ def _number_field(key: str, expected: str, accept: Callable[[float], bool], doc:
     return Field(key, expected, check, doc, default)
 
 
-def positive(key: str, unit: str, doc: str = "") -> Field:
-    """A finite number > 0 in ``unit``."""
-    return _number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc)
+def positive(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
+    """A finite number > 0 in ``unit`` (optional when ``default`` is given)."""
+    return _number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc, default)
 
 
 def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
@@ -78,9 +78,10 @@ def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None
     return _number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default)
 
 
-def fraction(key: str, doc: str = "") -> Field:
-    """A number strictly between 0 and 1."""
-    return _number_field(key, "a number between 0 and 1 (exclusive)", lambda x: 0.0 < x < 1.0, doc)
+def fraction(key: str, doc: str = "", default: float | None = None) -> Field:
+    """A number strictly between 0 and 1 (optional when ``default`` is given)."""
+    return _number_field(key, "a number between 0 and 1 (exclusive)", lambda x: 0.0 < x < 1.0, doc,
+                         default)
 
 
 def choice(key: str, options: tuple[str, ...], doc: str = "", default: str | None = None) -> Field:
@@ -146,6 +147,7 @@ INPUT_LIMITS: tuple[Field, ...] = (
     positive("ax_max", "m/s^2", "largest plausible |ax|"),
     positive("ay_max", "m/s^2", "largest plausible |ay|"),
     positive("r_max", "rad/s", "largest plausible |r|"),
+    positive("mz_max", "N*m", "largest plausible |mz| (direct yaw moment)", default=2.0e4),
 )
 
 # [plant]: the truth plant of harness/plant (simulation only; never in generated code). Optional.
@@ -247,7 +249,15 @@ SWITCHING = EstimatorSchema(
     fields=(*KF_FIELDS, *SEED000_FIELDS,
             nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
                         "scheme above threshold + hysteresis, leave it below threshold - "
-                        "hysteresis; 0 = the paper's single threshold", default=0.0)),
+                        "hysteresis; 0 = the paper's single threshold", default=0.0),
+            nonnegative("adaptive_memory", "s", "beyond the paper (A10): time constant of the "
+                        "memory of the peak |a_y,f| the road has carried; the threshold rises to "
+                        "adaptive_fraction times that peak, at most adaptive_max; 0 = off "
+                        "(the paper's fixed threshold)", default=0.0),
+            fraction("adaptive_fraction", "share of the remembered peak |a_y,f| used as the "
+                     "threshold (adaptive_memory > 0 only)", default=0.8),
+            positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
+                     "(adaptive_memory > 0 only)", default=2.5)),
     rules=(*LOW_SPEED_RULES, Rule("hysteresis", _hysteresis_below_threshold)))
 FUSION = EstimatorSchema(
     fields=(*KF_FIELDS, *SEED000_FIELDS,
@@ -255,8 +265,26 @@ FUSION = EstimatorSchema(
                      "integrator towards the KF")),
     rules=LOW_SPEED_RULES)
 
+ARX_DUAL_KF = EstimatorSchema(
+    fields=(
+        choice("exogenous", ("mz", "mz_delta"), "ARX inputs: the patent's direct yaw moment, or "
+               "also the steer angle (E2)"),
+        positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
+        positive("model_noise", "(rad/s)^2", "Q: variance of the ARX model error e_n per step"),
+        positive("ar_drift", "-", "Q_theta of a1 and a2 per step"),
+        positive("input_drift", "-", "Q_theta of an input parameter = (input_drift b)^2 per step"),
+        positive("ar_initial_variance", "-", "P_theta,0 of a1 and a2"),
+        positive("input_initial_factor", "-", "P_theta,0 of an input parameter = (factor b)^2"),
+        fraction("stability_radius", "largest root radius of z^2 - a1 z - a2 (E5)"),
+        positive("excitation_floor", "-", "skip the parameter update when phi' P phi is below"),
+        *LOW_SPEED_FIELDS,
+    ),
+    rules=LOW_SPEED_RULES)
+"""Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
+
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
     "switching": SWITCHING,
     "fusion": FUSION,
+    "arx_dual_kf": ARX_DUAL_KF,
 }

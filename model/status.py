@@ -10,5 +10,7 @@ REFERENCE_SUSPECT = 4
 """A reliability check rejected its measurement for longer than its time-out and accepted it
 again: the reference (e.g. the steady-state yaw rate) is suspect."""
 
+PARAMETERS_PROJECTED = 8
+"""Identified model parameters left the stable set and were projected back onto it."""
 STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT,
-               "REFERENCE_SUSPECT": REFERENCE_SUSPECT}
+               "REFERENCE_SUSPECT": REFERENCE_SUSPECT, "PARAMETERS_PROJECTED": PARAMETERS_PROJECTED}

@@ -118,25 +118,57 @@ def test_roll_compensation_recovers_the_cg_acceleration(config, estimator, compi
             assert ay_b > truth * 1.05  # about 8 % high: g sin(phi) on top of a_y
 
 
-def with_hysteresis(vehicle_text, value):
+def switching_signal(est, states):
+    """|a_y,f| of every step k: the median of this step's a_y,b (ay_b_1 after the step) and the
+    buffer before it (states[k] is the state before step k)."""
+    history = [est.states.index(f"ay_b_hist_{i}") for i in range(1, 5)]
+    window = np.column_stack([states[1:, est.states.index("ay_b_1")], states[:-1, history]])
+    return np.abs(np.median(window, axis=1))
+
+
+def with_option(vehicle_text, key, value):
     from model.params import parse_vehicle
 
-    text = vehicle_text.replace("hysteresis = 0.0 ", f"hysteresis = {value} ")
-    config = parse_vehicle(text, "hysteresis.toml", "c_class")
-    assert config.settings("switching")["hysteresis"] == value
+    text = vehicle_text.replace(f"{key} = 0.0 ", f"{key} = {value} ")
+    config = parse_vehicle(text, f"{key}.toml", "c_class")
+    assert config.settings("switching")[key] == value
     return config
 
 
+def with_hysteresis(vehicle_text, value):
+    return with_option(vehicle_text, "hysteresis", value)
+
+
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
-def test_hysteresis_option_is_equivalent_to_the_reference(vehicle_text, params):
-    """A7 beyond the paper: the C with hysteresis matches the reference step by step and in the
-    mode sequence, on the HIL-like scenario and the continuous DLC."""
+@pytest.mark.parametrize("key, value", [("hysteresis", 0.2), ("adaptive_memory", 5.0)])
+def test_beyond_the_paper_options_are_equivalent_to_the_reference(vehicle_text, params, key, value):
+    """A7/A10 beyond the paper: the C with hysteresis or the adaptive threshold matches the
+    reference step by step and in the mode sequence, on the HIL-like scenario and the continuous
+    DLC."""
     from harness.verify import verify_estimator
 
-    config = with_hysteresis(vehicle_text, 0.2)
+    config = with_option(vehicle_text, key, value)
     cases = (Case.of("hil_sine", duration=20.0), Case.of("continuous_dlc"))
     for result in verify_estimator(config, "switching", cases, params=params):
         assert result.ok, result
+
+
+def test_adaptive_threshold_follows_the_remembered_peak(vehicle_text):
+    """M_k = max(|a_y,f|, M_k-1 exp(-T/tau)); the mode switches at max(a_yT, min(0.8 M, 2.5))."""
+    config = with_option(vehicle_text, "adaptive_memory", 5.0)
+    est = build("switching", config)
+    log = Case.of("hil_sine", mu=0.85).simulate(config, 100.0)
+    outputs, states = load_estimator(est, render(config, "switching")).run(
+        log.matrix(est.inputs.names))
+    ay_f = switching_signal(est, states)
+    peak = states[1:, est.states.index("ay_peak")]
+    decay = np.exp(-T / 5.0)
+    expected = np.maximum(ay_f[1:], peak[:-1] * decay)
+    assert np.allclose(peak[1:], expected, rtol=1e-12, atol=1e-15)
+    threshold = np.maximum(1.5, np.minimum(0.8 * peak, 2.5))
+    mode = outputs[:len(ay_f), 3].astype(int)
+    assert np.array_equal(mode[1:], (ay_f[1:] > threshold[1:]).astype(int))
+    assert threshold.max() == 2.5 and np.mean(threshold > 1.5) > 0.3  # the threshold did adapt
 
 
 def test_hysteresis_enters_above_and_leaves_below_the_band(vehicle_text):
@@ -147,8 +179,7 @@ def test_hysteresis_enters_above_and_leaves_below_the_band(vehicle_text):
     outputs, states = load_estimator(est, render(config, "switching")).run(
         log.matrix(est.inputs.names))
     mode = outputs[:, 3].astype(int)
-    history = [est.states.index("ay_b_1")] + [est.states.index(f"ay_b_hist_{i}") for i in range(1, 5)]
-    ay_f = np.abs(np.median(states[1:, history], axis=1))   # the median this step switched on
+    ay_f = switching_signal(est, states)
     threshold = config.settings("switching")["threshold"]
     entered = [k for k in range(1, len(mode)) if mode[k - 1] == DYN and mode[k] == KIN]
     left = [k for k in range(1, len(mode)) if mode[k - 1] == KIN and mode[k] == DYN]

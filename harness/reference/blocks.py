@@ -12,7 +12,8 @@ import scipy.linalg
 
 LOW_SPEED = 1
 INVALID_INPUT = 2
-LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max"}
+LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
+            "mz": "mz_max"}
 
 
 def bicycle(vehicle: Mapping[str, float], vx: float):

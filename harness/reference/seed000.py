@@ -28,12 +28,18 @@ def median_length(config, table) -> int:
     return 2 * round(config.settings(table)["median_span"] / config.sample_time / 2) + 1
 
 
+def adaptive(config, table) -> bool:
+    """The switching table's adaptive threshold is on (adaptive_memory > 0)."""
+    return config.settings(table).get("adaptive_memory", 0.0) > 0.0
+
+
 def state_names(config, table) -> tuple[str, ...]:
     n = median_length(config, table)
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
-            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding")
+            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding",
+            *(("ay_peak",) if adaptive(config, table) else ()))
 
 
 def prefilter(config, table):
@@ -81,7 +87,8 @@ def init(config, table, u0):
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding,
+                     *([0.0] if adaptive(config, table) else [])])
 
 
 def held(config, table, x, inputs, ok):

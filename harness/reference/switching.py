@@ -4,6 +4,8 @@ written from the spec: threshold switch on the median-filtered a_y, hand-off bot
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from harness.reference import seed000
@@ -28,9 +30,15 @@ def step(config, state, u):
         return held
     updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
     status += REFERENCE_SUSPECT if suspect else 0
+    threshold = s["threshold"]
+    new = {**x, **updates}
+    if seed000.adaptive(config, TABLE):                                                # A10 option
+        peak = max(abs(ay_f), x["ay_peak"] * math.exp(-config.sample_time / s["adaptive_memory"]))
+        threshold = max(threshold, min(s["adaptive_fraction"] * peak, s["adaptive_max"]))
+        new["ay_peak"] = peak
     hysteresis = s["hysteresis"] if x["mode"] == KIN else -s["hysteresis"]        # A7 option
-    mode = KIN if abs(ay_f) > s["threshold"] - hysteresis else DYN
-    new = {**x, **updates, "mode": mode}
+    mode = KIN if abs(ay_f) > threshold - hysteresis else DYN
+    new["mode"] = mode
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]
         vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"])    # [E14]

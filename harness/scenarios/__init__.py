@@ -26,7 +26,8 @@ class Scenario:
 _NOISE = {"bias": False}
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("dlc", "ISO 3888-1 double lane change, path-following driver, speed held",
-             manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False, **_NOISE}),
+             manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False, **_NOISE,
+                              "yaw_moment": 0.0}),
     Scenario("continuous_dlc", "seed 000: three DLCs back to back, friction 0.85 -> 0.5 -> 0.35",
              manoeuvres.continuous_dlc,
              {"speed_kmh": 120.0, "mu_sequence": "0.85,0.5,0.35", "switch_times": "9,18",
@@ -36,7 +37,7 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
                                      "duration": 6.0, **_NOISE}),
     Scenario("sine_steer", "seed 003: sinusoidal steering, speed held", manoeuvres.sine_steer,
              {"speed_kmh": 80.0, "mu": 1.0, "amplitude": 0.02, "frequency": 0.5, "duration": 10.0,
-              **_NOISE}),
+              **_NOISE, "yaw_moment": 0.0}),
     Scenario("fishhook", "seed 002: NHTSA-style fishhook", manoeuvres.fishhook,
              {"speed_kmh": 96.0, "mu": 0.8, "amplitude": 0.06, "duration": 7.0, **_NOISE}),
     Scenario("hil_sine", "seed 000 HIL-like: pedal held (vx rising from 12.5 m/s), sine steering "

@@ -7,6 +7,8 @@ Scenario parameters not given by the seeds are marked *assumption* in the docstr
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from harness.logs import Log
@@ -26,14 +28,16 @@ MIN_DLC_DURATION = 10.0
 
 
 def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-        outliers: bool, bias: bool, progress=None) -> Log:
+        outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None) -> Log:
     """ISO 3888-1 double lane change at constant ``speed_kmh`` on friction ``mu``, path-following
-    driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on."""
+    driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on;
+    ``yaw_moment`` (N*m): rear torque-vectoring pulses (:class:`YawMomentPulses`), logged as
+    ``mz``."""
     speed = speed_kmh / 3.6
     course = courses.iso_dlc(LEAD_IN, _width(config))
     duration = max((course.length + RUN_OUT) / speed, MIN_DLC_DURATION)
     return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias,
-                  progress)
+                  progress, YawMomentPulses(yaw_moment))
 
 
 def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
@@ -71,13 +75,15 @@ def step_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: floa
 
 def sine_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
                amplitude: float, frequency: float, duration: float, bias: bool,
-               progress=None) -> Log:
+               yaw_moment: float = 0.0, progress=None) -> Log:
     """Seed 003's sine steer: delta = amplitude sin(2 pi f (t - 1)) after 1 s straight, speed held
-    (amplitude 0.02 rad and 0.5 Hz are *assumptions*: the seed gives none)."""
+    (amplitude 0.02 rad and 0.5 Hz are *assumptions*: the seed gives none); ``yaw_moment`` as in
+    :func:`dlc`."""
     def steer(t: float, state: np.ndarray) -> float:
         return amplitude * np.sin(2 * np.pi * frequency * (t - 1.0)) if t > 1.0 else 0.0
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress,
+                      YawMomentPulses(yaw_moment))
 
 
 def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
@@ -194,29 +200,67 @@ _RUNS: dict[tuple, Run] = {}
 only the sensor noise depends on the seed, so Monte-Carlo runs simulate the plant once."""
 
 
-def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress) -> Log:
-    key = (config.fingerprint(), rate_hz, course, speed, duration, mu)
+@dataclass(frozen=True)
+class YawMomentPulses:
+    """A direct yaw moment (N*m, positive counter-clockwise) from rear torque vectoring: pulses of
+    alternating sign, ``amplitude`` for 0.6 s every 2 s from t = 1.5 s (*assumption*: a
+    torque-vectoring test pattern; no seed gives one). The rear wheels get -+ amplitude R / t_w
+    (left, right) on top of the speed controller's torques, so M_z = t_w / 2 (F_x,rr - F_x,rl)."""
+
+    amplitude: float = 0.0
+    start: float = 1.5
+    period: float = 2.0
+    width: float = 0.6
+
+    def __call__(self, t: float) -> float:
+        if self.amplitude == 0.0 or t < self.start:
+            return 0.0
+        cycles, phase = divmod(t - self.start, self.period)
+        return self.amplitude * (1.0 if cycles % 2 == 0 else -1.0) if phase < self.width else 0.0
+
+    def torques(self, vehicle, speed_control):
+        """Wheel torques (fl, fr, rl, rr) of ``speed_control`` plus the vectoring pair."""
+        if self.amplitude == 0.0:
+            return speed_control
+        scale = vehicle["wheel_radius"] / vehicle["track_width"]
+
+        def torques(t: float, state: np.ndarray) -> np.ndarray:
+            delta = self(t) * scale
+            return speed_control(t, state) + np.array([0.0, 0.0, -delta, delta])
+
+        return torques
+
+
+def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress,
+           yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
+    key = (config.fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment)
     if key not in _RUNS:
         dt = 1.0 / (rate_hz * substeps(rate_hz))
         steer = PathFollower(config.vehicle, course.centre_line, dt)
         hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-        _RUNS[key] = simulate(config, rate_hz, duration, speed, steer, hold, mu, progress=progress)
+        _RUNS[key] = simulate(config, rate_hz, duration, speed, steer,
+                              yaw_moment.torques(config.vehicle, hold), mu, progress=progress)
     run = _RUNS[key]
     hit = course.outside(run.state("X"), run.state("Y"), _width(config))
-    return _log(config, run, seed, outliers, bias, hit)
+    return _log(config, run, seed, outliers, bias, hit, yaw_moment)
 
 
-def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress) -> Log:
+def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress,
+               yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
     dt = 1.0 / (rate_hz * substeps(rate_hz))
     hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-    run = simulate(config, rate_hz, duration, speed, steer, hold, _constant(mu), progress=progress)
-    return _log(config, run, seed, False, bias, np.zeros(len(run.t), dtype=bool))
+    run = simulate(config, rate_hz, duration, speed, steer, yaw_moment.torques(config.vehicle, hold),
+                   _constant(mu), progress=progress)
+    return _log(config, run, seed, False, bias, np.zeros(len(run.t), dtype=bool), yaw_moment)
 
 
 def _log(config: VehicleConfig, run: Run, seed: int, outliers: bool, bias: bool,
-         hit_cone: np.ndarray) -> Log:
+         hit_cone: np.ndarray, yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
+    """The log of ``run``; it has an ``mz`` column (the commanded moment) only when a direct yaw
+    moment was applied (design.md: ``mz`` is optional)."""
     spun = np.maximum.accumulate(np.abs(run.beta) > SPIN_BETA)
-    columns = {"t": run.t, **sensors.measure(config, run, seed, bias, outliers),
+    moment = ({"mz": np.array([yaw_moment(t) for t in run.t])} if yaw_moment.amplitude else {})
+    columns = {"t": run.t, **sensors.measure(config, run, seed, bias, outliers), **moment,
                "beta_ref": run.beta, "vx_ref": run.state("vx"), "vy_ref": run.state("vy"),
                "r_ref": run.state("r"), "mu": run.input("mu"),
                "off_course": (hit_cone | spun).astype(float)}

@@ -6,13 +6,14 @@ from typing import Callable
 
 from model.calibration import Parameters, parameters
 from model.estimator import Estimator
-from model.estimators import fusion, kf2dof, switching
+from model.estimators import arx_dual_kf, fusion, kf2dof, switching
 from model.params import VehicleConfig
 
 BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
     kf2dof.NAME: kf2dof.build,
     switching.NAME: switching.build,
     fusion.NAME: fusion.build,
+    arx_dual_kf.NAME: arx_dual_kf.build,
 }
 
 

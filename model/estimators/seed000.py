@@ -31,7 +31,12 @@ def window(params: Parameters, table: str) -> int:
     return filters.median_window(1.0 / numeric.sample_time, numeric.settings(table)["median_span"])
 
 
-def states(n_median: int) -> Layout:
+def adaptive(settings) -> bool:
+    """Whether a table enables the adaptive switching threshold (switching's adaptive_memory)."""
+    return settings.get("adaptive_memory", 0.0) > 0.0
+
+
+def states(n_median: int, adaptive_threshold: bool = False) -> Layout:
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -51,6 +56,8 @@ def states(n_median: int) -> Layout:
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
         Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+        *((Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)"),)
+          if adaptive_threshold else ()),
     ))
 
 
@@ -91,7 +98,8 @@ class Seed000:
         self.settings = params.config.settings(table)
         self.T = params.config.sample_time
         self.n_median = window(params, table)
-        self.layout = states(self.n_median)
+        self.adaptive = adaptive(params.numeric.settings(table))
+        self.layout = states(self.n_median, self.adaptive)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
@@ -173,6 +181,7 @@ class Seed000:
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0,
             "holding": holding,
+            **({"ay_peak": ca.SX(0)} if self.adaptive else {}),
         })
 
     def notes(self) -> dict[str, str]:

@@ -5,7 +5,8 @@ shared/methods/000-switch-sideslip.md, §2.2-2.10 with the §5 defaults:
 * shared pre-processing (model.estimators.seed000, the ``select`` kernel): prefilter [E6],
   reliability checks of r against r_ref [E7-E10] and of a_y,b against vx r [E11] with
   hold-last-valid and a time-out (A6, status REFERENCE_SUSPECT), median a_y,f [E23];
-  mode = KIN if |a_y,f| > threshold [E24] (optionally with hysteresis, A7);
+  mode = KIN if |a_y,f| > threshold [E24] (options beyond the paper: hysteresis, A7, and a
+  threshold adapted to the lateral acceleration the road has carried, A10);
 * dynamic scheme (KF, kf2dof's ``dynamic_update`` with this table's KF settings), entered from KIN
   with x = [vy_kin, r_k-1], P = P_0 [E26]; z = [a_y,m raw, r_k] (A3);
 * kinematic scheme: vy_kin += T (a_y,k-1 - r_k-1 vx_k-1) [E14], entered from DYN with
@@ -45,10 +46,22 @@ SCRATCH = Layout((
 ))
 
 
-def switching_threshold(seed: Seed000, mode_prev):
-    """a_yT [E24]; with ``hysteresis`` h > 0 (A7, beyond the paper): a_yT + h to enter the
-    kinematic scheme, a_yT - h to leave it."""
-    threshold, h = seed.settings["threshold"], seed.settings["hysteresis"]
+def remembered_peak(seed: Seed000, ay_filtered, previous_peak):
+    """M_k = max(|a_y,f|, M_k-1 exp(-T / adaptive_memory)): the largest lateral acceleration the
+    road has recently carried (a lower bound of mu g)."""
+    decay = ca.exp(-seed.T / seed.settings["adaptive_memory"])
+    return ca.fmax(ca.fabs(ay_filtered), previous_peak * decay)
+
+
+def switching_threshold(seed: Seed000, mode_prev, peak=None):
+    """a_yT [E24]. Beyond the paper, both off by default: with ``hysteresis`` h > 0 (A7), a_yT + h
+    to enter the kinematic scheme and a_yT - h to leave it; with the adaptive threshold (A10),
+    a_yT is raised to min(adaptive_fraction M_k, adaptive_max) when that is larger."""
+    settings = seed.settings
+    threshold, h = settings["threshold"], settings["hysteresis"]
+    if peak is not None:
+        threshold = ca.fmax(threshold, ca.fmin(settings["adaptive_fraction"] * peak,
+                                               settings["adaptive_max"]))
     if isinstance(h, float) and h == 0.0:
         return threshold
     return threshold + ca.if_else(mode_prev == KIN, -h, h)
@@ -64,8 +77,14 @@ def build(params: Parameters) -> Estimator:
     inputs, u = INPUTS.symbols("input")
     pre = seed.preprocess(s, u)
     active = pre.guard.active
-    mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, s["mode"]), KIN, DYN)
-    mid = {**s, **pre.updates, "mode": ca.if_else(active, mode, DYN)}
+    adaptive = {}
+    peak = None
+    if seed.adaptive:
+        peak = remembered_peak(seed, pre.ay_filtered, s["ay_peak"])
+        adaptive = {"ay_peak": ca.if_else(active, peak, s["ay_peak"])}
+    mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, s["mode"], peak),
+                      KIN, DYN)
+    mid = {**s, **pre.updates, **adaptive, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
                             "mode_prev": s["mode"], "status": pre.status})

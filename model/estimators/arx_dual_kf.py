@@ -1,0 +1,214 @@
+"""arx_dual_kf: yaw rate from an ARX model with a dual Kalman filter (seed 004, a patent).
+
+shared/methods/004-arx-dual-kf-yaw-rate.md, §2 with the §3/§5 defaults:
+
+* ARX(2) model x_n = a1 x_n-1 + a2 x_n-2 + b1 u_n-1 (+ b_delta delta_n-1 with
+  ``exogenous = "mz_delta"``, E2), u = the direct yaw moment ``mz`` (N*m) [A2];
+* KF1 on s = [x_n, x_n-1] in companion form (E3 default): predict with theta_n-1 and the inputs
+  of n-1, update with the gyro (h = [1 0]) [B1-B6]; its first gain entry K1 is an output;
+* KF2 on theta (random walk): measurement = KF1's output x_n, regressor
+  phi = [x_n-1, x_n-2, u_n-1 (, delta_n-1)] from KF1 outputs (E4 default), R_theta = K1^2 R
+  [C1-C6]; skipped (covariance still predicted) when the gyro sample is implausible, the speed is
+  low, or phi' P phi < excitation_floor (E5);
+* E5 projection: when the roots of z^2 - a1 z - a2 lie outside ``stability_radius``, a1 and a2
+  are rescaled onto it (status PARAMETERS_PROJECTED).
+
+Both filters use the Joseph form of the shared model.kalman update. Invalid inputs (design.md):
+an implausible gyro sample skips both updates (prediction only); an implausible ``mz`` (or
+delta) counts as 0 for this sample; status INVALID_INPUT. The ``mz`` column is optional in a log:
+the harness feeds 0 when it is absent, and the filter then is an adaptive AR(2) smoother of the
+gyro (E2; ``exogenous = "mz_delta"`` explains steer-induced yaw as well).
+
+Priors (§2.5) at the first sample's speed vx_0 (clamped to [vx_min, vx_max]): Phi, Gamma = ZOH of
+the bicycle model's A(vx_0) and [B_delta, B_M], B_M = [0, 1/I_z]; a1 = tr Phi, a2 = -det Phi,
+b1 = Gamma_M(2), b_delta = Gamma_delta(2). The noise scales of the input parameters use their
+first-order values b1 ~ T/I_z and b_delta ~ T a C_f/I_z (generation-time constants).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model import discretize, kalman, status
+from model.bicycle import bicycle_matrices
+from model.calibration import Parameters
+from model.estimator import Estimator, make_functions
+from model.estimators.kf2dof import zoh_plan
+from model.guard import first_sample, hold, input_guard
+from model.layout import Layout, Signal
+
+NAME = "arx_dual_kf"
+
+INPUTS = Layout((
+    Signal("delta", "rad", "front road-wheel steer angle, positive left (exogenous = mz_delta)"),
+    Signal("vx", "m/s", "longitudinal speed (low-speed rule, priors)"),
+    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
+    Signal("mz", "N*m", "direct yaw moment, positive counter-clockwise (0 when not logged)"),
+))
+HISTORY = ("x_1", "x_2")
+"""KF1 state: the yaw-rate outputs x_n-1 and x_n-2 before a step (x_n and x_n-1 after it)."""
+
+
+def regressors(settings) -> tuple[str, ...]:
+    """Names of the ARX parameters, in regressor order."""
+    return ("a1", "a2", "b_mz", *(("b_delta",) if settings["exogenous"] == "mz_delta" else ()))
+
+
+def layouts(settings) -> tuple[Layout, Layout]:
+    """(states, outputs) for the configured exogenous inputs."""
+    theta = regressors(settings)
+    states = Layout((
+        Signal("x_1", "rad/s", "yaw-rate output one sample back"),
+        Signal("x_2", "rad/s", "yaw-rate output two samples back"),
+        *(Signal(n, "(rad/s)^2", "KF1 covariance entry (upper triangle)")
+          for n in kalman.packed_names("P", HISTORY)),
+        *(Signal(n, "-", f"ARX parameter {n}") for n in theta),
+        *(Signal(n, "-", "KF2 covariance entry (upper triangle)")
+          for n in kalman.packed_names("Pt", theta)),
+        Signal("mz_prev", "N*m", "yaw moment of the previous sample (0 if it was implausible)"),
+        *((Signal("delta_prev", "rad", "steer angle of the previous sample"),)
+          if "b_delta" in theta else ()),
+        Signal("holding", "-", "1 while the speed is low (parameter updates skipped), else 0"),
+    ))
+    outputs = Layout((
+        Signal("r", "rad/s", "filtered yaw rate x_n"),
+        *(Signal(n, "-", f"ARX parameter {n}") for n in theta),
+        Signal("gain", "-", "KF1 gain K1 of this sample"),
+        Signal("status", "-", "status bits (model.status)", integer=True),
+    ))
+    return states, outputs
+
+
+def prior(params: Parameters, vx) -> ca.SX:
+    """theta_0 = [tr Phi, -det Phi, Gamma_M(2) (, Gamma_delta(2))] of the bicycle model at ``vx``."""
+    config = params.config
+    vehicle = config.vehicle
+    A, B_delta, _, _ = bicycle_matrices(vehicle, vx)
+    B = ca.horzcat(B_delta, ca.vertcat(0, 1.0 / vehicle["yaw_inertia"]))
+    Phi, Gamma = discretize.discretise("zoh", A, B, config.sample_time, zoh_plan(params, NAME))
+    theta = [Phi[0, 0] + Phi[1, 1], -(Phi[0, 0] * Phi[1, 1] - Phi[0, 1] * Phi[1, 0]), Gamma[1, 1]]
+    if config.settings(NAME)["exogenous"] == "mz_delta":
+        theta.append(Gamma[1, 0])
+    return ca.vertcat(*theta)
+
+
+def input_scales(params: Parameters) -> list:
+    """First-order sizes of b_mz (T/I_z) and b_delta (T a C_f / I_z) for the noise scales."""
+    vehicle, T = params.config.vehicle, params.config.sample_time
+    scales = [T / vehicle["yaw_inertia"]]
+    if params.config.settings(NAME)["exogenous"] == "mz_delta":
+        scales.append(T * vehicle["cg_to_front_axle"] * vehicle["cornering_stiffness_front"]
+                      / vehicle["yaw_inertia"])
+    return scales
+
+
+def parameter_covariances(params: Parameters) -> tuple[ca.SX, ca.SX]:
+    """(P_theta,0, Q_theta): diagonal; AR entries ar_initial_variance and ar_drift, input entries
+    (input_initial_factor b)^2 and (input_drift b)^2."""
+    settings = params.config.settings(NAME)
+    scales = input_scales(params)
+    P0 = [settings["ar_initial_variance"]] * 2 + [(settings["input_initial_factor"] * b) ** 2
+                                                  for b in scales]
+    Q = [settings["ar_drift"]] * 2 + [(settings["input_drift"] * b) ** 2 for b in scales]
+    return ca.diag(ca.vertcat(*P0)), ca.diag(ca.vertcat(*Q))
+
+
+def project_stable(a1, a2, radius):
+    """E5: (a1, a2, projected) with the roots of z^2 - a1 z - a2 scaled into |z| <= radius."""
+    discriminant = a1 * a1 + 4 * a2
+    rho = ca.if_else(discriminant >= 0, (ca.fabs(a1) + ca.sqrt(ca.fmax(discriminant, 0))) / 2,
+                     ca.sqrt(ca.fmax(-a2, 0)))
+    projected = rho > radius
+    scale = ca.if_else(projected, radius / rho, 1)
+    return a1 * scale, a2 * scale * scale, projected
+
+
+def build(params: Parameters) -> Estimator:
+    """The arx_dual_kf estimator ([vehicle], [inputs], [estimator.arx_dual_kf])."""
+    config = params.config
+    settings = config.settings(NAME)
+    states, outputs = layouts(params.numeric.settings(NAME))
+    theta_names = regressors(params.numeric.settings(NAME))
+    n = len(theta_names)
+    R, Q = settings["measurement_noise"], settings["model_noise"]
+    P_theta0, Q_theta = parameter_covariances(params)
+    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
+
+    state, s = states.symbols("state")
+    inputs, u = INPUTS.symbols("input")
+    guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
+    ok = guard.plausible
+    gyro_ok = ok["r"]
+    adapting = ca.logic_and(gyro_ok, ca.logic_and(ok["vx"], ca.logic_not(guard.low_speed)))
+
+    # ---- KF1: companion-form prediction with theta_n-1, update with the gyro -------------------
+    theta = ca.vertcat(*[s[name] for name in theta_names])
+    previous_inputs = [s["mz_prev"], *([s["delta_prev"]] if n == 4 else [])]
+    phi = ca.vertcat(s["x_1"], s["x_2"], *previous_inputs)
+    companion = ca.blockcat([[theta[0], theta[1]], [1, 0]])
+    Gamma = ca.vertcat(ca.horzcat(*[theta[i] for i in range(2, n)]), ca.SX.zeros(1, n - 2))
+    P = kalman.unpack_symmetric(ca.vertcat(*[s[k] for k in kalman.packed_names("P", HISTORY)]), 2)
+    s_pred, P_pred = kalman.predict(ca.vertcat(s["x_1"], s["x_2"]), P, companion, Gamma,
+                                    ca.vertcat(*previous_inputs), ca.diag(ca.vertcat(Q, 0)))
+    h = ca.horzcat(1, 0)
+    s_upd, P_upd, _ = kalman.update_joseph(s_pred, P_pred, hold(u["r"], gyro_ok, 0), h,
+                                           ca.SX.zeros(1, 1), ca.SX(0), R)
+    gain = ca.if_else(gyro_ok, P_pred[0, 0] / (P_pred[0, 0] + R), 0)
+    s_next = ca.if_else(gyro_ok, s_upd, s_pred)
+    P_next = ca.if_else(gyro_ok, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_pred))
+    x_n = s_next[0]
+
+    # ---- KF2: random-walk parameters, KF1's output as measurement --------------------------------
+    P_theta = kalman.unpack_symmetric(
+        ca.vertcat(*[s[k] for k in kalman.packed_names("Pt", theta_names)]), n) + Q_theta
+    excited = ca.mtimes([phi.T, P_theta, phi]) >= settings["excitation_floor"]
+    identify = ca.logic_and(adapting, excited)
+    theta_upd, P_theta_upd, _ = kalman.update_joseph(theta, P_theta, x_n, phi.T, ca.SX.zeros(1, 1),
+                                                     ca.SX(0), gain * gain * R)
+    theta_next = ca.if_else(identify, theta_upd, theta)
+    P_theta_next = ca.if_else(identify, kalman.pack_symmetric(P_theta_upd),
+                              kalman.pack_symmetric(P_theta))
+    a1, a2, projected = project_stable(theta_next[0], theta_next[1], settings["stability_radius"])
+    theta_out = ca.vertcat(a1, a2, theta_next[2:])
+
+    mz = hold(u["mz"], ok["mz"], 0)
+    next_state = states.pack({
+        "x_1": x_n, "x_2": s_next[1],
+        **{k: P_next[i] for i, k in enumerate(kalman.packed_names("P", HISTORY))},
+        **{k: theta_out[i] for i, k in enumerate(theta_names)},
+        **{k: P_theta_next[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
+        "mz_prev": mz,
+        **({"delta_prev": hold(u["delta"], ok["delta"], 0)} if n == 4 else {}),
+        "holding": ca.if_else(guard.low_speed, 1, 0),
+    })
+    code = guard.status + ca.if_else(projected, status.PARAMETERS_PROJECTED, 0)
+    output = outputs.pack({"r": x_n, **{k: theta_out[i] for i, k in enumerate(theta_names)},
+                           "gain": gain, "status": code})
+
+    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
+    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
+    theta0 = prior(params, vx0)
+    P0 = kalman.pack_symmetric(ca.SX.eye(2) * R)
+    P_theta0_packed = kalman.pack_symmetric(P_theta0)
+    init_state = states.pack({
+        "x_1": first["r"], "x_2": first["r"],
+        **{k: P0[i] for i, k in enumerate(kalman.packed_names("P", HISTORY))},
+        **{k: theta0[i] for i, k in enumerate(theta_names)},
+        **{k: P_theta0_packed[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
+        "mz_prev": first["mz"],
+        **({"delta_prev": first["delta"]} if n == 4 else {}),
+        "holding": holding,
+    })
+    init, step = make_functions(NAME, INPUTS, states, outputs, inputs, state, init_state,
+                                next_state, output, params)
+    return Estimator(NAME, "yaw rate from an ARX model with a dual Kalman filter (seed 004)",
+                     INPUTS, states, outputs, init, step, params,
+                     notes(params))
+
+
+def notes(params: Parameters) -> dict[str, str]:
+    """Notes for the generated files: inputs and the prior's ZOH series."""
+    plan = zoh_plan(params, NAME)
+    return {"exogenous": params.numeric.settings(NAME)["exogenous"],
+            "prior_zoh_series": f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
+                                f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e}"}
