@@ -114,14 +114,15 @@ def step(config, state, u):
     # KF2 [C1]-[C6] with the E5 skips
     P_theta = _unpacked([x[k] for k in _upper("Pt", theta_names)], n) + np.diag(
         [s["ar_drift"]] * 2 + [(s["input_drift"] * b) ** 2 for b in _input_scales(config)])
-    if ok["r"] and ok["vx"] and not low and phi @ P_theta @ phi >= s["excitation_floor"]:
+    updated = ok["r"] and ok["vx"] and not low and phi @ P_theta @ phi >= s["excitation_floor"]
+    if updated:
         theta, P_theta = blocks.kf_update(theta, P_theta, np.array([x_n]), phi[None, :],
                                           np.zeros((1, 1)), np.zeros(1),
                                           np.array([[gain * gain * R]]))
     a1, a2 = theta[0], theta[1]
     discriminant = a1 * a1 + 4 * a2
     rho = (abs(a1) + math.sqrt(discriminant)) / 2 if discriminant >= 0 else math.sqrt(max(-a2, 0.0))
-    if rho > s["stability_radius"]:                                                      # E5
+    if updated and rho > s["stability_radius"]:                               # E5, after (C6)
         scale = s["stability_radius"] / rho
         theta = np.array([a1 * scale, a2 * scale * scale, *theta[2:]])
         status |= PARAMETERS_PROJECTED

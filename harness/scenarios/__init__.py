@@ -121,6 +121,8 @@ VERIFICATION_SET: tuple[Case, ...] = (
     Case.of("fishhook"),
     Case.of("dlc", speed_kmh=120.0, mu=0.5),
     Case.of("hil_sine", mu=0.85),
+    Case.of("dlc", speed_kmh=80.0, yaw_moment=1000.0),
+    Case.of("sine_steer", yaw_moment=1000.0),
     Case.of("low_speed"),
     Case.of("invalid_inputs"),
 )

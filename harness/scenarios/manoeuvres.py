@@ -161,7 +161,7 @@ def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -
 def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
     """The 80 km/h DLC with bad samples: NaN, +-Inf and out-of-range values in every input, alone
     and in runs, so every hold/resume path is taken."""
-    log = dlc(config, rate_hz, seed, 80.0, 1.0, False, False, progress)
+    log = dlc(config, rate_hz, seed, 80.0, 1.0, False, False, progress=progress)
     n = len(log)
     faults = (
         ("ay", 0.30, 1, np.nan), ("r", 0.50, 1, np.inf), ("delta", 0.70, 1, -np.inf),

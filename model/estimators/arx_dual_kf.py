@@ -10,8 +10,8 @@ shared/methods/004-arx-dual-kf-yaw-rate.md, §2 with the §3/§5 defaults:
   phi = [x_n-1, x_n-2, u_n-1 (, delta_n-1)] from KF1 outputs (E4 default), R_theta = K1^2 R
   [C1-C6]; skipped (covariance still predicted) when the gyro sample is implausible, the speed is
   low, or phi' P phi < excitation_floor (E5);
-* E5 projection: when the roots of z^2 - a1 z - a2 lie outside ``stability_radius``, a1 and a2
-  are rescaled onto it (status PARAMETERS_PROJECTED).
+* E5 projection: when a parameter update moves the roots of z^2 - a1 z - a2 outside
+  ``stability_radius``, a1 and a2 are rescaled onto it (status PARAMETERS_PROJECTED).
 
 Both filters use the Joseph form of the shared model.kalman update. Invalid inputs (design.md):
 an implausible gyro sample skips both updates (prediction only); an implausible ``mz`` (or
@@ -113,12 +113,14 @@ def parameter_covariances(params: Parameters) -> tuple[ca.SX, ca.SX]:
     return ca.diag(ca.vertcat(*P0)), ca.diag(ca.vertcat(*Q))
 
 
-def project_stable(a1, a2, radius):
-    """E5: (a1, a2, projected) with the roots of z^2 - a1 z - a2 scaled into |z| <= radius."""
+def project_stable(a1, a2, radius, updated):
+    """E5: (a1, a2, projected) with the roots of z^2 - a1 z - a2 scaled into |z| <= radius, after
+    an ``updated`` parameter step only (unchanged parameters were projected when they changed;
+    testing them again would flicker on the boundary in rounding)."""
     discriminant = a1 * a1 + 4 * a2
     rho = ca.if_else(discriminant >= 0, (ca.fabs(a1) + ca.sqrt(ca.fmax(discriminant, 0))) / 2,
                      ca.sqrt(ca.fmax(-a2, 0)))
-    projected = rho > radius
+    projected = ca.logic_and(updated, rho > radius)
     scale = ca.if_else(projected, radius / rho, 1)
     return a1 * scale, a2 * scale * scale, projected
 
@@ -168,7 +170,8 @@ def build(params: Parameters) -> Estimator:
     theta_next = ca.if_else(identify, theta_upd, theta)
     P_theta_next = ca.if_else(identify, kalman.pack_symmetric(P_theta_upd),
                               kalman.pack_symmetric(P_theta))
-    a1, a2, projected = project_stable(theta_next[0], theta_next[1], settings["stability_radius"])
+    a1, a2, projected = project_stable(theta_next[0], theta_next[1], settings["stability_radius"],
+                                       identify)
     theta_out = ca.vertcat(a1, a2, theta_next[2:])
 
     mz = hold(u["mz"], ok["mz"], 0)

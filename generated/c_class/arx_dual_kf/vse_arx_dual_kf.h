@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 34561ab0933c698f5b97cb7354293dc9d07f7cf4f81ed8181d0cf6be61709706
- * Operations: step 399, init 384 (CasADi SX instructions).
+ * Operations: step 400, init 384 (CasADi SX instructions).
  * exogenous: mz
  * prior_zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17
  */
