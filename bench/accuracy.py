@@ -17,7 +17,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import track
 
-from bench import table3
+from bench import table3, yaw_rate
 from harness.paths import DEFAULT_VEHICLE, REPO
 from harness.plot import plot
 from harness.run import run_estimator
@@ -106,6 +106,12 @@ def main(argv: list[str] | None = None) -> None:
         "",
         *table3.beyond_paper_table(args.vehicle.read_text(), str(args.vehicle), config.name,
                                    args.beyond_seeds),
+        "## Seed 004: yaw rate of the ARX dual Kalman filter",
+        "",
+        *yaw_rate.table(args.vehicle.read_text(), str(args.vehicle), config.name, args.beyond_seeds),
+        yaw_rate.parameter_plot(args.vehicle.read_text(), str(args.vehicle), config.name,
+                                REPO / "docs" / "figures" / "arx_parameters.png"),
+        "",
         "## Plots (seed 1)",
         "",
         *figures,

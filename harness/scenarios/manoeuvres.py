@@ -42,7 +42,7 @@ def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: 
 
 def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
                    mu_sequence: str, switch_times: str, switch_by: str, duration: float,
-                   outliers: bool, bias: bool, progress=None) -> Log:
+                   outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None) -> Log:
     """Seed 000 scenario B: three double lane changes back to back at constant speed, the road
     friction stepping through ``mu_sequence`` (comma-separated) at ``switch_times`` (s, or m of
     travelled distance when ``switch_by`` is "distance"); one DLC per friction segment.
@@ -50,6 +50,7 @@ def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: 
     The seed gives no geometry: each DLC has the ISO offset (3.5 m) and lane widths, and a
     transition length chosen so that its centre line asks for 70 % of the friction then
     available, L = pi v sqrt(offset / (2 * 0.7 mu g)), as a skilled driver would (*assumption*).
+    ``yaw_moment`` as in :func:`dlc`.
     """
     speed = speed_kmh / 3.6
     profile = FrictionProfile(_numbers("mu_sequence", mu_sequence),
@@ -60,7 +61,8 @@ def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: 
                    for m in profile.values]
     course = courses.lane_changes([x + LEAD_IN for x in segment_starts], transitions, 25.0,
                                   _width(config))
-    return _drive(config, rate_hz, seed, course, speed, duration, profile, outliers, bias, progress)
+    return _drive(config, rate_hz, seed, course, speed, duration, profile, outliers, bias, progress,
+                  YawMomentPulses(yaw_moment))
 
 
 def step_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
