@@ -24,6 +24,7 @@ from harness.run import run_estimator
 from harness.scenarios import Case
 from harness.score import score
 from harness.vehicles import load_vehicle
+from model.estimators import build
 
 SCORING_SET: tuple[Case, ...] = (
     *(Case.of("dlc", speed_kmh=v, mu=mu) for v in (80.0, 120.0) for mu in (1.0, 0.85, 0.5, 0.35)),
@@ -67,7 +68,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=REPO / "docs" / "accuracy.md")
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
-    names = list(config.estimators)
+    names = [n for n in config.estimators if "beta" in build(n, config).outputs.names]  # sideslip
     rows = ["| scenario | stayed in cones | spun | estimator | β max (°) | β mean (°) | β RMSE (°) "
             "| v_y RMSE (m/s) | r RMSE (°/s) |", "|---|---|---|---|---|---|---|---|---|"]
     figures = [_figure(config, FIG8[1], list(FIG8[2]), FIG8[0])]

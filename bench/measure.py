@@ -69,7 +69,7 @@ def generated_driver(estimator: Estimator, files: dict[str, str], real: str) -> 
         "init": "        {\n            const double *u = inputs;\n" + set_inputs +
                 f"\n            {p}_init(&state, &in);\n        }}",
         "step": set_inputs + f"\n            {p}_step(&state, &in, &out);\n"
-                             "            checksum += (double)out.beta;",
+                             f"            checksum += (double)out.{estimator.outputs.signals[0].name};",
     }
     sources = {n: files[n] for n in library_sources(files)}
     headers = {n: t for n, t in files.items() if n.endswith(".h")}

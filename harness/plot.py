@@ -11,20 +11,31 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from harness.logs import Log  # noqa: E402
+from harness.logs import Log, LogError  # noqa: E402
 
 DYNAMIC = 0
 
 
+SIGNALS = (("beta", "beta_ref", "sideslip angle β (deg)", "|Δβ| (deg)"),
+           ("r", "r_ref", "yaw rate r (deg/s)", "|Δr| (deg/s)"))
+"""What is plotted: the first signal every estimate has (estimate, truth, axis labels)."""
+
+
 def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> None:
-    """Write a PNG with beta (deg) over time and the absolute error (deg) of each estimate."""
+    """Write a PNG with beta (deg) over time and the absolute error (deg) of each estimate (the
+    yaw rate in deg/s when an estimate has no beta, e.g. a yaw-rate estimator)."""
+    common = [s for s in SIGNALS if all(s[0] in est for est in estimates.values()) and s[1] in log]
+    if not common:
+        raise LogError(f"{next(iter(estimates.values())).source}:1: no column to plot: expected "
+                       "'beta' or 'r' in every estimate and its truth in the log")
+    name, truth, label_value, label_error = common[0]
     t = log["t"]
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5.5),
                                       gridspec_kw={"height_ratios": [3, 2]})
-    top.plot(t, np.rad2deg(log["beta_ref"]), color="black", lw=1.6, label="reference (truth)")
+    top.plot(t, np.rad2deg(log[truth]), color="black", lw=1.6, label="reference (truth)")
     for label, est in estimates.items():
-        line, = top.plot(t, np.rad2deg(est["beta"]), lw=1.0, label=label)
-        error = np.abs(np.rad2deg(est["beta"] - log["beta_ref"]))
+        line, = top.plot(t, np.rad2deg(est[name]), lw=1.0, label=label)
+        error = np.abs(np.rad2deg(est[name] - log[truth]))
         bottom.plot(t, error, lw=1.0, color=line.get_color(), label=label)
     for est in estimates.values():
         if "mode" in est:
@@ -37,8 +48,8 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
         for axis in (top, bottom):
             axis.axvline(first, color="red", ls=":", lw=1)
         top.text(first, top.get_ylim()[1], " off course / cone", color="red", va="top", fontsize=8)
-    top.set_ylabel("sideslip angle β (deg)")
-    bottom.set_ylabel("|Δβ| (deg)")
+    top.set_ylabel(label_value)
+    bottom.set_ylabel(label_error)
     bottom.set_xlabel("time (s)")
     top.legend(loc="upper right", fontsize=8)
     top.grid(alpha=0.3)

@@ -110,3 +110,20 @@ def test_score_rejects_mismatched_files(tmp_path):
     assert vsegen("run", "--log", str(b), "--estimator", "kf2dof", "--out", str(est)).returncode == 0
     result = vsegen("score", "--log", str(a), "--est", str(est))
     assert result.returncode == 2 and "expected the same time stamps" in result.stderr
+
+
+def test_yaw_rate_estimator_from_a_yaw_moment_log_is_scored_and_plotted(tmp_path):
+    """arx_dual_kf estimates r only: score and plot use the yaw rate; a log with mz feeds it."""
+    log, est, fig, bad = (tmp_path / n for n in ("log.csv", "arx.csv", "arx.png", "bad.csv"))
+    assert vsegen("simulate", "sine_steer", "--set", "yaw_moment=1000", "--out", str(log)).returncode == 0
+    assert "mz" in log.read_text().splitlines()[0].split(",")
+    result = vsegen("run", "--log", str(log), "--estimator", "arx_dual_kf", "--out", str(est))
+    assert result.returncode == 0, result.stderr
+    result = vsegen("score", "--log", str(log), "--est", str(est))
+    assert result.returncode == 0 and "r (deg/s)" in result.stdout and "beta" not in result.stdout
+    result = vsegen("plot", "--log", str(log), "--est", str(est), "--out", str(fig))
+    assert result.returncode == 0, result.stderr
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad.write_text("t,x\n0,1\n0.01,2\n")
+    result = vsegen("score", "--log", str(log), "--est", str(bad))
+    assert result.returncode == 2 and "no estimated signal: expected a column beta, vy or r" in result.stderr
