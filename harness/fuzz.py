@@ -21,7 +21,7 @@ from model.guard import LIMIT_KEYS
 from model.params import VehicleConfig
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
-TYPICAL = {"delta": 0.1, "vx": 40.0, "ax": 5.0, "ay": 8.0, "r": 0.5}
+TYPICAL = {"delta": 0.1, "vx": 40.0, "ax": 5.0, "ay": 8.0, "r": 0.5, "mz": 3000.0}
 """Scale of the 'ordinary' random values of each input."""
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from codegen.generate import check, render, write
+from model.estimators import BUILDERS
 from harness.build import WARNING_FLAGS
 from harness.paths import GENERATED
 from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
@@ -91,7 +92,7 @@ def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
 @pytest.mark.parametrize("real", ["double", "float"])
-@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
+@pytest.mark.parametrize("name", list(BUILDERS))
 def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real, name):
     compiler = _require(cc)
     files = render(config, name, real, params)
@@ -108,7 +109,7 @@ def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real
         assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
-@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
+@pytest.mark.parametrize("name", list(BUILDERS))
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
 def test_cross_builds_within_budget(config, target, name):
     if not available(target):

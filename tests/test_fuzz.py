@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from codegen.generate import render
+from model.estimators import BUILDERS
 from harness.fuzz import fuzz_estimator
 from harness.reference import blocks
 from harness.reference import kf2dof as reference
@@ -18,7 +19,7 @@ from harness.reference import kf2dof as reference
 STEPS = 1_000_000
 
 
-@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion"])
+@pytest.mark.parametrize("name", list(BUILDERS))
 @pytest.mark.parametrize("real", ["double", "float"])
 def test_a_million_adversarial_steps(config, name, real):
     report = fuzz_estimator(config, name, real, STEPS, seed=7)
