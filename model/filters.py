@@ -62,6 +62,13 @@ def biquad_step(f: Biquad, x: ca.SX, x1: ca.SX, x2: ca.SX, y1: ca.SX, y2: ca.SX)
     return f.n0 * x + f.n1 * x1 + f.n2 * x2 - f.d1 * y1 - f.d2 * y2
 
 
+def tustin_derivative(time_constant: float, T: float) -> tuple[float, float]:
+    """(n, d) of the Tustin-discretised filtered derivative s / (time_constant s + 1):
+    y[k] = n (x[k] - x[k-1]) - d y[k-1]."""
+    norm = 2.0 * time_constant + T
+    return 2.0 / norm, (T - 2.0 * time_constant) / norm
+
+
 def median_window(samples_per_second: float, span: float) -> int:
     """Odd window length covering ``span`` seconds: 2 round(span / (2 T)) + 1 (spec A2)."""
     return 2 * round(span * samples_per_second / 2.0) + 1

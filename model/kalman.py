@@ -47,6 +47,12 @@ def predict(x: ca.SX, P: ca.SX, Phi: ca.SX, Gamma: ca.SX, u: ca.SX, Qd: ca.SX):
     return x_pred, P_pred
 
 
+def ekf_predict(x_pred: ca.SX, P: ca.SX, F: ca.SX, Qd: ca.SX):
+    """EKF time update: the caller's nonlinear x- = f_d(x, u), and P- = F P F' + Qd with F the
+    Jacobian of f_d at the previous estimate."""
+    return x_pred, ca.mtimes([F, P, F.T]) + Qd
+
+
 def update_joseph(x: ca.SX, P: ca.SX, z: ca.SX, C: ca.SX, D: ca.SX, u: ca.SX, R: ca.SX):
     """Measurement update of z = C x + D u + v, v ~ N(0, R), with the Joseph-form covariance.
 

@@ -282,9 +282,50 @@ ARX_DUAL_KF = EstimatorSchema(
     rules=LOW_SPEED_RULES)
 """Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
 
+def _indicator_band(settings: Mapping[str, Any]) -> str:
+    if settings["indicator_high"] <= settings["indicator_low"]:
+        return (f"indicator_high = {settings['indicator_high']!r}: expected a rate above "
+                f"indicator_low = {settings['indicator_low']!r} 1/s")
+    return ""
+
+
+def _stiffness_band(settings: Mapping[str, Any]) -> str:
+    if settings["stiffness_max"] <= settings["stiffness_min"]:
+        return (f"stiffness_max = {settings['stiffness_max']!r}: expected a factor above "
+                f"stiffness_min = {settings['stiffness_min']!r}")
+    return ""
+
+
+EKF_RLS = EstimatorSchema(
+    fields=(
+        choice("stiffness", ("rls", "constant"), "cornering stiffness: estimated online (the "
+               "method) or the vehicle file's C_f, C_r (the plain EKF)"),
+        choice("weighting", ("stiffness_rate", "integral_only"), "fusion weight lambda: from the "
+               "stiffness rate (the method) or 1 (the integral method alone)"),
+        spd_matrix("process_noise", 2, "[beta, r]: rad^2*s, (rad/s)^2*s", "Q_c; Q_d = Q_c*T"),
+        positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
+        spd_matrix("initial_covariance", 2, "[beta, r]: rad^2, (rad/s)^2", "P_0 of the EKF"),
+        fraction("forgetting_factor", "RLS forgetting factor per 1 ms (rescaled to T)"),
+        positive("rls_initial_covariance", "1/rad^2", "P_RLS,0 = this times I"),
+        positive("rls_covariance_max", "1/rad^2", "bound on trace(P_RLS) (wind-up guard)"),
+        positive("slip_min", "rad", "update the RLS only while alpha_eq is at least this"),
+        positive("stiffness_min", "-", "lower clamp of C0 as a factor of C0_nom"),
+        positive("stiffness_max", "-", "upper clamp of C0 as a factor of C0_nom"),
+        positive("derivative_time_constant", "s", "tau_d of the filtered yaw acceleration"),
+        positive("indicator_time_constant", "s", "tau_D of the low-passed stiffness rate"),
+        nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
+        positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
+        *LOW_SPEED_FIELDS,
+    ),
+    rules=(*LOW_SPEED_RULES, Rule("indicator_high", _indicator_band),
+           Rule("stiffness_max", _stiffness_band)))
+"""Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
+§5)."""
+
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
     "switching": SWITCHING,
     "fusion": FUSION,
     "arx_dual_kf": ARX_DUAL_KF,
+    "ekf_rls": EKF_RLS,
 }

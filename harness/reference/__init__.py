@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import arx_dual_kf, fusion, kf2dof, switching
+from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, switching
 
 REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof, "switching": switching, "fusion": fusion,
-                                     "arx_dual_kf": arx_dual_kf}
+                                     "arx_dual_kf": arx_dual_kf, "ekf_rls": ekf_rls}

@@ -1,0 +1,155 @@
+"""Reference ekf_rls (shared/methods/001-stiffness-rate-fusion.md §2, §3 and §5 defaults):
+filtered yaw acceleration, axle forces and wheel loads, RLS of the left/right normalised
+stiffness, the EKF in beta form (Euler, y = r), the stiffness-rate weight and the integral method
+re-seeded from the fused beta. NumPy/SciPy only."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.signal
+
+from harness.reference import blocks
+
+TABLE = "ekf_rls"
+GRAVITY = 9.81
+INPUTS = ("delta", "vx", "ax", "ay", "r")
+STATES = ("beta_ekf", "r_ekf", "P_beta_beta", "P_beta_r", "P_r_r", "c0_left", "c0_right",
+          "Prls_c0_left_c0_left", "Prls_c0_left_c0_right", "Prls_c0_right_c0_right", "c_front",
+          "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
+OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
+
+
+def names(config):
+    return INPUTS, STATES, OUTPUTS
+
+
+def _loads(v, ax, ay):
+    """F_z fl, fr, rl, rr [23], each at least 5 % of m g / 4."""
+    m, a, b, h, d = v["mass"], v["cg_to_front_axle"], v["cg_to_rear_axle"], v["cg_height"], v["track_width"]
+    L = a + b
+    static = np.array([b, b, a, a]) * m * GRAVITY / (2 * L)
+    pitch = np.array([-1, -1, 1, 1]) * m * ax * h / (2 * L)
+    roll = np.array([-b, b, -a, a]) * m * ay * h / (L * d)
+    return np.maximum(static + pitch + roll, 0.05 * m * GRAVITY / 4)
+
+
+def _c0_nominal(v):
+    return (v["cornering_stiffness_front"] + v["cornering_stiffness_rear"]) / (v["mass"] * GRAVITY)
+
+
+def _axles(c0_left, c0_right, loads):
+    fl, fr, rl, rr = loads
+    return c0_left * fl + c0_right * fr, c0_left * rl + c0_right * rr
+
+
+def _f(v, x, delta, vx, cf, cr):
+    """2-DOF model in beta form with small-angle slip angles."""
+    m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
+    beta, r = x
+    fyf = cf * (delta - beta - a * r / vx) * math.cos(delta)
+    fyr = cr * (-beta + b * r / vx)
+    return np.array([(fyf + fyr) / (m * vx) - r, (a * fyf - b * fyr) / iz])
+
+
+def _jacobian(v, delta, vx, cf, cr):
+    m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
+    c = math.cos(delta)
+    return np.array([
+        [-(cf * c + cr) / (m * vx), (b * cr - a * cf * c) / (m * vx * vx) - 1.0],
+        [(b * cr - a * cf * c) / iz, -(a * a * cf * c + b * b * cr) / (iz * vx)],
+    ])
+
+
+def init(config, u0):
+    s, v = config.settings(TABLE), config.vehicle
+    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+                                         s["vx_resume"])
+    c0 = _c0_nominal(v)
+    if s["stiffness"] == "rls":
+        cf, cr = _axles(c0, c0, _loads(v, first["ax"], first["ay"]))
+    else:
+        cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
+    P0 = np.array(s["initial_covariance"])
+    p = s["rls_initial_covariance"]
+    return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
+                     first["r"], 0.0, 0.0, 0.0, holding])
+
+
+def step(config, state, u):
+    s, v, T = config.settings(TABLE), config.vehicle, config.sample_time
+    x = dict(zip(STATES, state))
+    inputs = dict(zip(INPUTS, u))
+    active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                         x["holding"] > 0.5)
+    if not active:
+        held = dict(x, holding=1.0)
+        return (np.array([held[k] for k in STATES]),
+                np.array([0.0, 0.0, 0.0, x["r_ekf"], 0.0, x["c_front"], x["c_rear"], float(status)]))
+    delta, vx, ax, ay, r = inputs["delta"], inputs["vx"], inputs["ax"], inputs["ay"], inputs["r"]
+    vx = min(max(vx, s["vx_min"]), config.limits["vx_max"])
+    m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
+    L = a + b
+
+    # filtered yaw acceleration s / (tau_d s + 1), Tustin (scipy)
+    (b0, b1), (_, a1) = scipy.signal.bilinear([1.0, 0.0], [s["derivative_time_constant"], 1.0],
+                                              fs=1.0 / T)
+    r_dot = b0 * r + b1 * x["r_last"] - a1 * x["r_dot"]
+
+    # forces [21, 22], loads [23], side coefficients (load-proportional split), alpha_eq [18]
+    fyf = (b * m * ay + iz * r_dot) / (L * math.cos(delta))
+    fyr = (a * m * ay - iz * r_dot) / L
+    fl, fr, rl, rr = _loads(v, ax, ay)
+    fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
+          "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
+    f_left = (fy["fl"] + fy["rl"]) / (fl + rl)
+    f_right = (fy["fr"] + fy["rr"]) / (fr + rr)
+    alpha_eq = abs(delta - L * r / vx)
+
+    # RLS [30-33]
+    X = np.array([x["c0_left"], x["c0_right"]])
+    P = np.array([[x["Prls_c0_left_c0_left"], x["Prls_c0_left_c0_right"]],
+                  [x["Prls_c0_left_c0_right"], x["Prls_c0_right_c0_right"]]])
+    if alpha_eq >= s["slip_min"]:
+        tau = s["forgetting_factor"] ** (T / 0.001)
+        A = alpha_eq * np.eye(2)
+        K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
+        X = X + K @ (np.array([abs(f_left), abs(f_right)]) - A @ X)
+        P = (np.eye(2) - K @ A) @ P / tau
+        P = P * min(1.0, s["rls_covariance_max"] / np.trace(P))
+    c0 = _c0_nominal(v)
+    X = np.clip(X, s["stiffness_min"] * c0, s["stiffness_max"] * c0)
+    if s["stiffness"] == "rls":
+        cf, cr = _axles(X[0], X[1], (fl, fr, rl, rr))
+    else:
+        cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
+
+    # EKF with the previous stiffness [13-15]
+    xe = np.array([x["beta_ekf"], x["r_ekf"]])
+    Pe = np.array([[x["P_beta_beta"], x["P_beta_r"]], [x["P_beta_r"], x["P_r_r"]]])
+    F = np.eye(2) + T * _jacobian(v, delta, vx, x["c_front"], x["c_rear"])
+    x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
+    P_pred = F @ Pe @ F.T + np.array(s["process_noise"]) * T
+    xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
+                              np.zeros((1, 1)), np.zeros(1), np.array([[s["measurement_noise"]]]))
+
+    # weight [37], integral method re-seeded from the fused beta, fusion
+    rate = max(abs(cf - x["c_front"]) / (T * v["cornering_stiffness_front"]),
+               abs(cr - x["c_rear"]) / (T * v["cornering_stiffness_rear"]))
+    indicator = x["indicator"] + (1 - math.exp(-T / s["indicator_time_constant"])) * (rate - x["indicator"])
+    if s["weighting"] == "stiffness_rate":
+        weight = min(max((indicator - s["indicator_low"]) / (s["indicator_high"] - s["indicator_low"]), 0.0), 1.0)
+    else:
+        weight = 1.0
+    bp = x["beta"]
+    beta_int = bp + T * ((ay * math.cos(bp) - ax * math.sin(bp)) / (vx / math.cos(bp)) - r)
+    beta = (1 - weight) * xe[0] + weight * beta_int
+
+    new = {"beta_ekf": xe[0], "r_ekf": xe[1], "P_beta_beta": Pe[0, 0], "P_beta_r": Pe[0, 1],
+           "P_r_r": Pe[1, 1], "c0_left": X[0], "c0_right": X[1], "Prls_c0_left_c0_left": P[0, 0],
+           "Prls_c0_left_c0_right": P[0, 1], "Prls_c0_right_c0_right": P[1, 1], "c_front": cf,
+           "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
+           "holding": 0.0}
+    return (np.array([new[k] for k in STATES]),
+            np.array([beta, xe[0], beta_int, xe[1], weight, cf, cr, float(status)]))

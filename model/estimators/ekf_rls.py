@@ -1,0 +1,249 @@
+"""ekf_rls: sideslip by fusing an EKF whose cornering stiffness is estimated online (RLS) with the
+integral method, weighted by the rate of change of the stiffness (seed 001).
+
+shared/methods/001-stiffness-rate-fusion.md, §2 with the §3/§5 defaults (every equation there is
+reconstructed; numbers in brackets are the spec's):
+
+* filtered yaw acceleration r_dot = s/(tau_d s + 1){r}, Tustin; axle forces from a_y and r_dot
+  [21, 22]; wheel loads with load transfer, each at least 5 % of a static corner load [23];
+  load-proportional left/right split and lateral force coefficients f_L, f_R (B3);
+  alpha_eq = |delta - L r / vx| [18];
+* RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32], forgetting factor tau^(T / 1 ms) (B6),
+  updated only while alpha_eq >= alpha_min, trace(P) bounded by p_max, X clamped to
+  [0.3, 1.5] C0_nom [33]; C_f, C_r [24, 25]; ``stiffness = "constant"`` gives the plain EKF with
+  the vehicle file's C_f, C_r;
+* EKF on x = [beta, r], Euler, with the previous sample's C_f, C_r (B7), measurement y = r
+  [9-15], Joseph update (model.kalman);
+* nonlinearity indicator D = max(|dC_f/dt| / C_f,nom, |dC_r/dt| / C_r,nom), low-passed (tau_D),
+  lambda = clamp((D - D1) / (D2 - D1), 0, 1) [37]; ``weighting = "integral_only"`` forces
+  lambda = 1 (the integral method alone);
+* integral method re-seeded from the last fused beta [35, 36 as corrected in §2.5];
+* beta = (1 - lambda) beta_EKF + lambda beta_int.
+
+Hold rule (model.guard): while not active every state is kept and beta = 0.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model import filters, kalman
+from model.calibration import Parameters, matrix
+from model.estimator import Estimator, make_functions
+from model.guard import first_sample, hold, input_guard
+from model.layout import Layout, Signal
+
+NAME = "ekf_rls"
+GRAVITY = 9.81
+REFERENCE_PERIOD = 0.001
+"""Sample time (s) at which the paper's forgetting factor applies (B6)."""
+LOAD_FLOOR = 0.05
+"""Smallest wheel load, as a share of a static corner load m g / 4 [23]."""
+
+INPUTS = Layout((
+    Signal("delta", "rad", "front road-wheel steer angle, positive left"),
+    Signal("vx", "m/s", "longitudinal speed"),
+    Signal("ax", "m/s^2", "longitudinal acceleration, body frame, positive forward"),
+    Signal("ay", "m/s^2", "lateral acceleration, body frame, positive left"),
+    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
+))
+_EKF = kalman.packed_names("P", ("beta", "r"))
+_RLS = kalman.packed_names("Prls", ("c0_left", "c0_right"))
+STATES = Layout((
+    Signal("beta_ekf", "rad", "EKF sideslip angle"),
+    Signal("r_ekf", "rad/s", "EKF yaw rate"),
+    *(Signal(n, "SI", "EKF covariance entry (upper triangle)") for n in _EKF),
+    Signal("c0_left", "1/rad", "normalised cornering stiffness, left wheels"),
+    Signal("c0_right", "1/rad", "normalised cornering stiffness, right wheels"),
+    *(Signal(n, "1/rad^2", "RLS covariance entry (upper triangle)") for n in _RLS),
+    Signal("c_front", "N/rad", "front axle cornering stiffness of the last sample"),
+    Signal("c_rear", "N/rad", "rear axle cornering stiffness of the last sample"),
+    Signal("r_last", "rad/s", "gyro yaw rate of the last sample (derivative filter)"),
+    Signal("r_dot", "rad/s^2", "filtered yaw acceleration of the last sample"),
+    Signal("indicator", "1/s", "low-passed nonlinearity indicator D"),
+    Signal("beta", "rad", "fused sideslip angle of the last sample"),
+    Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+))
+OUTPUTS = Layout((
+    Signal("beta", "rad", "fused sideslip angle"),
+    Signal("beta_ekf", "rad", "EKF sideslip angle"),
+    Signal("beta_int", "rad", "integral-method sideslip angle"),
+    Signal("r", "rad/s", "EKF yaw rate"),
+    Signal("weight", "-", "lambda, the integral method's weight"),
+    Signal("c_front", "N/rad", "front axle cornering stiffness"),
+    Signal("c_rear", "N/rad", "rear axle cornering stiffness"),
+    Signal("status", "-", "status bits (model.status)", integer=True),
+))
+
+
+def wheel_loads(vehicle, ax, ay) -> dict[str, ca.SX]:
+    """F_z of each wheel (N) with longitudinal and lateral load transfer [23], floored."""
+    m, a, b = vehicle["mass"], vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    h, d = vehicle["cg_height"], vehicle["track_width"]
+    L = a + b
+    pitch = m * ax * h / (2 * L)
+    floor = LOAD_FLOOR * m * GRAVITY / 4
+    front, rear = m * GRAVITY * b / (2 * L), m * GRAVITY * a / (2 * L)
+    roll_front, roll_rear = m * ay * h * b / (L * d), m * ay * h * a / (L * d)
+    return {"fl": ca.fmax(front - pitch - roll_front, floor),
+            "fr": ca.fmax(front - pitch + roll_front, floor),
+            "rl": ca.fmax(rear + pitch - roll_rear, floor),
+            "rr": ca.fmax(rear + pitch + roll_rear, floor)}
+
+
+def side_coefficients(vehicle, delta, ay, r_dot, loads) -> tuple[ca.SX, ca.SX]:
+    """(f_L, f_R): lateral force over load per side, each axle force [21, 22] split between its
+    wheels in proportion to their loads (B3)."""
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    L = a + b
+    fy_front = (b * m * ay + iz * r_dot) / (L * ca.cos(delta))
+    fy_rear = (a * m * ay - iz * r_dot) / L
+    front_share = fy_front / (loads["fl"] + loads["fr"])
+    rear_share = fy_rear / (loads["rl"] + loads["rr"])
+    f_left = (front_share * loads["fl"] + rear_share * loads["rl"]) / (loads["fl"] + loads["rl"])
+    f_right = (front_share * loads["fr"] + rear_share * loads["rr"]) / (loads["fr"] + loads["rr"])
+    return f_left, f_right
+
+
+def nominal_c0(vehicle):
+    """C0_nom = (C_f + C_r) / (m g) (1/rad)."""
+    return (vehicle["cornering_stiffness_front"] + vehicle["cornering_stiffness_rear"]) / (
+        vehicle["mass"] * GRAVITY)
+
+
+def axle_stiffness(c0_left, c0_right, loads) -> tuple[ca.SX, ca.SX]:
+    """C_f, C_r from the normalised stiffness and the wheel loads [24, 25]."""
+    return (c0_left * loads["fl"] + c0_right * loads["fr"],
+            c0_left * loads["rl"] + c0_right * loads["rr"])
+
+
+def rls_update(X, P, y, regressor, forgetting, p_max):
+    """[30-32] with alpha = regressor I: (X, P); then trace(P) bounded by p_max."""
+    eye = ca.SX.eye(2)
+    K = ca.mtimes(P * regressor, ca.inv(forgetting * eye + regressor * regressor * P))
+    X_new = X + ca.mtimes(K, y - regressor * X)
+    P_new = ca.mtimes(eye - regressor * K, P) / forgetting
+    trace = P_new[0, 0] + P_new[1, 1]
+    return X_new, P_new * ca.fmin(1, p_max / trace)
+
+
+def ekf_model(vehicle, x, delta, vx, c_front, c_rear):
+    """f(x, u) of the 2-DOF model in beta form [1-4] and its Jacobian [13] (small angles, B9)."""
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    beta, r = x[0], x[1]
+    alpha_f = delta - beta - a * r / vx
+    alpha_r = -beta + b * r / vx
+    fy_f, fy_r = c_front * alpha_f * ca.cos(delta), c_rear * alpha_r
+    f = ca.vertcat((fy_f + fy_r) / (m * vx) - r, (a * fy_f - b * fy_r) / iz)
+    return f, ca.jacobian(f, x)
+
+
+def build(params: Parameters) -> Estimator:
+    """The ekf_rls estimator ([vehicle], [inputs], [estimator.ekf_rls])."""
+    config = params.config
+    vehicle, T = config.vehicle, config.sample_time
+    settings = config.settings(NAME)
+    choices = params.numeric.settings(NAME)
+    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
+    c_front_nom = vehicle["cornering_stiffness_front"]
+    c_rear_nom = vehicle["cornering_stiffness_rear"]
+    c0_nom = nominal_c0(vehicle)
+    L = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
+
+    state, s = STATES.symbols("state")
+    inputs, u = INPUTS.symbols("input")
+    guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
+    ok, active = guard.plausible, guard.active
+    delta, ax, ay, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
+    vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
+
+    # ---- stiffness: filtered r_dot, forces, loads, RLS ------------------------------------------
+    n_dot, d_dot = filters.tustin_derivative(settings["derivative_time_constant"], T)
+    r_dot = n_dot * (r_m - s["r_last"]) - d_dot * s["r_dot"]
+    loads = wheel_loads(vehicle, ax, ay)
+    f_left, f_right = side_coefficients(vehicle, delta, ay, r_dot, loads)
+    alpha_eq = ca.fabs(delta - L * r_m / vx)
+    X = ca.vertcat(s["c0_left"], s["c0_right"])
+    P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
+    forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
+    X_upd, P_upd = rls_update(X, P_rls, ca.vertcat(ca.fabs(f_left), ca.fabs(f_right)), alpha_eq,
+                              forgetting, settings["rls_covariance_max"])
+    excited = alpha_eq >= settings["slip_min"]
+    low, high = settings["stiffness_min"] * c0_nom, settings["stiffness_max"] * c0_nom
+    X_next = ca.fmin(ca.fmax(ca.if_else(excited, X_upd, X), low), high)
+    P_rls_next = ca.if_else(excited, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_rls))
+    if choices["stiffness"] == "rls":
+        c_front, c_rear = axle_stiffness(X_next[0], X_next[1], loads)
+    else:
+        c_front, c_rear = ca.SX(c_front_nom), ca.SX(c_rear_nom)
+
+    # ---- EKF with the previous sample's stiffness (B7) ------------------------------------------
+    x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
+    f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
+    x_pred, P_pred = kalman.ekf_predict(
+        x + T * f, kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _EKF]), 2),
+        ca.SX.eye(2) + T * jacobian, matrix(settings["process_noise"]) * T)
+    x_ekf, P_ekf, _ = kalman.update_joseph(x_pred, P_pred, r_m, ca.horzcat(0, 1),
+                                           ca.SX.zeros(1, 1), ca.SX(0),
+                                           settings["measurement_noise"])
+
+    # ---- weight, integral method, fusion ---------------------------------------------------------
+    rate = ca.fmax(ca.fabs(c_front - s["c_front"]) / (T * c_front_nom),
+                   ca.fabs(c_rear - s["c_rear"]) / (T * c_rear_nom))
+    indicator = s["indicator"] + (1 - ca.exp(-T / settings["indicator_time_constant"])) * (
+        rate - s["indicator"])
+    d1, d2 = settings["indicator_low"], settings["indicator_high"]
+    if choices["weighting"] == "stiffness_rate":
+        weight = ca.fmin(ca.fmax((indicator - d1) / (d2 - d1), 0), 1)
+    else:
+        weight = ca.SX(1)
+    beta_prev = s["beta"]
+    speed = vx / ca.cos(beta_prev)
+    beta_int = beta_prev + T * ((ay * ca.cos(beta_prev) - ax * ca.sin(beta_prev)) / speed - r_m)
+    beta = (1 - weight) * x_ekf[0] + weight * beta_int
+
+    def keep(value, name):
+        return ca.if_else(active, value, s[name])
+
+    next_state = STATES.pack({
+        "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
+        **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
+        "c0_left": keep(X_next[0], "c0_left"), "c0_right": keep(X_next[1], "c0_right"),
+        **{n: keep(P_rls_next[i], n) for i, n in enumerate(_RLS)},
+        "c_front": keep(c_front, "c_front"), "c_rear": keep(c_rear, "c_rear"),
+        "r_last": keep(r_m, "r_last"), "r_dot": keep(r_dot, "r_dot"),
+        "indicator": keep(indicator, "indicator"), "beta": keep(beta, "beta"),
+        "holding": ca.if_else(active, 0, 1),
+    })
+    output = OUTPUTS.pack({
+        "beta": ca.if_else(active, beta, 0), "beta_ekf": ca.if_else(active, x_ekf[0], 0),
+        "beta_int": ca.if_else(active, beta_int, 0), "r": keep(x_ekf[1], "r_ekf"),
+        "weight": ca.if_else(active, weight, 0), "c_front": keep(c_front, "c_front"),
+        "c_rear": keep(c_rear, "c_rear"), "status": guard.status,
+    })
+
+    # ---- initialisation (§2.7) -------------------------------------------------------------------
+    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
+    P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
+    P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])
+    if choices["stiffness"] == "rls":
+        c_front0, c_rear0 = axle_stiffness(c0_nom, c0_nom,
+                                           wheel_loads(vehicle, first["ax"], first["ay"]))
+    else:
+        c_front0, c_rear0 = ca.SX(c_front_nom), ca.SX(c_rear_nom)
+    init_state = STATES.pack({
+        "beta_ekf": ca.SX(0), "r_ekf": first["r"],
+        **{n: P0[i] for i, n in enumerate(_EKF)},
+        "c0_left": c0_nom, "c0_right": c0_nom, **{n: P_rls0[i] for i, n in enumerate(_RLS)},
+        "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
+        "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
+    })
+    init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
+                                next_state, output, params)
+    return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
+                           "method by the stiffness rate (seed 001)",
+                     INPUTS, STATES, OUTPUTS, init, step, params,
+                     {"stiffness": choices["stiffness"], "weighting": choices["weighting"],
+                      "forgetting_factor_per_sample": f"{choices['forgetting_factor'] ** (params.numeric.sample_time / REFERENCE_PERIOD):.6g}"})
