@@ -302,6 +302,9 @@ EKF_RLS = EstimatorSchema(
                "method) or the vehicle file's C_f, C_r (the plain EKF)"),
         choice("weighting", ("stiffness_rate", "integral_only"), "fusion weight lambda: from the "
                "stiffness rate (the method) or 1 (the integral method alone)"),
+        choice("stiffness_regressor", ("literal", "ekf_slip"), "RLS regression: side-wise over "
+               "alpha_eq = |delta - L r / vx| (the paper) or per axle over the EKF prior's slip "
+               "angles (B2, unbiased)"),
         spd_matrix("process_noise", 2, "[beta, r]: rad^2*s, (rad/s)^2*s", "Q_c; Q_d = Q_c*T"),
         positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
         spd_matrix("initial_covariance", 2, "[beta, r]: rad^2, (rad/s)^2", "P_0 of the EKF"),

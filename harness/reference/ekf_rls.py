@@ -15,8 +15,8 @@ from harness.reference import blocks
 TABLE = "ekf_rls"
 GRAVITY = 9.81
 INPUTS = ("delta", "vx", "ax", "ay", "r")
-STATES = ("beta_ekf", "r_ekf", "P_beta_beta", "P_beta_r", "P_r_r", "c0_left", "c0_right",
-          "Prls_c0_left_c0_left", "Prls_c0_left_c0_right", "Prls_c0_right_c0_right", "c_front",
+STATES = ("beta_ekf", "r_ekf", "P_beta_beta", "P_beta_r", "P_r_r", "c0_1", "c0_2",
+          "Prls_c0_1_c0_1", "Prls_c0_1_c0_2", "Prls_c0_2_c0_2", "c_front",
           "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
 OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
 
@@ -39,9 +39,12 @@ def _c0_nominal(v):
     return (v["cornering_stiffness_front"] + v["cornering_stiffness_rear"]) / (v["mass"] * GRAVITY)
 
 
-def _axles(c0_left, c0_right, loads):
+def _axles(regressor, c0_1, c0_2, loads):
+    """C_f, C_r: from left/right normalised stiffness [24, 25], or front/rear (ekf_slip)."""
     fl, fr, rl, rr = loads
-    return c0_left * fl + c0_right * fr, c0_left * rl + c0_right * rr
+    if regressor == "literal":
+        return c0_1 * fl + c0_2 * fr, c0_1 * rl + c0_2 * rr
+    return c0_1 * (fl + fr), c0_2 * (rl + rr)
 
 
 def _f(v, x, delta, vx, cf, cr):
@@ -68,7 +71,7 @@ def init(config, u0):
                                          s["vx_resume"])
     c0 = _c0_nominal(v)
     if s["stiffness"] == "rls":
-        cf, cr = _axles(c0, c0, _loads(v, first["ax"], first["ay"]))
+        cf, cr = _axles(s["stiffness_regressor"], c0, c0, _loads(v, first["ax"], first["ay"]))
     else:
         cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
     P0 = np.array(s["initial_covariance"])
@@ -101,35 +104,37 @@ def step(config, state, u):
     fyf = (b * m * ay + iz * r_dot) / (L * math.cos(delta))
     fyr = (a * m * ay - iz * r_dot) / L
     fl, fr, rl, rr = _loads(v, ax, ay)
-    fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
-          "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
-    f_left = (fy["fl"] + fy["rl"]) / (fl + rl)
-    f_right = (fy["fr"] + fy["rr"]) / (fr + rr)
-    alpha_eq = abs(delta - L * r / vx)
+    xe = np.array([x["beta_ekf"], x["r_ekf"]])
+    x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
+    if s["stiffness_regressor"] == "literal":
+        fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
+              "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
+        y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
+        A = abs(delta - L * r / vx) * np.eye(2)                                    # alpha_eq [18]
+    else:                                                      # B2: per axle, EKF prior slip angles
+        y = np.abs([fyf / (fl + fr), fyr / (rl + rr)])
+        A = np.diag(np.abs([delta - x_pred[0] - a * x_pred[1] / vx, -x_pred[0] + b * x_pred[1] / vx]))
 
     # RLS [30-33]
-    X = np.array([x["c0_left"], x["c0_right"]])
-    P = np.array([[x["Prls_c0_left_c0_left"], x["Prls_c0_left_c0_right"]],
-                  [x["Prls_c0_left_c0_right"], x["Prls_c0_right_c0_right"]]])
-    if alpha_eq >= s["slip_min"]:
+    X = np.array([x["c0_1"], x["c0_2"]])
+    P = np.array([[x["Prls_c0_1_c0_1"], x["Prls_c0_1_c0_2"]],
+                  [x["Prls_c0_1_c0_2"], x["Prls_c0_2_c0_2"]]])
+    if min(A[0, 0], A[1, 1]) >= s["slip_min"]:
         tau = s["forgetting_factor"] ** (T / 0.001)
-        A = alpha_eq * np.eye(2)
         K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
-        X = X + K @ (np.array([abs(f_left), abs(f_right)]) - A @ X)
+        X = X + K @ (y - A @ X)
         P = (np.eye(2) - K @ A) @ P / tau
         P = P * min(1.0, s["rls_covariance_max"] / np.trace(P))
     c0 = _c0_nominal(v)
     X = np.clip(X, s["stiffness_min"] * c0, s["stiffness_max"] * c0)
     if s["stiffness"] == "rls":
-        cf, cr = _axles(X[0], X[1], (fl, fr, rl, rr))
+        cf, cr = _axles(s["stiffness_regressor"], X[0], X[1], (fl, fr, rl, rr))
     else:
         cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
 
     # EKF with the previous stiffness [13-15]
-    xe = np.array([x["beta_ekf"], x["r_ekf"]])
     Pe = np.array([[x["P_beta_beta"], x["P_beta_r"]], [x["P_beta_r"], x["P_r_r"]]])
     F = np.eye(2) + T * _jacobian(v, delta, vx, x["c_front"], x["c_rear"])
-    x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
     P_pred = F @ Pe @ F.T + np.array(s["process_noise"]) * T
     xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
                               np.zeros((1, 1)), np.zeros(1), np.array([[s["measurement_noise"]]]))
@@ -147,8 +152,8 @@ def step(config, state, u):
     beta = (1 - weight) * xe[0] + weight * beta_int
 
     new = {"beta_ekf": xe[0], "r_ekf": xe[1], "P_beta_beta": Pe[0, 0], "P_beta_r": Pe[0, 1],
-           "P_r_r": Pe[1, 1], "c0_left": X[0], "c0_right": X[1], "Prls_c0_left_c0_left": P[0, 0],
-           "Prls_c0_left_c0_right": P[0, 1], "Prls_c0_right_c0_right": P[1, 1], "c_front": cf,
+           "P_r_r": Pe[1, 1], "c0_1": X[0], "c0_2": X[1], "Prls_c0_1_c0_1": P[0, 0],
+           "Prls_c0_1_c0_2": P[0, 1], "Prls_c0_2_c0_2": P[1, 1], "c_front": cf,
            "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
            "holding": 0.0}
     return (np.array([new[k] for k in STATES]),

@@ -8,7 +8,9 @@ reconstructed; numbers in brackets are the spec's):
   [21, 22]; wheel loads with load transfer, each at least 5 % of a static corner load [23];
   load-proportional left/right split and lateral force coefficients f_L, f_R (B3);
   alpha_eq = |delta - L r / vx| [18];
-* RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32], forgetting factor tau^(T / 1 ms) (B6),
+* RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32] (or, ``stiffness_regressor =
+  "ekf_slip"`` (B2), X = [C0_f, C0_r] against each axle's slip angle from the EKF prior),
+  forgetting factor tau^(T / 1 ms) (B6),
   updated only while alpha_eq >= alpha_min, trace(P) bounded by p_max, X clamped to
   [0.3, 1.5] C0_nom [33]; C_f, C_r [24, 25]; ``stiffness = "constant"`` gives the plain EKF with
   the vehicle file's C_f, C_r;
@@ -48,13 +50,13 @@ INPUTS = Layout((
     Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
 ))
 _EKF = kalman.packed_names("P", ("beta", "r"))
-_RLS = kalman.packed_names("Prls", ("c0_left", "c0_right"))
+_RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
 STATES = Layout((
     Signal("beta_ekf", "rad", "EKF sideslip angle"),
     Signal("r_ekf", "rad/s", "EKF yaw rate"),
     *(Signal(n, "SI", "EKF covariance entry (upper triangle)") for n in _EKF),
-    Signal("c0_left", "1/rad", "normalised cornering stiffness, left wheels"),
-    Signal("c0_right", "1/rad", "normalised cornering stiffness, right wheels"),
+    Signal("c0_1", "1/rad", "normalised cornering stiffness: left wheels (literal) or front axle"),
+    Signal("c0_2", "1/rad", "normalised cornering stiffness: right wheels (literal) or rear axle"),
     *(Signal(n, "1/rad^2", "RLS covariance entry (upper triangle)") for n in _RLS),
     Signal("c_front", "N/rad", "front axle cornering stiffness of the last sample"),
     Signal("c_rear", "N/rad", "rear axle cornering stiffness of the last sample"),
@@ -91,14 +93,18 @@ def wheel_loads(vehicle, ax, ay) -> dict[str, ca.SX]:
             "rr": ca.fmax(rear + pitch + roll_rear, floor)}
 
 
-def side_coefficients(vehicle, delta, ay, r_dot, loads) -> tuple[ca.SX, ca.SX]:
-    """(f_L, f_R): lateral force over load per side, each axle force [21, 22] split between its
-    wheels in proportion to their loads (B3)."""
+def axle_forces(vehicle, delta, ay, r_dot) -> tuple[ca.SX, ca.SX]:
+    """F_yf, F_yr (N) from the measured a_y and the filtered yaw acceleration [21, 22]."""
     m, iz = vehicle["mass"], vehicle["yaw_inertia"]
     a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
     L = a + b
-    fy_front = (b * m * ay + iz * r_dot) / (L * ca.cos(delta))
-    fy_rear = (a * m * ay - iz * r_dot) / L
+    return (b * m * ay + iz * r_dot) / (L * ca.cos(delta)), (a * m * ay - iz * r_dot) / L
+
+
+def side_coefficients(vehicle, delta, ay, r_dot, loads) -> tuple[ca.SX, ca.SX]:
+    """(f_L, f_R): lateral force over load per side, each axle force [21, 22] split between its
+    wheels in proportion to their loads (B3)."""
+    fy_front, fy_rear = axle_forces(vehicle, delta, ay, r_dot)
     front_share = fy_front / (loads["fl"] + loads["fr"])
     rear_share = fy_rear / (loads["rl"] + loads["rr"])
     f_left = (front_share * loads["fl"] + rear_share * loads["rl"]) / (loads["fl"] + loads["rl"])
@@ -112,18 +118,38 @@ def nominal_c0(vehicle):
         vehicle["mass"] * GRAVITY)
 
 
-def axle_stiffness(c0_left, c0_right, loads) -> tuple[ca.SX, ca.SX]:
-    """C_f, C_r from the normalised stiffness and the wheel loads [24, 25]."""
-    return (c0_left * loads["fl"] + c0_right * loads["fr"],
-            c0_left * loads["rl"] + c0_right * loads["rr"])
+def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
+    """C_f, C_r from the normalised stiffness and the wheel loads: left/right [24, 25], or front/rear
+    (``ekf_slip``, B2)."""
+    if regressor == "literal":
+        return c0[0] * loads["fl"] + c0[1] * loads["fr"], c0[0] * loads["rl"] + c0[1] * loads["rr"]
+    return c0[0] * (loads["fl"] + loads["fr"]), c0[1] * (loads["rl"] + loads["rr"])
 
 
-def rls_update(X, P, y, regressor, forgetting, p_max):
-    """[30-32] with alpha = regressor I: (X, P); then trace(P) bounded by p_max."""
+def stiffness_regression(regressor: str, vehicle, delta, vx, ay, r_m, r_dot, loads, x_prior):
+    """(y, A, excitation) of the RLS y = A X: the literal side-wise coefficients over
+    alpha_eq = |delta - L r / vx| [18, 27-29], or (B2 ``ekf_slip``) each axle's force over load
+    against its slip angle from the EKF prior [3]; excitation = the smallest regressor entry."""
+    L = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
+    if regressor == "literal":
+        f_left, f_right = side_coefficients(vehicle, delta, ay, r_dot, loads)
+        alpha_eq = ca.fabs(delta - L * r_m / vx)
+        return ca.vertcat(ca.fabs(f_left), ca.fabs(f_right)), alpha_eq * ca.SX.eye(2), alpha_eq
+    fy_front, fy_rear = axle_forces(vehicle, delta, ay, r_dot)
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    alpha_f = ca.fabs(delta - x_prior[0] - a * x_prior[1] / vx)
+    alpha_r = ca.fabs(-x_prior[0] + b * x_prior[1] / vx)
+    y = ca.vertcat(ca.fabs(fy_front) / (loads["fl"] + loads["fr"]),
+                   ca.fabs(fy_rear) / (loads["rl"] + loads["rr"]))
+    return y, ca.diag(ca.vertcat(alpha_f, alpha_r)), ca.fmin(alpha_f, alpha_r)
+
+
+def rls_update(X, P, y, A, forgetting, p_max):
+    """[30-32] for y = A X: (X, P); then trace(P) bounded by p_max."""
     eye = ca.SX.eye(2)
-    K = ca.mtimes(P * regressor, ca.inv(forgetting * eye + regressor * regressor * P))
-    X_new = X + ca.mtimes(K, y - regressor * X)
-    P_new = ca.mtimes(eye - regressor * K, P) / forgetting
+    K = ca.mtimes([P, A.T, ca.inv(forgetting * eye + ca.mtimes([A, P, A.T]))])
+    X_new = X + ca.mtimes(K, y - ca.mtimes(A, X))
+    P_new = ca.mtimes(eye - ca.mtimes(K, A), P) / forgetting
     trace = P_new[0, 0] + P_new[1, 1]
     return X_new, P_new * ca.fmin(1, p_max / trace)
 
@@ -150,7 +176,6 @@ def build(params: Parameters) -> Estimator:
     c_front_nom = vehicle["cornering_stiffness_front"]
     c_rear_nom = vehicle["cornering_stiffness_rear"]
     c0_nom = nominal_c0(vehicle)
-    L = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
 
     state, s = STATES.symbols("state")
     inputs, u = INPUTS.symbols("input")
@@ -163,25 +188,24 @@ def build(params: Parameters) -> Estimator:
     n_dot, d_dot = filters.tustin_derivative(settings["derivative_time_constant"], T)
     r_dot = n_dot * (r_m - s["r_last"]) - d_dot * s["r_dot"]
     loads = wheel_loads(vehicle, ax, ay)
-    f_left, f_right = side_coefficients(vehicle, delta, ay, r_dot, loads)
-    alpha_eq = ca.fabs(delta - L * r_m / vx)
-    X = ca.vertcat(s["c0_left"], s["c0_right"])
+    x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
+    f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
+    y, A, excitation = stiffness_regression(choices["stiffness_regressor"], vehicle, delta, vx,
+                                            ay, r_m, r_dot, loads, x + T * f)
+    X = ca.vertcat(s["c0_1"], s["c0_2"])
     P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
     forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
-    X_upd, P_upd = rls_update(X, P_rls, ca.vertcat(ca.fabs(f_left), ca.fabs(f_right)), alpha_eq,
-                              forgetting, settings["rls_covariance_max"])
-    excited = alpha_eq >= settings["slip_min"]
+    X_upd, P_upd = rls_update(X, P_rls, y, A, forgetting, settings["rls_covariance_max"])
+    excited = excitation >= settings["slip_min"]
     low, high = settings["stiffness_min"] * c0_nom, settings["stiffness_max"] * c0_nom
     X_next = ca.fmin(ca.fmax(ca.if_else(excited, X_upd, X), low), high)
     P_rls_next = ca.if_else(excited, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_rls))
     if choices["stiffness"] == "rls":
-        c_front, c_rear = axle_stiffness(X_next[0], X_next[1], loads)
+        c_front, c_rear = axle_stiffness(choices["stiffness_regressor"], X_next, loads)
     else:
         c_front, c_rear = ca.SX(c_front_nom), ca.SX(c_rear_nom)
 
     # ---- EKF with the previous sample's stiffness (B7) ------------------------------------------
-    x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
-    f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
     x_pred, P_pred = kalman.ekf_predict(
         x + T * f, kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _EKF]), 2),
         ca.SX.eye(2) + T * jacobian, matrix(settings["process_noise"]) * T)
@@ -210,7 +234,7 @@ def build(params: Parameters) -> Estimator:
     next_state = STATES.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
-        "c0_left": keep(X_next[0], "c0_left"), "c0_right": keep(X_next[1], "c0_right"),
+        "c0_1": keep(X_next[0], "c0_1"), "c0_2": keep(X_next[1], "c0_2"),
         **{n: keep(P_rls_next[i], n) for i, n in enumerate(_RLS)},
         "c_front": keep(c_front, "c_front"), "c_rear": keep(c_rear, "c_rear"),
         "r_last": keep(r_m, "r_last"), "r_dot": keep(r_dot, "r_dot"),
@@ -229,14 +253,14 @@ def build(params: Parameters) -> Estimator:
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])
     if choices["stiffness"] == "rls":
-        c_front0, c_rear0 = axle_stiffness(c0_nom, c0_nom,
+        c_front0, c_rear0 = axle_stiffness(choices["stiffness_regressor"], (c0_nom, c0_nom),
                                            wheel_loads(vehicle, first["ax"], first["ay"]))
     else:
         c_front0, c_rear0 = ca.SX(c_front_nom), ca.SX(c_rear_nom)
     init_state = STATES.pack({
         "beta_ekf": ca.SX(0), "r_ekf": first["r"],
         **{n: P0[i] for i, n in enumerate(_EKF)},
-        "c0_left": c0_nom, "c0_right": c0_nom, **{n: P_rls0[i] for i, n in enumerate(_RLS)},
+        "c0_1": c0_nom, "c0_2": c0_nom, **{n: P_rls0[i] for i, n in enumerate(_RLS)},
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
     })
@@ -246,4 +270,5 @@ def build(params: Parameters) -> Estimator:
                            "method by the stiffness rate (seed 001)",
                      INPUTS, STATES, OUTPUTS, init, step, params,
                      {"stiffness": choices["stiffness"], "weighting": choices["weighting"],
+                      "stiffness_regressor": choices["stiffness_regressor"],
                       "forgetting_factor_per_sample": f"{choices['forgetting_factor'] ** (params.numeric.sample_time / REFERENCE_PERIOD):.6g}"})
