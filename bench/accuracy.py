@@ -17,7 +17,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import track
 
-from bench import table3, yaw_rate
+from bench import seed001, table3, yaw_rate
 from harness.paths import DEFAULT_VEHICLE, REPO
 from harness.plot import plot
 from harness.run import run_estimator
@@ -112,6 +112,13 @@ def main(argv: list[str] | None = None) -> None:
         *yaw_rate.table(args.vehicle.read_text(), str(args.vehicle), config.name, args.beyond_seeds),
         yaw_rate.parameter_plot(args.vehicle.read_text(), str(args.vehicle), config.name,
                                 REPO / "docs" / "figures" / "arx_parameters.png"),
+        "",
+        "## Seed 001 reproduction (1 kHz logs)",
+        "",
+        *seed001.table(args.vehicle.read_text(), str(args.vehicle), config.name, args.beyond_seeds),
+        "",
+        seed001.stiffness_plot(args.vehicle.read_text(), str(args.vehicle), config.name,
+                               REPO / "docs" / "figures" / "ekf_rls_stiffness.png"),
         "",
         "## Plots (seed 1)",
         "",
