@@ -1,0 +1,120 @@
+"""Seed 001's EKF with RLS stiffness: wheel loads, the RLS block (convergence, wind-up bound,
+clamp), the filtered derivative against scipy, the integral method alone, the plain-EKF variant,
+the hold rule. On the generated C (double) and the symbolic blocks; equivalence to the reference
+over every scenario is in verify."""
+
+from __future__ import annotations
+
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+import scipy.signal
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.scenarios import Case
+from model import filters, status
+from model.estimators import build, ekf_rls
+from model.params import parse_vehicle
+
+NAME = "ekf_rls"
+
+
+def variant(vehicle_text, **keys):
+    text = vehicle_text
+    for key, value in keys.items():
+        text, count = re.subn(rf'(?m)^{key} = "[a-z_]+"', f'{key} = "{value}"', text)
+        assert count == 1
+    return parse_vehicle(text, "ekf_rls.toml", "c_class")
+
+
+def run(config, case, rate=100.0):
+    config = config.with_sample_time(1.0 / rate) if rate != 100.0 else config
+    est = build(NAME, config)
+    log = case.simulate(config, rate)
+    outputs, states = load_estimator(est, render(config, NAME)).run(log.matrix(est.inputs.names))
+    return est, log, outputs, states
+
+
+def test_wheel_loads_sum_to_the_weight_and_shift_with_acceleration(config):
+    v = config.vehicle
+    ax, ay = ca.SX.sym("ax"), ca.SX.sym("ay")
+    loads = ca.Function("loads", [ax, ay], [ca.vertcat(*ekf_rls.wheel_loads(v, ax, ay).values())])
+    weight = v["mass"] * ekf_rls.GRAVITY
+    for a_x, a_y in ((0.0, 0.0), (2.0, 4.0), (-3.0, -5.0)):
+        fl, fr, rl, rr = np.array(loads(a_x, a_y)).ravel()
+        assert fl + fr + rl + rr == pytest.approx(weight, rel=1e-12)
+        assert np.sign(fr - fl) == np.sign(a_y) or a_y == 0          # a left turn loads the right
+    fl0, fr0, rl0, rr0 = np.array(loads(0.0, 0.0)).ravel()
+    fl1, fr1, rl1, rr1 = np.array(loads(3.0, 0.0)).ravel()
+    assert rl1 + rr1 > rl0 + rr0 and fl1 + fr1 < fl0 + fr0           # acceleration loads the rear
+    assert min(np.array(loads(0.0, 30.0)).ravel()) == pytest.approx(0.05 * weight / 4)  # floor
+
+
+def test_rls_converges_to_consistent_data_and_bounds_its_covariance():
+    X, P = ca.SX.sym("X", 2), ca.SX.sym("P", 2, 2)
+    y, A = ca.SX.sym("y", 2), ca.SX.sym("A", 2, 2)
+    update = ca.Function("rls", [X, P, y, A], list(ekf_rls.rls_update(X, P, y, A, 0.9, 1e4)))
+    rng = np.random.default_rng(1)
+    truth = np.array([12.0, 20.0])
+    x, p = np.array([17.8, 17.8]), 100.0 * np.eye(2)
+    for _ in range(300):
+        regressor = np.diag(rng.uniform(0.005, 0.05, 2))
+        x, p = (np.array(v) for v in update(x, p, regressor @ truth, regressor))
+        x = x.ravel()
+    assert x == pytest.approx(truth, rel=1e-6)
+    for _ in range(200):                                   # tiny regressor: P / tau grows ...
+        x, p = (np.array(v) for v in update(x.ravel(), p, np.zeros(2), 1e-9 * np.eye(2)))
+    assert np.trace(p) == pytest.approx(1e4, rel=1e-9)      # ... up to the bound, not for ever
+
+
+def test_filtered_derivative_matches_scipy():
+    T, tau = 0.001, 0.02
+    n, d = filters.tustin_derivative(tau, T)
+    (b0, b1), (_, a1) = scipy.signal.bilinear([1.0, 0.0], [tau, 1.0], fs=1.0 / T)
+    assert (n, -n, d) == pytest.approx((b0, b1, a1), rel=1e-12)
+
+
+def test_integral_only_is_the_free_integration_of_the_spec(vehicle_text):
+    """weighting = integral_only: beta_k = beta_k-1 + T((a_y cos b - a_x sin b) / (vx / cos b) - r)
+    [36], from beta_0 = 0."""
+    config = variant(vehicle_text, weighting="integral_only")
+    est, log, outputs, _ = run(config, Case.of("dlc", speed_kmh=80.0))
+    beta = 0.0
+    expected = []
+    for delta, vx, ax, ay, r in log.matrix(est.inputs.names):
+        beta = beta + 0.01 * ((ay * np.cos(beta) - ax * np.sin(beta)) / (vx / np.cos(beta)) - r)
+        expected.append(beta)
+    assert np.allclose(outputs[:, 0], expected, rtol=1e-9, atol=1e-12)
+    assert np.all(outputs[:, est.outputs.index("weight")] == 1.0)
+
+
+def test_plain_ekf_keeps_the_vehicle_file_stiffness_and_never_blends(vehicle_text):
+    config = variant(vehicle_text, stiffness="constant")
+    est, _, outputs, _ = run(config, Case.of("dlc", speed_kmh=80.0))
+    assert np.all(outputs[:, est.outputs.index("c_front")] == config.vehicle["cornering_stiffness_front"])
+    assert np.all(outputs[:, est.outputs.index("weight")] == 0.0)
+    assert np.array_equal(outputs[:, 0], outputs[:, est.outputs.index("beta_ekf")])
+
+
+def test_stiffness_stays_inside_its_clamp_and_the_weight_in_0_1(config):
+    est, _, outputs, states = run(config, Case.of("dlc", speed_kmh=80.0, mu=0.5))
+    c0 = ekf_rls.nominal_c0(config.vehicle)
+    s = config.settings(NAME)
+    for name in ("c0_1", "c0_2"):
+        values = states[:, est.states.index(name)]
+        assert values.min() >= s["stiffness_min"] * c0 - 1e-12
+        assert values.max() <= s["stiffness_max"] * c0 + 1e-12
+    weight = outputs[:, est.outputs.index("weight")]
+    assert weight.min() >= 0.0 and weight.max() <= 1.0
+
+
+def test_low_speed_holds_every_state(config):
+    est, log, outputs, states = run(config, Case.of("low_speed"))
+    held = outputs[:, -1].astype(int) & status.LOW_SPEED > 0
+    assert held.any()
+    k = int(np.argmax(held))
+    assert np.all(outputs[held, 0] == 0.0)
+    assert np.array_equal(states[k + 1, :-1], states[k, :-1])   # everything but the flag is kept
