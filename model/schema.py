@@ -195,18 +195,31 @@ SAMPLING: tuple[Field, ...] = (
 DISCRETISATIONS = ("euler", "tustin", "zoh")
 
 
-def _resume_above_min(settings: Mapping[str, Any]) -> str:
-    if settings["vx_resume"] <= settings["vx_min"]:
-        return (f"vx_resume = {settings['vx_resume']!r}: expected a speed above "
-                f"vx_min = {settings['vx_min']!r} m/s (hysteresis)")
-    return ""
+def above(key: str, lower: str, what: str, unit: str = "") -> Rule:
+    """Rule: ``key`` must be greater than the table's ``lower`` (``what`` names the value)."""
+    def check(settings: Mapping[str, Any]) -> str:
+        if settings[key] <= settings[lower]:
+            return (f"{key} = {settings[key]!r}: expected {what} above "
+                    f"{lower} = {settings[lower]!r}{' ' + unit if unit else ''}")
+        return ""
+    return Rule(key, check)
+
+
+def below(key: str, upper: str, what: str, unit: str = "") -> Rule:
+    """Rule: ``key`` must be smaller than the table's ``upper``."""
+    def check(settings: Mapping[str, Any]) -> str:
+        if settings[key] >= settings[upper]:
+            return (f"{key} = {settings[key]!r}: expected {what} below "
+                    f"{upper} = {settings[upper]!r}{' ' + unit if unit else ''}")
+        return ""
+    return Rule(key, check)
 
 
 LOW_SPEED_FIELDS: tuple[Field, ...] = (
     positive("vx_min", "m/s", "below this speed the estimator holds (status LOW_SPEED)"),
     positive("vx_resume", "m/s", "after a low-speed hold, resume at or above this speed"),
 )
-LOW_SPEED_RULES: tuple[Rule, ...] = (Rule("vx_resume", _resume_above_min),)
+LOW_SPEED_RULES: tuple[Rule, ...] = (above("vx_resume", "vx_min", "a speed", "m/s (hysteresis)"),)
 
 KF_FIELDS: tuple[Field, ...] = (
     choice("discretisation", DISCRETISATIONS, "method turning A, B into Phi, Gamma"),
@@ -238,13 +251,6 @@ SEED000_FIELDS: tuple[Field, ...] = (
 
 
 
-def _hysteresis_below_threshold(settings: Mapping[str, Any]) -> str:
-    if settings["hysteresis"] >= settings["threshold"]:
-        return (f"hysteresis = {settings['hysteresis']!r}: expected a number >= 0 below "
-                f"threshold = {settings['threshold']!r} m/s^2")
-    return ""
-
-
 SWITCHING = EstimatorSchema(
     fields=(*KF_FIELDS, *SEED000_FIELDS,
             nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
@@ -258,7 +264,7 @@ SWITCHING = EstimatorSchema(
                      "threshold (adaptive_memory > 0 only)", default=0.8),
             positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
                      "(adaptive_memory > 0 only)", default=2.5)),
-    rules=(*LOW_SPEED_RULES, Rule("hysteresis", _hysteresis_below_threshold)))
+    rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 FUSION = EstimatorSchema(
     fields=(*KF_FIELDS, *SEED000_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
@@ -281,20 +287,6 @@ ARX_DUAL_KF = EstimatorSchema(
     ),
     rules=LOW_SPEED_RULES)
 """Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
-
-def _indicator_band(settings: Mapping[str, Any]) -> str:
-    if settings["indicator_high"] <= settings["indicator_low"]:
-        return (f"indicator_high = {settings['indicator_high']!r}: expected a rate above "
-                f"indicator_low = {settings['indicator_low']!r} 1/s")
-    return ""
-
-
-def _stiffness_band(settings: Mapping[str, Any]) -> str:
-    if settings["stiffness_max"] <= settings["stiffness_min"]:
-        return (f"stiffness_max = {settings['stiffness_max']!r}: expected a factor above "
-                f"stiffness_min = {settings['stiffness_min']!r}")
-    return ""
-
 
 EKF_RLS = EstimatorSchema(
     fields=(
@@ -320,8 +312,8 @@ EKF_RLS = EstimatorSchema(
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         *LOW_SPEED_FIELDS,
     ),
-    rules=(*LOW_SPEED_RULES, Rule("indicator_high", _indicator_band),
-           Rule("stiffness_max", _stiffness_band)))
+    rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
+           above("stiffness_max", "stiffness_min", "a factor")))
 """Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
 §5)."""
 

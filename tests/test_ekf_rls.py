@@ -118,3 +118,15 @@ def test_low_speed_holds_every_state(config):
     k = int(np.argmax(held))
     assert np.all(outputs[held, 0] == 0.0)
     assert np.array_equal(states[k + 1, :-1], states[k, :-1])   # everything but the flag is kept
+
+
+@pytest.mark.parametrize("edit, message", [
+    ("indicator_high = 2.0 ", "indicator_high = 0.1: expected a rate above indicator_low = 0.5 1/s"),
+    ("stiffness_max = 1.5", "stiffness_max = 0.1: expected a factor above stiffness_min = 0.3"),
+])
+def test_inverted_bands_are_one_line_errors(vehicle_text, edit, message):
+    from model.params import ParameterError
+
+    key = edit.split(" = ")[0]
+    with pytest.raises(ParameterError, match=re.escape(message)):
+        parse_vehicle(vehicle_text.replace(edit, f"{key} = 0.1 "), "bad.toml", "c_class")
