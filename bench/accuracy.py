@@ -38,7 +38,10 @@ SCORING_SET: tuple[Case, ...] = (
 )
 
 
-def _cell(values: list[float]) -> str:
+def _cell(values: list[float] | None) -> str:
+    """mean (± std over seeds) of a statistic, '-' for a signal the estimator does not give."""
+    if not values:
+        return "-"
     return f"{np.mean(values):.3f}" if len(values) == 1 else f"{np.mean(values):.3f} ± {np.std(values):.3f}"
 
 
@@ -88,7 +91,7 @@ def main(argv: list[str] | None = None) -> None:
             st = stats[name]
             rows.append(f"| {case.label} | {cones} | {spun} | {name} | {_cell(st['beta_max'])} | "
                         f"{_cell(st['beta_mean'])} | {_cell(st['beta_rmse'])} | "
-                        f"{_cell(st['vy_rmse'])} | {_cell(st['r_rmse'])} |")
+                        f"{_cell(st.get('vy_rmse'))} | {_cell(st.get('r_rmse'))} |")
     text = "\n".join([
         f"# Accuracy on the common scenarios (vehicle {config.name})",
         "",
