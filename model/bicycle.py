@@ -12,6 +12,9 @@ from typing import Mapping
 
 import casadi as ca
 
+GRAVITY = 9.81
+"""Gravitational acceleration (m/s^2) used by every estimator."""
+
 
 def bicycle_matrices(vehicle: Mapping[str, float], vx) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     """A(vx), B, C(vx), D of the linear bicycle model; ``vx`` may be symbolic (SX) or a number."""

@@ -16,6 +16,7 @@ from codegen.generate import render
 from harness.build import load_estimator
 from harness.scenarios import Case
 from model import filters, status
+from model.bicycle import GRAVITY
 from model.estimators import build, ekf_rls
 from model.params import parse_vehicle
 
@@ -42,7 +43,7 @@ def test_wheel_loads_sum_to_the_weight_and_shift_with_acceleration(config):
     v = config.vehicle
     ax, ay = ca.SX.sym("ax"), ca.SX.sym("ay")
     loads = ca.Function("loads", [ax, ay], [ca.vertcat(*ekf_rls.wheel_loads(v, ax, ay).values())])
-    weight = v["mass"] * ekf_rls.GRAVITY
+    weight = v["mass"] * GRAVITY
     for a_x, a_y in ((0.0, 0.0), (2.0, 4.0), (-3.0, -5.0)):
         fl, fr, rl, rr = np.array(loads(a_x, a_y)).ravel()
         assert fl + fr + rl + rr == pytest.approx(weight, rel=1e-12)

@@ -10,6 +10,8 @@ from typing import Mapping
 import numpy as np
 import scipy.linalg
 
+GRAVITY = 9.81
+"""m/s^2, as in the model."""
 LOW_SPEED = 1
 INVALID_INPUT = 2
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",

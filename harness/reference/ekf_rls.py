@@ -13,7 +13,7 @@ import scipy.signal
 from harness.reference import blocks
 
 TABLE = "ekf_rls"
-GRAVITY = 9.81
+GRAVITY = blocks.GRAVITY
 INPUTS = ("delta", "vx", "ax", "ay", "r")
 STATES = ("beta_ekf", "r_ekf", "P_beta_beta", "P_beta_r", "P_r_r", "c0_1", "c0_2",
           "Prls_c0_1_c0_1", "Prls_c0_1_c0_2", "Prls_c0_2_c0_2", "c_front",

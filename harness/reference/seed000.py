@@ -13,9 +13,7 @@ from harness.reference import blocks
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1
 REFERENCE_SUSPECT = 4
-
-
-GRAVITY = 9.81
+GRAVITY = blocks.GRAVITY
 
 
 def roll_corrected(config, table, ay_measured):

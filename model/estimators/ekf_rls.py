@@ -30,13 +30,13 @@ from __future__ import annotations
 import casadi as ca
 
 from model import filters, kalman
+from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
 from model.estimator import Estimator, make_functions
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
 
 NAME = "ekf_rls"
-GRAVITY = 9.81
 REFERENCE_PERIOD = 0.001
 """Sample time (s) at which the paper's forgetting factor applies (B6)."""
 LOAD_FLOOR = 0.05

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from model import filters, kalman, status
-from model.bicycle import stability_factor
+from model.bicycle import GRAVITY, stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
 from model.guard import (Guard, first_sample, hold, input_guard, plausibility,
@@ -22,7 +22,6 @@ from model.layout import Layout, Signal
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 DYN, KIN = 0, 1
-GRAVITY = 9.81
 
 
 def window(params: Parameters, table: str) -> int:
