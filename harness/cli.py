@@ -344,7 +344,8 @@ def list_() -> None:
     console.print("scenarios:")
     for s in SCENARIOS.values():
         options = " ".join(f"{k}={v}" for k, v in s.defaults.items())
-        console.print(f"  {s.name}: {s.description}" + (f"  [options: {options}]" if options else ""))
+        console.print(f"  {s.name}: {s.description}" + (f"  [options: {options}]" if options else ""),
+                      markup=False)  # the brackets are text, not rich markup
     console.print("vehicles:   " + ", ".join(_display(p) for p in shipped_vehicles()))
 
 

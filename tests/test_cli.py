@@ -62,6 +62,8 @@ def test_bad_vehicle_file_is_one_line(tmp_path):
 def test_list():
     result = vsegen("list")
     assert result.returncode == 0 and "kf2dof" in result.stdout and "dlc" in result.stdout
+    text = " ".join(result.stdout.split())                      # rich may wrap long lines
+    assert "[options: mu=0.85 v_start=12.5" in text and "yaw_moment=0.0]" in text
 
 
 def test_simulate_run_score_plot(tmp_path):
