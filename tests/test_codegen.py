@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from codegen.generate import check, render, write
-from model.estimators import BUILDERS
 from harness.build import WARNING_FLAGS
 from harness.paths import GENERATED
 from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
+from model.estimators import BUILDERS
 
 COMPILERS = ["gcc", "clang"]
 STRICT_TEMPLATE_FLAGS = ("-Wconversion", "-Wshadow", "-Wcast-qual", "-Wstrict-prototypes",

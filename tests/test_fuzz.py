@@ -11,10 +11,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from codegen.generate import render
-from model.estimators import BUILDERS
 from harness.fuzz import fuzz_estimator
 from harness.reference import blocks
 from harness.reference import kf2dof as reference
+from model.estimators import BUILDERS
 
 STEPS = 1_000_000
 
