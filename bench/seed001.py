@@ -7,7 +7,6 @@ DLC."""
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import matplotlib
@@ -19,6 +18,7 @@ import numpy as np  # noqa: E402
 from harness.logs import Log  # noqa: E402
 from harness.run import run_estimator  # noqa: E402
 from harness.scenarios import Case  # noqa: E402
+from harness.vehicles import with_settings  # noqa: E402
 from model.params import VehicleConfig, parse_vehicle  # noqa: E402
 
 NAME = "ekf_rls"
@@ -35,11 +35,8 @@ MIN_SLIP = 0.002
 def variants(vehicle_text: str, source: str, name: str) -> tuple[tuple[str, VehicleConfig], ...]:
     """(label, configuration at T = 1 ms) of each compared method."""
     def with_keys(**keys: str) -> VehicleConfig:
-        text = vehicle_text
-        for key, value in keys.items():
-            text, count = re.subn(rf'(?m)^{key} = "[a-z_]+"', f'{key} = "{value}"', text)
-            assert count == 1, key
-        return parse_vehicle(text, source, name).with_sample_time(1.0 / RATE_HZ)
+        return parse_vehicle(with_settings(vehicle_text, f"estimator.{NAME}", **keys), source,
+                             name).with_sample_time(1.0 / RATE_HZ)
 
     return (("plain EKF (constant stiffness)", with_keys(stiffness="constant")),
             ("integral method alone", with_keys(weighting="integral_only")),

@@ -8,13 +8,12 @@ compensation of the accelerometer (roll_gradient = 0), as the paper does."""
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from harness.run import run_estimator
 from harness.scenarios import Case
 from harness.score import score
+from harness.vehicles import with_settings
 from model.params import parse_vehicle
 
 PAPER = {"switching": (0.274, 0.059, 0.086), "fusion": (0.462, 0.076, 0.124)}
@@ -26,16 +25,16 @@ CASES = (("continuous DLC (Table 3)", Case.of("continuous_dlc")),
 
 def methods(vehicle_text: str, source: str, name: str):
     """(label, vehicle configuration, estimator) of each compared method."""
-    def threshold(value: str):
-        marker = "threshold = 1.5                # m/s^2, a_yT (seed 000)"
-        return parse_vehicle(vehicle_text.replace(marker, f"threshold = {value}"), source, name)
+    def switching(**values):
+        return parse_vehicle(with_settings(vehicle_text, "estimator.switching", **values), source,
+                             name)
 
     base = parse_vehicle(vehicle_text, source, name)
-    plant, estimators = vehicle_text.split("[estimator.switching]", 1)  # keep the plant's roll
-    literal = parse_vehicle(plant + "[estimator.switching]" + re.sub(
-        r"(?m)^roll_gradient = [0-9.e-]+", "roll_gradient = 0.0", estimators), source, name)
-    return (("kinematic only", threshold("1e-9"), "switching"),
-            ("KF only", threshold("1e9"), "switching"),
+    literal = parse_vehicle(with_settings(  # the plant keeps its roll; the estimators ignore it
+        with_settings(vehicle_text, "estimator.switching", roll_gradient=0.0),
+        "estimator.fusion", roll_gradient=0.0), source, name)
+    return (("kinematic only", switching(threshold=1e-9), "switching"),
+            ("KF only", switching(threshold=1e9), "switching"),
             ("switching", base, "switching"),
             ("fusion (comparison)", base, "fusion"),
             ("switching, literal a_y (no roll compensation)", literal, "switching"),
@@ -76,12 +75,8 @@ def beyond_paper_table(vehicle_text: str, source: str, name: str, seeds: int) ->
     held, growing sine steering) at μ 0.85 and 0.35, the continuous DLC and single DLCs up to the
     limit."""
     def variant(keys: dict[str, float]):
-        text = vehicle_text
-        for key, value in keys.items():
-            text = text.replace(f"{key} = 0.0 ", f"{key} = {value} ")
-        config = parse_vehicle(text, source, name)
-        assert all(config.settings("switching")[k] == v for k, v in keys.items()), keys
-        return config
+        return parse_vehicle(with_settings(vehicle_text, "estimator.switching", **keys), source,
+                             name)
 
     base = parse_vehicle(vehicle_text, source, name)
     lines = []

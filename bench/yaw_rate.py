@@ -16,6 +16,7 @@ import numpy as np  # noqa: E402
 
 from harness.run import run_estimator  # noqa: E402
 from harness.scenarios import Case  # noqa: E402
+from harness.vehicles import with_settings  # noqa: E402
 from model.params import parse_vehicle  # noqa: E402
 
 NAME = "arx_dual_kf"
@@ -30,10 +31,12 @@ PLOT_CASE = Case.of("continuous_dlc", yaw_moment=300.0)
 
 def variants(vehicle_text: str, source: str, name: str):
     """(label, configuration) of the patent form (mz) and the E2 form (mz and delta)."""
-    marker = 'exogenous = "mz" '
-    return (("ARX dual KF, patent (mz)", parse_vehicle(vehicle_text, source, name)),
-            ("ARX dual KF, E2 (mz, δ)", parse_vehicle(
-                vehicle_text.replace(marker, 'exogenous = "mz_delta" '), source, name)))
+    def exogenous(value: str):
+        return parse_vehicle(with_settings(vehicle_text, f"estimator.{NAME}", exogenous=value),
+                             source, name)
+
+    return (("ARX dual KF, patent (mz)", exogenous("mz")),
+            ("ARX dual KF, E2 (mz, δ)", exogenous("mz_delta")))
 
 
 def _errors(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, float]:

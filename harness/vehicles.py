@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from harness.files import read_user_text
@@ -19,3 +20,25 @@ def load_vehicle(path: Path | str) -> VehicleConfig:
 def shipped_vehicles() -> list[Path]:
     """The vehicle files in the repository's vehicles/ folder."""
     return sorted(VEHICLES.glob("*.toml"))
+
+
+def with_settings(text: str, section: str, **values: float | str) -> str:
+    """``text`` of a vehicle file with ``key = value`` set in table ``[section]`` (e.g.
+    "estimator.switching", "vehicle"), for comparing variants of one vehicle. Each key must already
+    be in that table; its trailing comment is kept. Strings are written quoted."""
+    lines, current, found = text.split("\n"), None, set()
+    for i, line in enumerate(lines):
+        header = re.match(r"\s*\[([^\]]+)\]\s*(#.*)?$", line)
+        if header:
+            current = header.group(1).strip()
+            continue
+        match = re.match(r"(\s*)([A-Za-z_][A-Za-z0-9_]*)(\s*=\s*)([^#]*?)(\s*#.*)?$", line)
+        if current == section and match and match.group(2) in values:
+            value = values[match.group(2)]
+            rendered = f'"{value}"' if isinstance(value, str) else repr(float(value))
+            lines[i] = f"{match.group(1)}{match.group(2)}{match.group(3)}{rendered}{match.group(5) or ''}"
+            found.add(match.group(2))
+    missing = set(values) - found
+    if missing:
+        raise KeyError(f"[{section}] has no key {', '.join(sorted(missing))}")
+    return "\n".join(lines)

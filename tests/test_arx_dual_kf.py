@@ -5,7 +5,6 @@ equivalence to the reference over every scenario is in verify."""
 
 from __future__ import annotations
 
-import re
 
 import numpy as np
 import pytest
@@ -15,6 +14,7 @@ from codegen.generate import render
 from harness.build import load_estimator
 from harness.logs import Log
 from harness.scenarios import Case
+from harness.vehicles import with_settings
 from model import status
 from model.estimators import build
 from model.params import parse_vehicle
@@ -23,9 +23,9 @@ NAME = "arx_dual_kf"
 
 
 def variant(vehicle_text, exogenous="mz", **vehicle):
-    text = vehicle_text.replace('exogenous = "mz" ', f'exogenous = "{exogenous}" ')
-    for key, value in vehicle.items():
-        text = re.sub(rf"(?m)^{key} = [0-9.e+]+", f"{key} = {value}", text)
+    text = with_settings(vehicle_text, f"estimator.{NAME}", exogenous=exogenous)
+    if vehicle:
+        text = with_settings(text, "vehicle", **vehicle)
     return parse_vehicle(text, "arx.toml", "c_class")
 
 

@@ -15,6 +15,7 @@ import scipy.signal
 from codegen.generate import render
 from harness.build import load_estimator
 from harness.scenarios import Case
+from harness.vehicles import with_settings
 from model import filters, status
 from model.bicycle import GRAVITY
 from model.estimators import build, ekf_rls
@@ -24,11 +25,8 @@ NAME = "ekf_rls"
 
 
 def variant(vehicle_text, **keys):
-    text = vehicle_text
-    for key, value in keys.items():
-        text, count = re.subn(rf'(?m)^{key} = "[a-z_]+"', f'{key} = "{value}"', text)
-        assert count == 1
-    return parse_vehicle(text, "ekf_rls.toml", "c_class")
+    return parse_vehicle(with_settings(vehicle_text, f"estimator.{NAME}", **keys), "ekf_rls.toml",
+                         "c_class")
 
 
 def run(config, case, rate=100.0):

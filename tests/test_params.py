@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from harness.vehicles import load_vehicle
-from model.params import ParameterError
+from model.params import ParameterError, parse_vehicle
 
 
 def test_default_vehicle_values(config):
@@ -89,3 +89,15 @@ def test_other_sample_time(config):
     fast = config.with_sample_time(0.001)
     assert fast.sample_time == 0.001
     assert fast.parameter_hash("kf2dof") != config.parameter_hash("kf2dof")
+
+
+def test_with_settings_edits_one_table_only(vehicle_text):
+    from harness.vehicles import with_settings
+
+    text = with_settings(vehicle_text, "estimator.switching", threshold=2.0, prefilter="bessel")
+    config = parse_vehicle(text, "variant.toml", "c_class")
+    assert config.settings("switching")["threshold"] == 2.0
+    assert config.settings("switching")["prefilter"] == "bessel"
+    assert config.settings("fusion")["threshold"] == 1.5          # same key, other table: kept
+    with pytest.raises(KeyError, match=r"\[estimator.switching\] has no key nope"):
+        with_settings(vehicle_text, "estimator.switching", nope=1.0)

@@ -99,11 +99,11 @@ def test_reference_time_out_and_low_speed(config, estimator, compiled):
 def test_roll_compensation_recovers_the_cg_acceleration(config, estimator, compiled, vehicle_text):
     """With the car's roll gradient the prefiltered a_y matches vx r in a steady turn; with 0
     (the paper's literal a_y) it carries the gravity component of body roll."""
+    from harness.vehicles import with_settings
     from model.params import parse_vehicle
 
-    plant, tables = vehicle_text.split("[estimator.switching]", 1)
-    literal = parse_vehicle(plant + "[estimator.switching]" + tables.replace(
-        "roll_gradient = 0.0082 ", "roll_gradient = 0.0    "), "literal.toml", "c_class")
+    literal = parse_vehicle(with_settings(vehicle_text, "estimator.switching", roll_gradient=0.0),
+                            "literal.toml", "c_class")
     assert literal.settings("switching")["roll_gradient"] == 0.0
     log = Case.of("step_steer").simulate(config, 100.0)
     steady = slice(400, 600)
@@ -127,10 +127,11 @@ def switching_signal(est, states):
 
 
 def with_option(vehicle_text, key, value):
+    from harness.vehicles import with_settings
     from model.params import parse_vehicle
 
-    text = vehicle_text.replace(f"{key} = 0.0 ", f"{key} = {value} ")
-    config = parse_vehicle(text, f"{key}.toml", "c_class")
+    config = parse_vehicle(with_settings(vehicle_text, "estimator.switching", **{key: value}),
+                           f"{key}.toml", "c_class")
     assert config.settings("switching")[key] == value
     return config
 
