@@ -21,30 +21,11 @@ def _theta_names(config):
     return ("a1", "a2", "b_mz", *extra)
 
 
-def _upper(prefix, names):
-    return tuple(f"{prefix}_{names[i]}_{names[j]}" for i in range(len(names))
-                 for j in range(i, len(names)))
-
-
 def names(config):
     theta = _theta_names(config)
-    states = ("x_1", "x_2", *_upper("P", ("x_1", "x_2")), *theta, *_upper("Pt", theta), "mz_prev",
+    states = ("x_1", "x_2", *blocks.upper_names("P", ("x_1", "x_2")), *theta, *blocks.upper_names("Pt", theta), "mz_prev",
               *(("delta_prev",) if "b_delta" in theta else ()), "holding")
     return INPUTS, states, ("r", *theta, "gain", "status")
-
-
-def _packed(P):
-    n = P.shape[0]
-    return [P[i, j] for i in range(n) for j in range(i, n)]
-
-
-def _unpacked(values, n):
-    P = np.zeros((n, n))
-    it = iter(values)
-    for i in range(n):
-        for j in range(i, n):
-            P[i, j] = P[j, i] = next(it)
-    return P
 
 
 def _input_scales(config):
@@ -76,7 +57,7 @@ def init(config, u0):
                       + [(s["input_initial_factor"] * b) ** 2 for b in _input_scales(config)])
     delta = [first["delta"]] if len(theta) == 4 else []
     R = s["measurement_noise"]
-    return np.array([first["r"], first["r"], R, 0.0, R, *theta, *_packed(P_theta), first["mz"],
+    return np.array([first["r"], first["r"], R, 0.0, R, *theta, *blocks.packed(P_theta), first["mz"],
                      *delta, holding])
 
 
@@ -87,10 +68,9 @@ def step(config, state, u):
     inputs = dict(zip(INPUTS, u))
     theta_names = _theta_names(config)
     n = len(theta_names)
-    ok = {k: blocks.plausible(config.limits, k, v) for k, v in inputs.items()}
-    low = ok["vx"] and (inputs["vx"] < s["vx_min"]
-                        or (x["holding"] > 0.5 and inputs["vx"] < s["vx_resume"]))
-    status = (0 if all(ok.values()) else blocks.INVALID_INPUT) | (blocks.LOW_SPEED if low else 0)
+    _, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                     x["holding"] > 0.5)
+    low = bool(status & blocks.LOW_SPEED)   # only the parameter filter pauses (E5)
     R, Q = s["measurement_noise"], s["model_noise"]
 
     # KF1 [B1]-[B6]
@@ -99,7 +79,7 @@ def step(config, state, u):
     phi = np.array([x["x_1"], x["x_2"], *previous])
     prediction = float(phi @ theta)
     A = np.array([[theta[0], theta[1]], [1.0, 0.0]])
-    P = _unpacked([x["P_x_1_x_1"], x["P_x_1_x_2"], x["P_x_2_x_2"]], 2)
+    P = blocks.unpacked([x["P_x_1_x_1"], x["P_x_1_x_2"], x["P_x_2_x_2"]], 2)
     P_pred = A @ P @ A.T + np.diag([Q, 0.0])
     s_pred = np.array([prediction, x["x_1"]])
     if ok["r"]:
@@ -112,7 +92,7 @@ def step(config, state, u):
     x_n = s_new[0]
 
     # KF2 [C1]-[C6] with the E5 skips
-    P_theta = _unpacked([x[k] for k in _upper("Pt", theta_names)], n) + np.diag(
+    P_theta = blocks.unpacked([x[k] for k in blocks.upper_names("Pt", theta_names)], n) + np.diag(
         [s["ar_drift"]] * 2 + [(s["input_drift"] * b) ** 2 for b in _input_scales(config)])
     updated = ok["r"] and ok["vx"] and not low and phi @ P_theta @ phi >= s["excitation_floor"]
     if updated:
@@ -129,7 +109,7 @@ def step(config, state, u):
 
     new = {"x_1": x_n, "x_2": s_new[1], "P_x_1_x_1": P_new[0, 0], "P_x_1_x_2": P_new[0, 1],
            "P_x_2_x_2": P_new[1, 1], **dict(zip(theta_names, theta)),
-           **dict(zip(_upper("Pt", theta_names), _packed(P_theta))),
+           **dict(zip(blocks.upper_names("Pt", theta_names), blocks.packed(P_theta))),
            "mz_prev": inputs["mz"] if ok["mz"] else 0.0, "holding": 1.0 if low else 0.0}
     if n == 4:
         new["delta_prev"] = inputs["delta"] if ok["delta"] else 0.0

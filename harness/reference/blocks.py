@@ -66,6 +66,28 @@ def kf_update(x, P, z, C, D, u, R):
     return x + K @ nu, I_KC @ P @ I_KC.T + K @ R @ K.T
 
 
+def upper_names(prefix: str, names: tuple[str, ...]) -> tuple[str, ...]:
+    """Names of a symmetric matrix's stored entries, upper triangle row by row."""
+    return tuple(f"{prefix}_{names[i]}_{names[j]}" for i in range(len(names))
+                 for j in range(i, len(names)))
+
+
+def packed(P: np.ndarray) -> list[float]:
+    """The upper triangle of P, row by row."""
+    n = P.shape[0]
+    return [P[i, j] for i in range(n) for j in range(i, n)]
+
+
+def unpacked(values, n: int) -> np.ndarray:
+    """The symmetric n x n matrix whose upper triangle (row by row) is ``values``."""
+    P = np.zeros((n, n))
+    entries = iter(values)
+    for i in range(n):
+        for j in range(i, n):
+            P[i, j] = P[j, i] = next(entries)
+    return P
+
+
 def plausible(limits: Mapping[str, float], name: str, value: float) -> bool:
     """Finite and within its [inputs] limit."""
     return math.isfinite(value) and abs(value) <= limits[LIMIT_OF[name]]

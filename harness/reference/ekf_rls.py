@@ -15,8 +15,9 @@ from harness.reference import blocks
 TABLE = "ekf_rls"
 GRAVITY = blocks.GRAVITY
 INPUTS = ("delta", "vx", "ax", "ay", "r")
-STATES = ("beta_ekf", "r_ekf", "P_beta_beta", "P_beta_r", "P_r_r", "c0_1", "c0_2",
-          "Prls_c0_1_c0_1", "Prls_c0_1_c0_2", "Prls_c0_2_c0_2", "c_front",
+EKF_P = blocks.upper_names("P", ("beta", "r"))
+RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
+STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
           "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
 OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
 
@@ -117,8 +118,7 @@ def step(config, state, u):
 
     # RLS [30-33]
     X = np.array([x["c0_1"], x["c0_2"]])
-    P = np.array([[x["Prls_c0_1_c0_1"], x["Prls_c0_1_c0_2"]],
-                  [x["Prls_c0_1_c0_2"], x["Prls_c0_2_c0_2"]]])
+    P = blocks.unpacked([x[k] for k in RLS_P], 2)
     if min(A[0, 0], A[1, 1]) >= s["slip_min"]:
         tau = s["forgetting_factor"] ** (T / 0.001)
         K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
@@ -133,7 +133,7 @@ def step(config, state, u):
         cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
 
     # EKF with the previous stiffness [13-15]
-    Pe = np.array([[x["P_beta_beta"], x["P_beta_r"]], [x["P_beta_r"], x["P_r_r"]]])
+    Pe = blocks.unpacked([x[k] for k in EKF_P], 2)
     F = np.eye(2) + T * _jacobian(v, delta, vx, x["c_front"], x["c_rear"])
     P_pred = F @ Pe @ F.T + np.array(s["process_noise"]) * T
     xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
@@ -151,9 +151,8 @@ def step(config, state, u):
     beta_int = bp + T * ((ay * math.cos(bp) - ax * math.sin(bp)) / (vx / math.cos(bp)) - r)
     beta = (1 - weight) * xe[0] + weight * beta_int
 
-    new = {"beta_ekf": xe[0], "r_ekf": xe[1], "P_beta_beta": Pe[0, 0], "P_beta_r": Pe[0, 1],
-           "P_r_r": Pe[1, 1], "c0_1": X[0], "c0_2": X[1], "Prls_c0_1_c0_1": P[0, 0],
-           "Prls_c0_1_c0_2": P[0, 1], "Prls_c0_2_c0_2": P[1, 1], "c_front": cf,
+    new = {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
+           "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,
            "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
            "holding": 0.0}
     return (np.array([new[k] for k in STATES]),
