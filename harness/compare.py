@@ -51,17 +51,37 @@ class Difference:
 
 
 def difference(name: str, a: np.ndarray, b: np.ndarray, tolerance: Tolerance,
-               integer: bool = False) -> Difference:
-    """Worst absolute and guarded relative difference between runs ``a`` and ``b``."""
+               integer: bool = False, scale=1.0) -> Difference:
+    """Worst absolute and guarded relative difference between runs ``a`` and ``b``; ``scale``
+    (per column, or one number) multiplies the floor for signals whose natural size is not O(1)
+    in SI units (``model.layout.Signal.scale``)."""
     a, b = np.asarray(a, float), np.asarray(b, float)
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         return Difference(name, np.inf, np.inf, tolerance.relative, integer)
     delta = np.abs(a - b)
     magnitude = np.maximum(np.abs(a), np.abs(b))
     peak = magnitude.max(axis=0, initial=0.0) * PEAK_FRACTION  # per column of a state matrix
-    scale = np.maximum(np.maximum(magnitude, tolerance.floor), peak)
+    scale = np.maximum(np.maximum(magnitude, tolerance.floor * np.asarray(scale, float)), peak)
     return Difference(name, float(delta.max(initial=0.0)), float((delta / scale).max(initial=0.0)),
                       tolerance.relative, integer)
+
+
+REFERENCE_PRECISION = float(np.finfo(np.longdouble).eps / np.finfo(np.float64).eps)
+"""Rounding unit of the long-double reference (the unscented filters') relative to double."""
+
+
+def for_estimator(real: str, rounding_gain: float) -> Tolerance:
+    """The tolerance for code of type ``real`` of an estimator whose algorithm amplifies rounding
+    by ``rounding_gain`` (``model.estimator.Estimator``; for the unscented filters the UT's sum of
+    |weights|, 2e6 at the paper's alpha = 0.001, times the tyres' force-per-speed conditioning,
+    about 20). Their reference computes in long double; what remains of the gain after that,
+    gain x REFERENCE_PRECISION (about 2e4), is the factor by which the reference itself is less
+    exact than double arithmetic on a plain filter, so the double tolerance is widened by it (never
+    narrowed). The float tolerance lies far above and stays."""
+    base = TOLERANCES[real]
+    if real == "double":
+        return Tolerance(base.relative * max(1.0, rounding_gain * REFERENCE_PRECISION), base.floor)
+    return base
 
 
 def as_seen_by(real: str, inputs: np.ndarray) -> np.ndarray:

@@ -22,10 +22,10 @@ def shipped_vehicles() -> list[Path]:
     return sorted(VEHICLES.glob("*.toml"))
 
 
-def with_settings(text: str, section: str, **values: float | str) -> str:
+def with_settings(text: str, section: str, **values: float | str | list[float]) -> str:
     """``text`` of a vehicle file with ``key = value`` set in table ``[section]`` (e.g.
     "estimator.switching", "vehicle"), for comparing variants of one vehicle. Each key must already
-    be in that table; its trailing comment is kept. Strings are written quoted."""
+    be in that table; its trailing comment is kept. Strings are written quoted, lists as arrays."""
     lines, current, found = text.split("\n"), None, set()
     for i, line in enumerate(lines):
         header = re.match(r"\s*\[([^\]]+)\]\s*(#.*)?$", line)
@@ -35,7 +35,12 @@ def with_settings(text: str, section: str, **values: float | str) -> str:
         match = re.match(r"(\s*)([A-Za-z_][A-Za-z0-9_]*)(\s*=\s*)([^#]*?)(\s*#.*)?$", line)
         if current == section and match and match.group(2) in values:
             value = values[match.group(2)]
-            rendered = f'"{value}"' if isinstance(value, str) else repr(float(value))
+            if isinstance(value, str):
+                rendered = f'"{value}"'
+            elif isinstance(value, (list, tuple)):
+                rendered = "[" + ", ".join(repr(float(v)) for v in value) + "]"
+            else:
+                rendered = repr(float(value))
             lines[i] = f"{match.group(1)}{match.group(2)}{match.group(3)}{rendered}{match.group(5) or ''}"
             found.add(match.group(2))
     missing = set(values) - found

@@ -8,7 +8,7 @@ import numpy as np
 
 from codegen.generate import render
 from harness.build import load_estimator
-from harness.compare import TOLERANCES, Difference, as_seen_by, difference
+from harness.compare import Difference, as_seen_by, difference, for_estimator
 from harness.reference import REFERENCES
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
@@ -52,7 +52,9 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
         if tuple(model_layout.names) != tuple(ref_names):
             raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
     compiled = load_estimator(estimator, render(config, name, real, params))
-    tolerance = TOLERANCES[real]
+    tolerance = for_estimator(real, estimator.rounding_gain)
+    state_scales = np.array(estimator.states.scales)
+    step_scales = np.concatenate([state_scales, estimator.outputs.scales])
     results = []
     for case in cases:
         log = case.simulate(config, 1.0 / config.sample_time, seed)
@@ -60,20 +62,22 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
         c_out, c_states = compiled.run(inputs)
         r_out, r_states = run_reference(reference, config, inputs)
         outputs = tuple(
-            difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer)
+            difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer, s.scale)
             for i, s in enumerate(estimator.outputs.signals)
         )
-        states = difference("state (all entries)", c_states, r_states, tolerance)
-        stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance)
+        states = difference("state (all entries)", c_states, r_states, tolerance,
+                            scale=state_scales)
+        stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
         results.append(CaseResult(name, real, case.label, len(log), outputs, states, stepwise))
         if progress:
             progress()
     return results
 
 
-def _stepwise(reference, config, c_states, c_out, inputs, tolerance) -> Difference:
+def _stepwise(reference, config, c_states, c_out, inputs, tolerance, scales) -> Difference:
     """Each reference step from the C's state k against the C's state k+1 and output k."""
     expected = [np.concatenate(reference.step(config, c_states[k], row))
                 for k, row in enumerate(inputs)]
     actual = np.hstack([c_states[1:], c_out])
-    return difference("step from the C state", actual, np.array(expected), tolerance)
+    return difference("step from the C state", actual, np.array(expected), tolerance,
+                      scale=scales)

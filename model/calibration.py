@@ -77,7 +77,9 @@ def calibratable(config: VehicleConfig, estimator: str) -> Parameters:
     limits = {k: entry(k, v) for k, v in config.limits.items()}
     settings: dict[str, Any] = {}
     for key, value in config.settings(estimator).items():
-        if isinstance(value, tuple):
+        if isinstance(value, tuple) and not isinstance(value[0], tuple):
+            settings[key] = tuple(entry(f"{key}_{i + 1}", v) for i, v in enumerate(value))
+        elif isinstance(value, tuple):
             n = len(value)
             upper = {(i, j): entry(f"{key}_{i + 1}{j + 1}", value[i][j])
                      for i in range(n) for j in range(i, n)}

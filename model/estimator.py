@@ -49,6 +49,9 @@ class Estimator:
         parameters: where the parameter values come from (``params`` is an input when they are
             calibratable).
         notes: facts worth printing in generated files (e.g. discretisation error bound).
+        rounding_gain: how much the algorithm amplifies the rounding of its NumPy reference
+            beyond that of a plain Kalman filter (1 for most; the unscented transform's weighted
+            sums, ``model.unscented``); the double equivalence tolerance is widened by it.
     """
 
     name: str
@@ -61,6 +64,7 @@ class Estimator:
     parameters: Parameters
     notes: Mapping[str, str] = field(default_factory=dict)
     schemes: Schemes | None = None
+    rounding_gain: float = 1.0
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

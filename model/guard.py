@@ -19,8 +19,9 @@ import casadi as ca
 
 from model import status
 
+WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 LIMIT_KEYS = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
-              "mz": "mz_max"}
+              "mz": "mz_max", **{name: "omega_max" for name in WHEEL_SPEEDS}}
 """Which ``[inputs]`` limit bounds which log column."""
 
 
@@ -70,7 +71,8 @@ def _all(flags) -> ca.SX:
     return result
 
 
-NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0, "mz": 0.0}
+NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0, "mz": 0.0,
+           **{name: 0.0 for name in WHEEL_SPEEDS}}
 """What an implausible input of the first sample is replaced by (vx: the low-speed limit)."""
 
 

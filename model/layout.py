@@ -15,6 +15,10 @@ class Signal:
     unit: str
     doc: str
     integer: bool = False
+    scale: float = 1.0
+    """Magnitude (in ``unit``) at which rounding of this entry is judged: the equivalence check's
+    floor is multiplied by it. 1 for the O(1) SI signals; e.g. about 1e4 for a car's yaw moment in
+    N*m, whose rounding comes from force moments of that size."""
 
 
 @dataclass(frozen=True)
@@ -26,6 +30,10 @@ class Layout:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(s.name for s in self.signals)
+
+    @property
+    def scales(self) -> tuple[float, ...]:
+        return tuple(s.scale for s in self.signals)
 
     def __len__(self) -> int:
         return len(self.signals)

@@ -123,6 +123,32 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
     return Field(key, expected, check, doc)
 
 
+def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False) -> Field:
+    """The ``size`` diagonal entries of a diagonal covariance, each > 0 (or >= 0 when
+    ``zero_allowed``). Normalised to a tuple of floats."""
+    bound = ">= 0" if zero_allowed else "> 0"
+    expected = f"a list of {size} numbers {bound} ({unit}), the diagonal"
+
+    def check(value: Any) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != size:
+            raise Invalid(expected)
+        try:
+            entries = tuple(_number(v) for v in value)
+        except Invalid:
+            raise Invalid(expected) from None
+        if any(v < 0.0 or (v == 0.0 and not zero_allowed) for v in entries):
+            raise Invalid(expected)
+        return entries
+
+    return Field(key, expected, check, doc)
+
+
+def between(key: str, low: float, high: float, doc: str = "", default: float | None = None) -> Field:
+    """A number strictly between ``low`` and ``high``."""
+    return _number_field(key, f"a number between {low:g} and {high:g} (exclusive)",
+                         lambda x: low < x < high, doc, default)
+
+
 # ------------------------------------------------------------------------------------------------
 # [vehicle]: physical parameters (names fixed: other tools depend on them)
 
@@ -148,6 +174,7 @@ INPUT_LIMITS: tuple[Field, ...] = (
     positive("ay_max", "m/s^2", "largest plausible |ay|"),
     positive("r_max", "rad/s", "largest plausible |r|"),
     positive("mz_max", "N*m", "largest plausible |mz| (direct yaw moment)", default=2.0e4),
+    positive("omega_max", "rad/s", "largest plausible |omega| of a wheel speed", default=400.0),
 )
 
 # [plant]: the truth plant of harness/plant (simulation only; never in generated code). Optional.
@@ -317,10 +344,48 @@ EKF_RLS = EstimatorSchema(
 """Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
 §5)."""
 
+UKF_FIELDS: tuple[Field, ...] = (
+    choice("longitudinal_force", ("wheel_speeds", "free_rolling"), "tyre slip ratios from the "
+           "measured wheel speeds (C4.1) or free rolling with a_x a random walk (C4.2)"),
+    positive("friction", "-", "road friction mu of the HSRI model (known, C9)"),
+    positive("longitudinal_stiffness", "N", "C_x per tyre, N per unit slip (the cornering "
+             "stiffness per tyre is half the [vehicle] axle value)"),
+    nonnegative("drag_area", "m^2", "C_d A of the drag F_w = 1.2 C_dA u^2 / 2 (0 = none, the "
+                "paper)"),
+    positive("slip_speed_floor", "m/s", "eps_v: slip ratios divide by max(r omega, eps_v)"),
+    _number_field("ut_alpha", "a number in (0, 1]", lambda x: 0.0 < x <= 1.0,
+                  "UT spread alpha"),
+    nonnegative("ut_beta", "-", "UT prior-distribution factor beta (2 for Gaussian)"),
+    nonnegative("ut_kappa", "-", "UT secondary scaling kappa"),
+    diagonal("initial_covariance", 6, "[u, v, gamma, Gamma, a_x, a_y]: SI units squared", "P_0",
+             zero_allowed=True),
+    diagonal("process_noise", 6, "SI units squared per step", "Q (Q_0 of the adaptive filter)"),
+    diagonal("measurement_noise", 3, "[a_x, a_y, gamma]: (m/s^2)^2, (m/s^2)^2, (rad/s)^2", "R"),
+    *LOW_SPEED_FIELDS,
+)
+"""Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""
+
+UKF = EstimatorSchema(fields=UKF_FIELDS, rules=LOW_SPEED_RULES)
+AUKF = EstimatorSchema(
+    fields=(*UKF_FIELDS, between("forgetting_factor", 0.95, 0.99, "Sage-Husa fading factor f "
+                                 "(the paper: 0.95 < f < 0.99)"),
+            choice("noise_safeguard", ("floor", "none"), "Sage-Husa safeguard: Q_ii >= 1e-3 "
+                   "Q_0,ii (the spec's §2.10) or none (the literal (15b): Q may turn negative and "
+                   "the covariance lose positive definiteness, which the repair then catches)"),
+            diagonal("process_noise_max", 6, "SI units squared per step", "ceiling of the adapted "
+                     "Q (beyond the spec: without it abusive inputs, e.g. a_y alternating "
+                     "+-25 m/s^2, grow Q and P until they overflow)")),
+    rules=(*LOW_SPEED_RULES, Rule("process_noise_max", lambda t: "" if all(
+        high > low for high, low in zip(t["process_noise_max"], t["process_noise"])) else
+        f"process_noise_max = {list(t['process_noise_max'])!r}: expected every entry above its "
+        f"process_noise entry {list(t['process_noise'])!r}")))
+
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
     "switching": SWITCHING,
     "fusion": FUSION,
     "arx_dual_kf": ARX_DUAL_KF,
     "ekf_rls": EKF_RLS,
+    "ukf": UKF,
+    "aukf": AUKF,
 }

@@ -12,5 +12,9 @@ again: the reference (e.g. the steady-state yaw rate) is suspect."""
 
 PARAMETERS_PROJECTED = 8
 """Identified model parameters left the stable set and were projected back onto it."""
+COVARIANCE_REPAIRED = 16
+"""The state covariance was not positive definite; it was repaired (correlations dropped, variances
+kept) before the step used it."""
 STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT,
-               "REFERENCE_SUSPECT": REFERENCE_SUSPECT, "PARAMETERS_PROJECTED": PARAMETERS_PROJECTED}
+               "REFERENCE_SUSPECT": REFERENCE_SUSPECT, "PARAMETERS_PROJECTED": PARAMETERS_PROJECTED,
+               "COVARIANCE_REPAIRED": COVARIANCE_REPAIRED}

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, switching
+from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, switching, unscented
 
-REFERENCES: dict[str, ModuleType] = {"kf2dof": kf2dof, "switching": switching, "fusion": fusion,
-                                     "arx_dual_kf": arx_dual_kf, "ekf_rls": ekf_rls}
+REFERENCES: dict[str, ModuleType | unscented.Variant] = {
+    "kf2dof": kf2dof, "switching": switching, "fusion": fusion, "arx_dual_kf": arx_dual_kf,
+    "ekf_rls": ekf_rls, "ukf": unscented.Variant("ukf", adaptive=False),
+    "aukf": unscented.Variant("aukf", adaptive=True)}

@@ -15,7 +15,8 @@ GRAVITY = 9.81
 LOW_SPEED = 1
 INVALID_INPUT = 2
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
-            "mz": "mz_max"}
+            "mz": "mz_max", "omega_fl": "omega_max", "omega_fr": "omega_max",
+            "omega_rl": "omega_max", "omega_rr": "omega_max"}
 
 
 def bicycle(vehicle: Mapping[str, float], vx: float):

@@ -154,7 +154,7 @@ def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -
         "ax": np.gradient(vx, t) + rng.normal(0, noise["accel_noise"], len(t)),
         "ay": vx * r + rng.normal(0, noise["accel_noise"], len(t)),
         "r": r + rng.normal(0, noise["gyro_noise"], len(t)),
-        "omega_rl": omega, "omega_rr": omega,
+        "omega_fl": omega, "omega_fr": omega, "omega_rl": omega, "omega_rr": omega,
         "beta_ref": np.arctan2(vy, vx), "vx_ref": vx, "vy_ref": vy, "r_ref": r,
         "mu": np.ones_like(t), "off_course": np.zeros_like(t),
     }, source="<simulated low_speed>", notes={"run": "synthetic, no plant"})
@@ -170,6 +170,7 @@ def invalid_inputs(config: VehicleConfig, rate_hz: float, seed: int, progress=No
         ("vx", 0.90, 1, np.nan), ("ax", 1.10, 1, np.nan), ("delta", 2.00, 3, 2.5),
         ("r", 2.50, 5, 40.0), ("vx", 3.00, 1, 1e6), ("vx", 3.50, 2, -np.inf),
         ("ay", 4.00, 20, np.nan), ("vx", 5.00, 4, 0.5), ("ay", 5.50, 1, -1e300),
+        ("omega_fl", 6.00, 1, np.nan), ("omega_rr", 6.50, 3, np.inf), ("omega_fr", 7.00, 1, 1e4),
     )
     for column, time, count, value in faults:
         start = int(round(time * rate_hz))

@@ -6,7 +6,7 @@ from typing import Callable
 
 from model.calibration import Parameters, parameters
 from model.estimator import Estimator
-from model.estimators import arx_dual_kf, ekf_rls, fusion, kf2dof, switching
+from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, switching
 from model.params import VehicleConfig
 
 BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
@@ -15,6 +15,8 @@ BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
     fusion.NAME: fusion.build,
     arx_dual_kf.NAME: arx_dual_kf.build,
     ekf_rls.NAME: ekf_rls.build,
+    aukf.PLAIN_NAME: aukf.build_plain,
+    aukf.NAME: aukf.build_adaptive,
 }
 
 

@@ -1,0 +1,211 @@
+"""Reference aukf and ukf (shared/methods/002-aukf-sage-husa.md §2, §3 and §5 defaults): the 3-DOF
+model with four-wheel kinematics, HSRI tyres and load transfer (1)-(8), the scaled UT (10)-(11),
+the UKF (12)-(14) with the points not redrawn, and (aukf) the sub-optimal Sage-Husa estimator of q
+and Q (15a)-(15b) with the §2.10 safeguard and
+the ceiling process_noise_max. NumPy only.
+
+The sigma points are propagated and weighted literally, in the difference form of C6, in
+``numpy.longdouble`` (64-bit mantissa on x86-64): with alpha = 0.001 the weights are about +-1e6,
+and the extra 11 bits keep this literal form an accurate oracle for the generated C, which
+evaluates the same sums in a rearranged, cancellation-free form.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.reference import blocks
+
+LD = np.longdouble
+STATE = ("u", "v", "gamma", "moment", "ax", "ay")
+COVARIANCE = blocks.upper_names("P", STATE)
+OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
+WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
+COVARIANCE_REPAIRED = 16
+AIR_DENSITY = 1.2
+N = 6
+
+
+@dataclass(frozen=True)
+class Variant:
+    """The reference shape (``names``, ``init``, ``step``) for one of the two tables."""
+
+    table: str
+    adaptive: bool
+
+    def names(self, config):
+        s = config.settings(self.table)
+        wheels = WHEEL_SPEEDS if s["longitudinal_force"] == "wheel_speeds" else ()
+        extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
+                 if self.adaptive else ())
+        return (("delta", "vx", "ax", "ay", "r", *wheels), (*STATE, *COVARIANCE, *extra, "holding"),
+                OUTPUTS)
+
+    def init(self, config, u0):
+        s = config.settings(self.table)
+        inputs = dict(zip(self.names(config)[0], u0))
+        first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"])
+        x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
+        extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
+                 if self.adaptive else [])
+        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra
+                        + [2 * holding], dtype=float)
+
+    def step(self, config, state, u):
+        s = config.settings(self.table)
+        input_names, state_names, _ = self.names(config)
+        x = dict(zip(state_names, state))
+        inputs = dict(zip(input_names, u))
+        active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                             x["holding"] > 0.5)
+        if not active:       # hold; holding = 2 marks a low-speed hold, 1 an invalid input
+            held = dict(x, holding=2.0 if status & blocks.LOW_SPEED else 1.0)
+            return (np.array([held[k] for k in state_names]),
+                    np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
+                              float(status)]))
+        if x["holding"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
+            x = dict(zip(state_names, self.init(config, u)))
+        X = np.array([x[k] for k in STATE], dtype=LD)
+        P = blocks.unpacked([x[k] for k in COVARIANCE], N).astype(LD)
+        if self.adaptive:
+            q = np.array([x[f"qmean_{n}"] for n in STATE], dtype=LD)
+            Q = np.diag(np.array([x[f"qvar_{n}"] for n in STATE], dtype=LD))
+        else:
+            q, Q = np.zeros(N, dtype=LD), np.diag(np.array(s["process_noise"], dtype=LD))
+        R = np.diag(np.array(s["measurement_noise"], dtype=LD))
+        wheels = (np.array([inputs[w] for w in WHEEL_SPEEDS], dtype=LD)
+                  * LD(config.vehicle["wheel_radius"])
+                  if s["longitudinal_force"] == "wheel_speeds" else None)
+
+        # (10), (11): sigma points and weights
+        alpha, beta, kappa = LD(s["ut_alpha"]), LD(s["ut_beta"]), LD(s["ut_kappa"])
+        tau = alpha ** 2 * (N + kappa) - N
+        wm = np.full(2 * N + 1, 1 / (2 * (N + tau)), dtype=LD)
+        wc = wm.copy()
+        wm[0] = tau / (N + tau)
+        wc[0] = wm[0] + 1 - alpha ** 2 + beta
+        root, repaired = cholesky(P)
+        columns = np.sqrt(N + tau) * root
+        chi = np.column_stack([X, X[:, None] + columns, X[:, None] - columns])
+
+        # (12): propagate, add q; mean and covariance in difference form (C6)
+        F = process(config, s, chi, LD(inputs["delta"]), wheels)
+        points = F + q[:, None]
+        mean = points[:, 0] + (points[:, 1:] - points[:, :1]) @ wm[1:]
+        deviations = points - mean[:, None]
+        spread = (deviations * wc) @ deviations.T
+        P_pred = spread + Q
+
+        # (13), (14): Z = [a_x, a_y, gamma], r = 0
+        Z = points[[4, 5, 2], :]
+        z_hat = Z[:, 0] + (Z[:, 1:] - Z[:, :1]) @ wm[1:]
+        z_dev = Z - z_hat[:, None]
+        P_zz = (z_dev * wc) @ z_dev.T + R
+        P_xz = (deviations * wc) @ z_dev.T
+        K = P_xz @ _inverse3(P_zz)
+        eps = np.array([inputs["ax"], inputs["ay"], inputs["r"]], dtype=LD) - z_hat
+        X_new = mean + K @ eps
+        P_new = P_pred - K @ P_zz @ K.T
+
+        new = {**dict(zip(STATE, X_new)), **dict(zip(COVARIANCE, blocks.packed(P_new)))}
+        if self.adaptive:                                                  # (15a), (15b), §2.10
+            f = LD(s["forgetting_factor"])
+            d = (1 - f) / (1 - LD(x["fading"]))
+            q_new = (1 - d) * q + d * (X_new - (mean - q))
+            gain = K @ eps
+            bracket = np.outer(gain, gain) + P_new - spread
+            Q_new = np.diag((1 - d) * Q + d * bracket)
+            if s["noise_safeguard"] == "floor":
+                Q_new = np.maximum(Q_new, 1e-3 * np.array(s["process_noise"], dtype=LD))
+            Q_new = np.minimum(Q_new, np.array(s["process_noise_max"], dtype=LD))
+            new.update({**{f"qmean_{n}": q_new[i] for i, n in enumerate(STATE)},
+                        **{f"qvar_{n}": Q_new[i] for i, n in enumerate(STATE)},
+                        "fading": LD(x["fading"]) * f})
+        new["holding"] = 0.0
+        output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]],
+                  status | (COVARIANCE_REPAIRED if repaired else 0)]
+        return (np.array([new[k] for k in state_names], dtype=float),
+                np.array(output, dtype=float))
+
+
+def _inverse3(A):
+    """Inverse of a 3 x 3 matrix by its adjugate, in the matrix's precision (LAPACK has no
+    long double)."""
+    cof = np.empty((3, 3), dtype=A.dtype)
+    for i in range(3):
+        for j in range(3):
+            rows = [r for r in range(3) if r != i]
+            cols = [c for c in range(3) if c != j]
+            minor = A[rows[0], cols[0]] * A[rows[1], cols[1]] - A[rows[0], cols[1]] * A[rows[1], cols[0]]
+            cof[i, j] = (-1) ** (i + j) * minor
+    return cof.T / (A[0, :] @ cof[0, :])
+
+
+def cholesky(P):
+    """(L, repaired): Cholesky-Banachiewicz of P + diag(eps_i), eps_i = 1e-9 max(1, P_ii) (§2.11
+    with the jitter per entry, as the state mixes units); if a pivot j is below eps_j / 2 the
+    covariance is repaired to diag(max(P_ii, 0) + eps_i)."""
+    n = P.shape[0]
+    eps = LD(1e-9) * np.maximum(LD(1), np.diag(P))
+    A = P + np.diag(eps)
+    L = np.zeros_like(A)
+    for j in range(n):
+        pivot = A[j, j] - np.sum(L[j, :j] ** 2)
+        if pivot < eps[j] / 2:
+            return np.diag(np.sqrt(np.maximum(np.diag(P), 0) + eps)), True
+        L[j, j] = np.sqrt(pivot)
+        for i in range(j + 1, n):
+            L[i, j] = (A[i, j] - np.sum(L[i, :j] * L[j, :j])) / L[j, j]
+    return L, False
+
+
+def process(config, s, X, delta, rolling):
+    """(8) for every column of X = [u, v, gamma, Gamma, a_x, a_y]: Euler, with Gamma, a_x, a_y
+    from the HSRI tyre forces at X (2)-(7); ``rolling`` = r omega of fl, fr, rl, rr or None for
+    free rolling (S_x = 0, a_x a random walk)."""
+    v = config.vehicle
+    m, iz, a, b = LD(v["mass"]), LD(v["yaw_inertia"]), LD(v["cg_to_front_axle"]), LD(v["cg_to_rear_axle"])
+    t, h, g = LD(v["track_width"]), LD(v["cg_height"]), LD(blocks.GRAVITY)
+    T = LD(config.sample_time)
+    mu, cx, floor = LD(s["friction"]), LD(s["longitudinal_stiffness"]), LD(s["slip_speed_floor"])
+    cy = np.array([v["cornering_stiffness_front"]] * 2 + [v["cornering_stiffness_rear"]] * 2,
+                  dtype=LD)[:, None] / 2
+    u, vy, gamma, moment, ax, ay = X
+    L = a + b
+    # (5) wheel-centre velocities, then the wheel frame (delta on the front wheels only)
+    u_c = np.array([u - gamma * t / 2, u + gamma * t / 2, u - gamma * t / 2, u + gamma * t / 2])
+    v_c = np.array([vy + gamma * a, vy + gamma * a, vy - gamma * b, vy - gamma * b])
+    steer = np.array([delta, delta, 0, 0], dtype=LD)[:, None]
+    cos_d, sin_d = np.cos(steer), np.sin(steer)
+    u_x = u_c * cos_d + v_c * sin_d
+    v_y = -u_c * sin_d + v_c * cos_d
+    # (3), (4) slip ratios
+    if rolling is None:
+        s_x = np.zeros_like(u_x)
+        s_y = v_y / np.maximum(u_x, floor)
+    else:
+        r_omega = rolling[:, None]
+        s_x = (r_omega - u_x) / np.maximum(r_omega, floor)
+        s_y = v_y / np.maximum(r_omega, floor)
+    # (7) loads
+    static = np.array([b, b, a, a], dtype=LD)[:, None] * m * g / (2 * L)
+    pitch = np.array([-1, -1, 1, 1], dtype=LD)[:, None] * m * ax * h / (2 * L)
+    roll = np.array([-b / t, b / t, -a / t, a / t], dtype=LD)[:, None] * m * ay * h / L
+    F_z = np.maximum(static + pitch + roll, 0)
+    # (2) HSRI, lambda guarded by max(mu F_z, 1 N)
+    lam = np.sqrt((cx * s_x) ** 2 + (cy * s_y) ** 2) / np.maximum(mu * F_z, 1)
+    f = np.where(lam <= 0.5, LD(1), (lam - LD(0.25)) / np.maximum(lam, 0.5) ** 2)
+    f_x, f_y = cx * s_x * f, -cy * s_y * f
+    # (1) body-frame forces, moment, accelerations
+    F_X = f_x * cos_d - f_y * sin_d
+    F_Y = f_x * sin_d + f_y * cos_d
+    Gamma = (a * (F_Y[0] + F_Y[1]) - b * (F_Y[2] + F_Y[3])
+             + t / 2 * (F_X[1] - F_X[0]) + t / 2 * (F_X[3] - F_X[2]))
+    if rolling is None:
+        ax_next = ax
+    else:
+        ax_next = (F_X.sum(axis=0) - AIR_DENSITY * LD(s["drag_area"]) * u * u / 2) / m
+    return np.array([u + T * (ax + vy * gamma), vy + T * (ay - u * gamma), gamma + T * moment / iz,
+                     Gamma, ax_next, F_Y.sum(axis=0) / m])

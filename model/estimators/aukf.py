@@ -1,0 +1,266 @@
+"""aukf / ukf: speeds, yaw rate and sideslip from an unscented Kalman filter on the 3-DOF HSRI
+model, with (aukf) or without (ukf) the sub-optimal Sage-Husa process-noise estimator (seed 002).
+
+shared/methods/002-aukf-sage-husa.md, §2 with the §3/§5 defaults:
+
+* state X = [u, v, gamma, Gamma, a_x, a_y], process model ``model.three_dof`` (Euler, HSRI tyres,
+  load transfer; C2: Gamma, a_x, a_y one step delayed); cornering stiffness per tyre = half the
+  [vehicle] axle value;
+* scaled UT with 2n + 1 = 13 points (``model.unscented``): Cholesky of P + eps I, unrolled, with the
+  non-positive-definite repair (status COVARIANCE_REPAIRED); each point's propagated increment
+  F(chi_i) - F(chi_0) evaluated without cancellation (pair arithmetic, ``model.increments``,
+  C6);
+* UKF recursion (12)-(14) with the noise mean q, the points not redrawn, Z = [a_x, a_y, gamma]
+  (linear, so P_zz = H P_chi H' + R and P_xz = P_chi H' with P_chi the points' spread);
+* aukf: (15a)-(15b) with d_k = (1 - f)/(1 - f^(k+1)) (the state keeps f^(k+1)); Q kept diagonal,
+  each entry at least 1e-3 Q_0 (§2.10; ``noise_safeguard = "none"`` drops this floor) and, beyond the spec, at most ``process_noise_max`` (abusive
+  inputs otherwise grow Q and P until they overflow).
+
+Hold rule (model.guard, on the logged vx like every estimator): while holding every state is kept
+and beta = 0; ``holding`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
+after a low-speed hold restarts the filter from itself (the speed it stopped with is stale); after
+an invalid input it continues. Initial state [vx_0, 0, 0, 0, 0, 0] (the paper's X(t_0) = [26.6667, 0, ...] is
+its test speed), P_0, q_0 = 0, Q_0 from the vehicle file.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model import status, unscented
+from model.bicycle import GRAVITY
+from model.calibration import Parameters
+from model.estimator import Estimator, make_functions
+from model.guard import WHEEL_SPEEDS, first_sample, hold, input_guard
+from model.increments import Pair, lift
+from model.layout import Layout, Signal
+from model.three_dof import ThreeDof
+
+NAME = "aukf"
+PLAIN_NAME = "ukf"
+STATE = (("u", "m/s", "longitudinal speed"), ("v", "m/s", "lateral speed"),
+         ("gamma", "rad/s", "yaw rate"), ("moment", "N*m", "yaw moment Gamma"),
+         ("ax", "m/s^2", "longitudinal acceleration"), ("ay", "m/s^2", "lateral acceleration"))
+X_NAMES = tuple(name for name, _, _ in STATE)
+N = len(STATE)
+MEASURED = (4, 5, 2)
+"""Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
+Q_FLOOR = 1e-3
+"""Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
+_BASE_INPUTS = (
+    Signal("delta", "rad", "front road-wheel steer angle, positive left"),
+    Signal("vx", "m/s", "longitudinal speed (initial u and the low-speed rule)"),
+    Signal("ax", "m/s^2", "longitudinal acceleration, positive forward"),
+    Signal("ay", "m/s^2", "lateral acceleration, positive left"),
+    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
+)
+COVARIANCE_PAIRS = tuple((X_NAMES[i], X_NAMES[j]) for i in range(N) for j in range(i, N))
+COVARIANCE = tuple(f"P_{a}_{b}" for a, b in COVARIANCE_PAIRS)
+
+
+def force_scales(vehicle) -> dict[str, float]:
+    """Per state, the size at which its rounding is judged (``model.layout.Signal.scale``): the
+    yaw moment and the accelerations are balances of four tyre forces of about m g / 4 each, so
+    m g l / 4 (N*m) and g (m/s^2); 1 for the speeds and the yaw rate."""
+    scales = {name: 1.0 for name in X_NAMES}
+    scales.update(moment=vehicle["mass"] * GRAVITY * vehicle["wheelbase"] / 4, ax=GRAVITY,
+                  ay=GRAVITY)
+    return scales
+
+
+def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
+    """(inputs, states, outputs) for the configured longitudinal force and variant."""
+    wheels = settings["longitudinal_force"] == "wheel_speeds"
+    inputs = Layout((*_BASE_INPUTS, *((Signal(n, "rad/s", f"wheel speed {n[6:]}")
+                                      for n in WHEEL_SPEEDS) if wheels else ())))
+    scale = force_scales(vehicle)
+    states = Layout((
+        *(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE),
+        *(Signal(f"P_{a}_{b}", "SI", "covariance entry (upper triangle)", scale=scale[a] * scale[b])
+          for a, b in COVARIANCE_PAIRS),
+        *((*(Signal(f"qmean_{n}", unit, f"process-noise mean of {n}", scale=scale[n])
+             for n, unit, _ in STATE),
+           *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",
+                    scale=scale[n] ** 2) for n, unit, _ in STATE),
+           Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
+        Signal("holding", "-", "2 while holding at low speed, 1 on an invalid input, else 0"),
+    ))
+    outputs = Layout((
+        Signal("beta", "rad", "sideslip angle atan2(v, u)"),
+        Signal("vx", "m/s", "longitudinal speed u"),
+        Signal("vy", "m/s", "lateral speed v"),
+        Signal("r", "rad/s", "yaw rate gamma"),
+        Signal("yaw_moment", "N*m", "yaw moment Gamma", scale=scale["moment"]),
+        Signal("ax", "m/s^2", "longitudinal acceleration a_x", scale=scale["ax"]),
+        Signal("ay", "m/s^2", "lateral acceleration a_y", scale=scale["ay"]),
+        Signal("status", "-", "status bits (model.status)", integer=True),
+    ))
+    return inputs, states, outputs
+
+
+def process_model(params: Parameters, name: str) -> ThreeDof:
+    """The 3-DOF HSRI model with the vehicle's and the estimator's parameters."""
+    config = params.config
+    v, s = config.vehicle, config.settings(name)
+    return ThreeDof(
+        mass=v["mass"], yaw_inertia=v["yaw_inertia"], cg_to_front_axle=v["cg_to_front_axle"],
+        cg_to_rear_axle=v["cg_to_rear_axle"], track_width=v["track_width"],
+        cg_height=v["cg_height"], wheel_radius=v["wheel_radius"],
+        cornering_front=v["cornering_stiffness_front"] / 2,
+        cornering_rear=v["cornering_stiffness_rear"] / 2,
+        longitudinal=s["longitudinal_stiffness"], friction=s["friction"],
+        drag_area=s["drag_area"], slip_speed_floor=s["slip_speed_floor"],
+        sample_time=config.sample_time,
+        wheel_speeds=params.numeric.settings(name)["longitudinal_force"] == "wheel_speeds")
+
+
+def propagate(model: ThreeDof, x: ca.SX, L: ca.SX, weights: unscented.Weights, delta: ca.SX,
+              rolling_speeds) -> tuple[ca.SX, ca.SX]:
+    """(mean, spread) of the 2n + 1 points propagated through the model, without the noise terms:
+    mean = sum W_m F(chi_i), spread = sum W_c (F(chi_i) - mean)(...)'; each pair of points
+    chi_0 +- s_i goes through the model at once, in pair arithmetic (``model.increments``)."""
+    cos_delta, sin_delta = ca.cos(delta), ca.sin(delta)
+    base = [x[i] for i in range(N)]
+    centre = ca.vertcat(*model.step(base, delta, cos_delta, sin_delta, rolling_speeds))
+    pairs = []
+    for offset in unscented.sigma_offsets(L, weights):
+        moved = model.step([Pair(base[i], offset[i], ca.SX(0)) for i in range(N)], delta,
+                           cos_delta, sin_delta, rolling_speeds)
+        pairs.append((ca.vertcat(*[lift(v).odd for v in moved]),
+                      ca.vertcat(*[lift(v).even for v in moved])))
+    return unscented.statistics(centre, pairs, weights)
+
+
+def rounding_gain(weights: unscented.Weights, config, name: str) -> float:
+    """How much the filter amplifies a rounding of its inputs' scale (``Estimator.rounding_gain``):
+    the UT's sum |W_m| times the stiffest tyre force's sensitivity to a speed, relative to the
+    force scale m g / 4. A slip ratio (r omega - u_x) / (r omega) rounds at the speed's scale, and
+    C_x (or C_y) turns that into force: the relative rounding of a force is 4 C / (m g) times the
+    relative rounding of the speed."""
+    vehicle = config.vehicle
+    stiffest = max(config.settings(name)["longitudinal_stiffness"],
+                   vehicle["cornering_stiffness_front"] / 2, vehicle["cornering_stiffness_rear"] / 2)
+    return weights.rounding_gain * 4 * stiffest / (vehicle["mass"] * GRAVITY)
+
+
+def build_adaptive(params: Parameters) -> Estimator:
+    """The aukf estimator ([vehicle], [inputs], [estimator.aukf])."""
+    return _build(params, NAME, adaptive=True)
+
+
+def build_plain(params: Parameters) -> Estimator:
+    """The ukf estimator ([vehicle], [inputs], [estimator.ukf])."""
+    return _build(params, PLAIN_NAME, adaptive=False)
+
+
+def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
+    config = params.config
+    settings = config.settings(name)
+    inputs_layout, states, outputs = layouts(params.numeric.settings(name), adaptive,
+                                             params.numeric.vehicle)
+    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
+    weights = unscented.Weights(N, settings["ut_alpha"], settings["ut_beta"], settings["ut_kappa"])
+    model = process_model(params, name)
+    Q0 = ca.vertcat(*settings["process_noise"])
+    R = ca.diag(ca.vertcat(*settings["measurement_noise"]))
+    H = ca.SX.zeros(3, N)
+    for row, column in enumerate(MEASURED):
+        H[row, column] = 1
+
+    state, kept = states.symbols("state")
+    inputs, u = inputs_layout.symbols("input")
+    guard = input_guard(u, config.limits, vx_min, vx_resume, kept["holding"])
+    active = guard.active
+
+    # ---- initialisation -------------------------------------------------------------------------
+    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
+    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
+    P0 = settings["initial_covariance"]
+    init_state = states.pack({
+        "u": vx0, **{n: ca.SX(0) for n in X_NAMES[1:]},
+        **{n: ca.SX(P0[i]) if i == j else ca.SX(0) for n, (i, j) in
+           zip(COVARIANCE, ((i, j) for i in range(N) for j in range(i, N)))},
+        **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
+            **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
+            "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
+        "holding": 2 * holding,
+    })
+    # the first sample after a low-speed hold (holding = 2) restarts the filter from itself
+    start = ca.if_else(kept["holding"] > 1.5, init_state, state)
+    s = {name: start[i] for i, name in enumerate(states.names)}
+    x = ca.vertcat(*[s[n] for n in X_NAMES])
+    P = ca.SX.zeros(N, N)
+    for n, (i, j) in zip(COVARIANCE, ((i, j) for i in range(N) for j in range(i, N))):
+        P[i, j] = P[j, i] = s[n]
+    if adaptive:
+        q = ca.vertcat(*[s[f"qmean_{n}"] for n in X_NAMES])
+        Q = ca.vertcat(*[s[f"qvar_{n}"] for n in X_NAMES])
+    else:
+        q, Q = ca.SX.zeros(N), Q0
+
+    # ---- prediction (10)-(12): inputs are used only while active, so hold them harmlessly -------
+    delta = hold(u["delta"], active, 0)
+    wheels = [hold(u[n], active, 0) * config.vehicle["wheel_radius"]
+              for n in WHEEL_SPEEDS] if model.wheel_speeds else None
+    L, repaired = unscented.cholesky_repaired(P)
+    propagated, spread = propagate(model, x, L, weights, delta, wheels)
+    x_pred = propagated + q
+    P_pred = spread + ca.diag(Q)
+
+    # ---- update (13)-(14) -------------------------------------------------------------------------
+    z = ca.vertcat(*[hold(u[n], active, 0) for n in ("ax", "ay", "r")])
+    P_zz = ca.mtimes([H, spread, H.T]) + R
+    P_xz = ca.mtimes(spread, H.T)
+    K = ca.mtimes(P_xz, ca.inv(P_zz))
+    innovation = z - ca.mtimes(H, x_pred)
+    correction = ca.mtimes(K, innovation)
+    x_new = x_pred + correction
+    # P_pred - K P_zz K' (14) in Joseph form for the points' spread (K is its optimal gain):
+    # a sum of positive semi-definite terms, with none of the cancellation of the printed form
+    I_KH = ca.SX.eye(N) - ca.mtimes(K, H)
+    P_new = ca.mtimes([I_KH, spread, I_KH.T]) + ca.mtimes([K, R, K.T]) + ca.diag(Q)
+
+    # ---- Sage-Husa (15a)-(15b) --------------------------------------------------------------------
+    extra = {}
+    if adaptive:
+        f = settings["forgetting_factor"]
+        d = (1 - f) / (1 - s["fading"])
+        q_new = (1 - d) * q + d * (x_new - propagated)
+        bracket = correction * correction + ca.diag(P_new) - ca.diag(spread)
+        Q_new = (1 - d) * Q + d * bracket
+        if params.numeric.settings(name)["noise_safeguard"] == "floor":
+            Q_new = ca.fmax(Q_new, Q_FLOOR * Q0)
+        Q_new = ca.fmin(Q_new, ca.vertcat(*settings["process_noise_max"]))
+        extra = {**{f"qmean_{n}": q_new[i] for i, n in enumerate(X_NAMES)},
+                 **{f"qvar_{n}": Q_new[i] for i, n in enumerate(X_NAMES)},
+                 "fading": s["fading"] * f}
+
+    def keep(value, key):
+        return ca.if_else(active, value, kept[key])
+
+    upper = [P_new[i, j] for i in range(N) for j in range(i, N)]
+    updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
+                           **extra, "holding": ca.SX(0)})
+    held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
+    code = guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
+    output = outputs.pack({
+        "beta": ca.if_else(active, ca.atan2(x_new[1], x_new[0]), 0),
+        **{out: keep(x_new[X_NAMES.index(n)], n) for out, n in
+           (("vx", "u"), ("vy", "v"), ("r", "gamma"), ("yaw_moment", "moment"), ("ax", "ax"),
+            ("ay", "ay"))},
+        "status": code,
+    })
+
+    next_state = ca.if_else(active, updated, held)
+    next_state, output = ca.cse(next_state), ca.cse(output)
+    init, step = make_functions(name, inputs_layout, states, outputs, inputs, state, init_state,
+                                next_state, output, params)
+    variant = "adaptive UKF (Sage-Husa process noise)" if adaptive else "UKF"
+    numeric = params.numeric.settings(name)
+    spread = unscented.Weights(N, numeric["ut_alpha"], numeric["ut_beta"], numeric["ut_kappa"])
+    return Estimator(name, f"speeds, yaw rate and sideslip: {variant} on the 3-DOF HSRI model "
+                           "(seed 002)", inputs_layout, states, outputs, init, step, params,
+                     {"longitudinal_force": numeric["longitudinal_force"],
+                      "sigma_points": f"{2 * N + 1}, weights W_m0 = {spread.mean0:.7g}, "
+                                      f"W_i = {spread.other:.7g}"},
+                     rounding_gain=rounding_gain(spread, params.numeric, name))
