@@ -52,12 +52,16 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     options = kernel_options(real, f"{base}_")
     generator = ca.CodeGenerator(f"{base}.c", options)
     generator.add(estimator.init)
-    if estimator.schemes is None:
-        generator.add(estimator.step)
-    else:
+    if estimator.schemes is not None:
         generator.add(estimator.schemes.select)
         for _, function in estimator.schemes.branches:
             generator.add(function)
+    elif estimator.repeated is not None:
+        for function in (estimator.repeated.prepare, estimator.repeated.each,
+                         estimator.repeated.finish):
+            generator.add(function)
+    else:
+        generator.add(estimator.step)
     with tempfile.TemporaryDirectory(prefix="vsegen-kernel-") as tmp:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()

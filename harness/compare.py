@@ -12,6 +12,17 @@ step from the same state (no accumulation at all).
 * float C against the double reference (fed the same float-rounded inputs, which is all the float
   C can see): 1e-4 relative, floor 1 — i.e. 1e-4 absolute for values below 1 (beta within 1e-4 rad,
   the target of the production-C work).
+
+Two refinements, both declared by the estimator's model, not chosen per run:
+
+* a signal whose natural size is not O(1) in SI units (a yaw moment of 1e4 N*m, or an acceleration
+  that is the balance of tyre forces of order g) has its floor multiplied by its
+  ``Signal.scale``;
+* an algorithm that amplifies rounding (``Estimator.rounding_gain``: the unscented transform's
+  weights of +-1e6 at the paper's alpha = 0.001) is compared against a long-double reference, and
+  the double tolerance is widened by what the long double cannot absorb (:func:`for_estimator`).
+  Measured for ukf and aukf: up to 3e-9 relative against a tolerance of 2.1e-8; the float check
+  is unchanged and passes at up to 3e-5.
 """
 
 from __future__ import annotations

@@ -17,11 +17,12 @@ import jinja2
 
 from codegen.generate import library_sources, render
 from model.estimators import build
-from model.guard import LIMIT_KEYS
+from model.guard import LIMIT_KEYS, WHEEL_SPEEDS
 from model.params import VehicleConfig
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
-TYPICAL = {"delta": 0.1, "vx": 40.0, "ax": 5.0, "ay": 8.0, "r": 0.5, "mz": 3000.0}
+TYPICAL = {"delta": 0.1, "vx": 40.0, "ax": 5.0, "ay": 8.0, "r": 0.5, "mz": 3000.0,
+           **{name: 120.0 for name in WHEEL_SPEEDS}}
 """Scale of the 'ordinary' random values of each input."""
 
 

@@ -9,6 +9,10 @@ An estimator that switches between schemes (seed 000) also has :class:`Schemes`:
 Function that updates the shared part of the state and picks a scheme, and one Function per
 scheme. The generated C then evaluates only the chosen scheme (CasADi's SX ``if_else`` would
 evaluate every branch); ``step`` is their composition, for Python.
+
+An estimator whose step applies one computation to several items (the unscented transform's
+sigma-point pairs, seed 002) has :class:`Repeated` instead: the generated C loops over the items
+with one copy of that code rather than unrolling it, and ``step`` is again the composition.
 """
 
 from __future__ import annotations
@@ -34,6 +38,22 @@ class Schemes:
     select: ca.Function
     branches: tuple[tuple[str, ca.Function], ...]
     scratch: Layout
+
+
+@dataclass(frozen=True)
+class Repeated:
+    """A step whose bulk is one Function applied to ``count`` items.
+
+    ``prepare(state, input[, params]) -> (items, shared)``: ``items`` holds the ``count`` item
+    inputs back to back; ``each(shared, item[, params]) -> (result)``;
+    ``finish(state, input, results[, params]) -> (state_next, output)``, ``results`` the
+    ``count`` results back to back.
+    """
+
+    prepare: ca.Function
+    each: ca.Function
+    finish: ca.Function
+    count: int
 
 
 @dataclass(frozen=True)
@@ -65,6 +85,7 @@ class Estimator:
     notes: Mapping[str, str] = field(default_factory=dict)
     schemes: Schemes | None = None
     rounding_gain: float = 1.0
+    repeated: Repeated | None = None
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
@@ -121,3 +142,25 @@ def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, i
             composed_state = ca.if_else(chosen, branch_state, composed_state)
             composed_output = ca.if_else(chosen, branch_output, composed_output)
     return Schemes(select, tuple(functions), scratch), composed_state, composed_output
+
+
+def make_repeated(name: str, state_sym: ca.SX, input_sym: ca.SX, items: list[ca.SX],
+                  shared: ca.SX, each: ca.Function, results_sym: ca.SX, next_state: ca.SX,
+                  output: ca.SX, parameters: Parameters) -> tuple[Repeated, ca.SX, ca.SX]:
+    """The Functions of a repeated step and the composed (next_state, output) expressions.
+
+    ``items`` and ``shared`` are expressions of the state and input; ``each`` maps (shared, item
+    [, params]) to one result; ``next_state`` and ``output`` use ``results_sym``, the results of
+    all items back to back.
+    """
+    extra = parameters.inputs()
+    extra_names = ["params"] * len(extra)
+    prepare = ca.Function(f"vse_{name}_kernel_prepare", [state_sym, input_sym, *extra],
+                          [ca.densify(ca.vertcat(*items)), ca.densify(shared)],
+                          ["state", "input", *extra_names], ["items", "shared"])
+    finish = ca.Function(f"vse_{name}_kernel_finish", [state_sym, input_sym, results_sym, *extra],
+                         [ca.densify(next_state), ca.densify(output)],
+                         ["state", "input", "results", *extra_names], ["state_next", "output"])
+    results = ca.vertcat(*[each(shared, item, *extra) for item in items])
+    composed_state, composed_output = ca.substitute([next_state, output], [results_sym], [results])
+    return Repeated(prepare, each, finish, len(items)), composed_state, composed_output

@@ -109,6 +109,11 @@ def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real
         assert result.returncode == 0 and result.stderr == "", result.stderr
 
 
+BUDGETS = {"ukf": (36864, 3072), "aukf": (36864, 3072)}
+"""Text and step-stack bytes per estimator where they differ from 16 KiB / 1 KiB: the unscented
+filters propagate 13 sigma points through a four-wheel tyre model (the heaviest estimators)."""
+
+
 @pytest.mark.parametrize("name", list(BUILDERS))
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
 def test_cross_builds_within_budget(config, target, name):
@@ -117,8 +122,9 @@ def test_cross_builds_within_budget(config, target, name):
     report = build_for_target(render(config, name, target.real), name, target)
     assert set(report.undefined) <= ALLOWED[target.real]
     assert not any(s.startswith("__aeabi_d") for s in report.undefined)
-    assert 0 < report.text < 16384 and report.data == 0 and report.bss == 0
-    assert 0 < report.stack_step < 1024 and 0 < report.stack_init < 1024
+    text, stack = BUDGETS.get(name, (16384, 1024))
+    assert 0 < report.text < text and report.data == 0 and report.bss == 0
+    assert 0 < report.stack_step < stack and 0 < report.stack_init < 1024
 
 
 def test_memory_discipline_violations_are_caught(config):

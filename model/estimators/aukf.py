@@ -30,7 +30,7 @@ import casadi as ca
 from model import status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import Parameters
-from model.estimator import Estimator, make_functions
+from model.estimator import Estimator, make_functions, make_repeated
 from model.guard import WHEEL_SPEEDS, first_sample, hold, input_guard
 from model.increments import Pair, lift
 from model.layout import Layout, Signal
@@ -114,21 +114,23 @@ def process_model(params: Parameters, name: str) -> ThreeDof:
         wheel_speeds=params.numeric.settings(name)["longitudinal_force"] == "wheel_speeds")
 
 
-def propagate(model: ThreeDof, x: ca.SX, L: ca.SX, weights: unscented.Weights, delta: ca.SX,
-              rolling_speeds) -> tuple[ca.SX, ca.SX]:
-    """(mean, spread) of the 2n + 1 points propagated through the model, without the noise terms:
-    mean = sum W_m F(chi_i), spread = sum W_c (F(chi_i) - mean)(...)'; each pair of points
-    chi_0 +- s_i goes through the model at once, in pair arithmetic (``model.increments``)."""
-    cos_delta, sin_delta = ca.cos(delta), ca.sin(delta)
-    base = [x[i] for i in range(N)]
-    centre = ca.vertcat(*model.step(base, delta, cos_delta, sin_delta, rolling_speeds))
-    pairs = []
-    for offset in unscented.sigma_offsets(L, weights):
-        moved = model.step([Pair(base[i], offset[i], ca.SX(0)) for i in range(N)], delta,
-                           cos_delta, sin_delta, rolling_speeds)
-        pairs.append((ca.vertcat(*[lift(v).odd for v in moved]),
-                      ca.vertcat(*[lift(v).even for v in moved])))
-    return unscented.statistics(centre, pairs, weights)
+def pair_function(model: ThreeDof, name: str, params: Parameters) -> ca.Function:
+    """``each(shared, offset[, params]) -> [odd; even]``: the parts of F(x +- offset) - F(x) for
+    one pair of sigma points, in pair arithmetic (``model.increments``); ``shared`` =
+    [x, delta, cos delta, sin delta, r omega_fl..rr (wheel-speed mode)]. The C calls it once per
+    pair (``model.estimator.Repeated``)."""
+    shared = ca.SX.sym("shared", N + 3 + (len(WHEEL_SPEEDS) if model.wheel_speeds else 0))
+    offset = ca.SX.sym("offset", N)
+    x = [shared[i] for i in range(N)]
+    delta, cos_delta, sin_delta = shared[N], shared[N + 1], shared[N + 2]
+    rolling = [shared[N + 3 + j] for j in range(len(WHEEL_SPEEDS))] if model.wheel_speeds else None
+    moved = [lift(v) for v in model.step([Pair(x[i], offset[i], ca.SX(0)) for i in range(N)],
+                                         delta, cos_delta, sin_delta, rolling)]
+    result = ca.vertcat(*[v.odd for v in moved], *[v.even for v in moved])
+    extra = params.inputs()
+    return ca.Function(f"vse_{name}_kernel_each", [shared, offset, *extra],
+                       [ca.densify(ca.cse(result))], ["shared", "item", *["params"] * len(extra)],
+                       ["result"])
 
 
 def rounding_gain(weights: unscented.Weights, config, name: str) -> float:
@@ -200,12 +202,19 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
 
     # ---- prediction (10)-(12): inputs are used only while active, so hold them harmlessly -------
     delta = hold(u["delta"], active, 0)
+    cos_delta, sin_delta = ca.cos(delta), ca.sin(delta)
     wheels = [hold(u[n], active, 0) * config.vehicle["wheel_radius"]
               for n in WHEEL_SPEEDS] if model.wheel_speeds else None
     L, repaired = unscented.cholesky_repaired(P)
-    propagated, spread = propagate(model, x, L, weights, delta, wheels)
+    offsets = unscented.sigma_offsets(L, weights)
+    shared = ca.vertcat(x, delta, cos_delta, sin_delta, *(wheels or []))
+    each = pair_function(model, name, params)
+    results = ca.SX.sym("pairs", 2 * N * N)            # per pair of points: odd, even (N each)
+    pairs = [(results[2 * N * k:2 * N * k + N], results[2 * N * k + N:2 * N * (k + 1)])
+             for k in range(N)]
+    centre = ca.vertcat(*model.step([x[i] for i in range(N)], delta, cos_delta, sin_delta, wheels))
+    propagated, spread = unscented.statistics(centre, pairs, weights)
     x_pred = propagated + q
-    P_pred = spread + ca.diag(Q)
 
     # ---- update (13)-(14) -------------------------------------------------------------------------
     z = ca.vertcat(*[hold(u[n], active, 0) for n in ("ax", "ay", "r")])
@@ -252,15 +261,17 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     })
 
     next_state = ca.if_else(active, updated, held)
-    next_state, output = ca.cse(next_state), ca.cse(output)
+    repeated, next_state, output = make_repeated(name, state, inputs, offsets, shared, each,
+                                                 results, ca.cse(next_state), ca.cse(output), params)
     init, step = make_functions(name, inputs_layout, states, outputs, inputs, state, init_state,
                                 next_state, output, params)
     variant = "adaptive UKF (Sage-Husa process noise)" if adaptive else "UKF"
     numeric = params.numeric.settings(name)
-    spread = unscented.Weights(N, numeric["ut_alpha"], numeric["ut_beta"], numeric["ut_kappa"])
+    ut = unscented.Weights(N, numeric["ut_alpha"], numeric["ut_beta"], numeric["ut_kappa"])
     return Estimator(name, f"speeds, yaw rate and sideslip: {variant} on the 3-DOF HSRI model "
                            "(seed 002)", inputs_layout, states, outputs, init, step, params,
                      {"longitudinal_force": numeric["longitudinal_force"],
-                      "sigma_points": f"{2 * N + 1}, weights W_m0 = {spread.mean0:.7g}, "
-                                      f"W_i = {spread.other:.7g}"},
-                     rounding_gain=rounding_gain(spread, params.numeric, name))
+                      "sigma_points": f"{2 * N + 1}, weights W_m0 = {ut.mean0:.7g}, "
+                                      f"W_i = {ut.other:.7g}; the C propagates the {N} pairs "
+                                      "in a loop"},
+                     rounding_gain=rounding_gain(ut, params.numeric, name), repeated=repeated)

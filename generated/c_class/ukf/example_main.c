@@ -6,9 +6,9 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: c3854b0b9022c65c19f48c05d50e104de4be05c89a24a6d200ef5302a793cf12
- * Operations: step 12043, init 86 (CasADi SX instructions).
+ * Operations: step 7661, init 86 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
- * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33
+ * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin

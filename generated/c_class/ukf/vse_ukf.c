@@ -6,9 +6,9 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: c3854b0b9022c65c19f48c05d50e104de4be05c89a24a6d200ef5302a793cf12
- * Operations: step 12043, init 86 (CasADi SX instructions).
+ * Operations: step 7661, init 86 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
- * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33
+ * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
 #include "vse_ukf.h"
 #include "vse_ukf_kernel.h"
@@ -44,9 +44,13 @@ void vse_ukf_step(vse_ukf_state *state, const vse_ukf_input *in, vse_ukf_output 
     casadi_real u[9];
     casadi_real current[VSE_UKF_N_STATE];
     casadi_real y[8];
+    casadi_real items[36];
+    casadi_real shared[13];
+    casadi_real results[72];
+    int i;
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
-    const casadi_real *arg[2];
+    const casadi_real *arg[3];
     casadi_real *res[2];
     pack_input(in, u);
     /* the kernel reads its arguments while it writes its results: step from a copy */
@@ -88,11 +92,24 @@ void vse_ukf_step(vse_ukf_state *state, const vse_ukf_input *in, vse_ukf_output 
     y[5] = 0.0;
     y[6] = 0.0;
     y[7] = 0.0;
+    /* prepare the 6 items, run one kernel on each, then finish the step */
     arg[0] = current;
     arg[1] = u;
+    res[0] = items;
+    res[1] = shared;
+    (void)vse_ukf_kernel_prepare(arg, res, &iw, &w, 0);
+    for (i = 0; i < 6; ++i) {
+        arg[0] = shared;
+        arg[1] = &items[i * 6];
+        res[0] = &results[i * 12];
+        (void)vse_ukf_kernel_each(arg, res, &iw, &w, 0);
+    }
+    arg[0] = current;
+    arg[1] = u;
+    arg[2] = results;
     res[0] = state->x;
     res[1] = y;
-    (void)vse_ukf_kernel_step(arg, res, &iw, &w, 0);
+    (void)vse_ukf_kernel_finish(arg, res, &iw, &w, 0);
     out->beta = y[0];
     out->vx = y[1];
     out->vy = y[2];

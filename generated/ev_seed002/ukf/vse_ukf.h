@@ -6,9 +6,9 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 5123178f33d788f61f404490d3fa887e220eb691402a2e97453709b444435a6c
- * Operations: step 12104, init 86 (CasADi SX instructions).
+ * Operations: step 7698, init 86 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
- * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33
+ * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
 #ifndef VSE_UKF_H
 #define VSE_UKF_H
