@@ -13,8 +13,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
 import numpy as np  # noqa: E402
 
+from bench.figures import save_figure  # noqa: E402
 from harness.logs import Log  # noqa: E402
 from harness.run import run_estimator  # noqa: E402
 from harness.scenarios import Case  # noqa: E402
@@ -92,13 +94,6 @@ def stiffness_plot(vehicle_text: str, source: str, name: str, out: Path) -> str:
         for label, config in configs[2:]:
             axis.plot(log["t"], run_estimator(config, NAME, log)[key] / 1e3, lw=0.8, label=label)
         axis.set_ylabel(f"{'front' if key == 'c_front' else 'rear'} axle (kN/rad)")
-        axis.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
     axes[1].set_xlabel("time (s)")
-    axes[0].set_title(f"Cornering stiffness on {case.label}, 1 kHz, vehicle {name}, seed 1",
-                      fontsize=10)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=80)
-    plt.close(fig)
-    return f"![stiffness against the truth](figures/{out.name})"
+    return save_figure(fig, axes, out, f"Cornering stiffness on {case.label}, 1 kHz, vehicle "
+                        f"{name}, seed 1", "stiffness against the truth")

@@ -16,8 +16,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
 import numpy as np  # noqa: E402
 
+from bench.figures import save_figure  # noqa: E402
 from harness.paths import REPO  # noqa: E402
 from harness.run import run_estimator  # noqa: E402
 from harness.scenarios import Case  # noqa: E402
@@ -108,17 +110,10 @@ def figure(label: str, case: Case, config: VehicleConfig, out: Path) -> str:
     for name, est in estimates.items():
         axes[1].plot(t, est["vx"] - log["vx_ref"], lw=0.9, label=name.upper())
     axes[1].set_ylabel("u error (m/s)")
-    for axis in axes:
-        axis.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("time (s)")
     notes = f"stayed in cones: {log.notes['stayed in cones']}, spun: {log.notes['spun']}"
-    axes[0].set_title(f"{label}: {case.label}, vehicle ev_seed002, seed 1\n{notes}", fontsize=9)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=80)
-    plt.close(fig)
-    return f"![{label}](figures/{out.name})"
+    return save_figure(fig, axes, out, f"{label}: {case.label}, vehicle ev_seed002, seed 1\n{notes}",
+                        label, title_size=9)
 
 
 def figures() -> list[str]:

@@ -12,8 +12,10 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
 import numpy as np  # noqa: E402
 
+from bench.figures import save_figure  # noqa: E402
 from harness.run import run_estimator  # noqa: E402
 from harness.scenarios import Case  # noqa: E402
 from harness.vehicles import with_settings  # noqa: E402
@@ -83,12 +85,5 @@ def parameter_plot(vehicle_text: str, source: str, name: str, out: Path) -> str:
     axes[3].plot(log["t"], log["mu"], color="black", lw=1.2)
     axes[3].set_ylabel("road μ")
     axes[3].set_xlabel("time (s)")
-    for axis in axes:
-        axis.grid(alpha=0.3)
-    axes[0].legend(fontsize=8)
-    axes[0].set_title(f"ARX parameters on {PLOT_CASE.label}, vehicle {name}, seed 1", fontsize=10)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=80)
-    plt.close(fig)
-    return f"![ARX parameters over the continuous DLC](figures/{out.name})"
+    return save_figure(fig, axes, out, f"ARX parameters on {PLOT_CASE.label}, vehicle {name}, "
+                        "seed 1", "ARX parameters over the continuous DLC")

@@ -6,21 +6,23 @@ shared/methods/002-aukf-sage-husa.md, §2 with the §3/§5 defaults:
 * state X = [u, v, gamma, Gamma, a_x, a_y], process model ``model.three_dof`` (Euler, HSRI tyres,
   load transfer; C2: Gamma, a_x, a_y one step delayed); cornering stiffness per tyre = half the
   [vehicle] axle value;
-* scaled UT with 2n + 1 = 13 points (``model.unscented``): Cholesky of P + eps I, unrolled, with the
-  non-positive-definite repair (status COVARIANCE_REPAIRED); each point's propagated increment
-  F(chi_i) - F(chi_0) evaluated without cancellation (pair arithmetic, ``model.increments``,
-  C6);
+* scaled UT with 2n + 1 = 13 points (``model.unscented``): unrolled Cholesky of P plus a
+  per-entry jitter, with the non-positive-definite repair (status COVARIANCE_REPAIRED); each pair
+  of points propagated in pair arithmetic (``model.increments``, C6), so nothing cancels; the C
+  runs the 6 pairs through one kernel in a loop (``model.estimator.Repeated``);
 * UKF recursion (12)-(14) with the noise mean q, the points not redrawn, Z = [a_x, a_y, gamma]
-  (linear, so P_zz = H P_chi H' + R and P_xz = P_chi H' with P_chi the points' spread);
+  (linear, so P_zz = H P_chi H' + R and P_xz = P_chi H' with P_chi the points' spread), the
+  covariance update in Joseph form;
 * aukf: (15a)-(15b) with d_k = (1 - f)/(1 - f^(k+1)) (the state keeps f^(k+1)); Q kept diagonal,
-  each entry at least 1e-3 Q_0 (§2.10; ``noise_safeguard = "none"`` drops this floor) and, beyond the spec, at most ``process_noise_max`` (abusive
-  inputs otherwise grow Q and P until they overflow).
+  each entry at least 1e-3 Q_0 (§2.10; ``noise_safeguard = "none"`` drops this floor) and, beyond
+  the spec, at most ``process_noise_max`` (abusive inputs otherwise grow Q and P until they
+  overflow).
 
 Hold rule (model.guard, on the logged vx like every estimator): while holding every state is kept
 and beta = 0; ``holding`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
 after a low-speed hold restarts the filter from itself (the speed it stopped with is stale); after
-an invalid input it continues. Initial state [vx_0, 0, 0, 0, 0, 0] (the paper's X(t_0) = [26.6667, 0, ...] is
-its test speed), P_0, q_0 = 0, Q_0 from the vehicle file.
+an invalid input it continues. Initial state [vx_0, 0, 0, 0, 0, 0] (the paper's
+X(t_0) = [26.6667, 0, ...] is its test speed), P_0, q_0 = 0, Q_0 from the vehicle file.
 """
 
 from __future__ import annotations
