@@ -361,6 +361,10 @@ UKF_FIELDS: tuple[Field, ...] = (
              zero_allowed=True),
     diagonal("process_noise", 6, "SI units squared per step", "Q (Q_0 of the adaptive filter)"),
     diagonal("measurement_noise", 3, "[a_x, a_y, gamma]: (m/s^2)^2, (m/s^2)^2, (rad/s)^2", "R"),
+    nonnegative("restart_speed_error", "m/s", "beyond the spec: restart the filter from the "
+                "current sample when |u - v_x| exceeds this (status FILTER_RESTARTED); 0 = never"),
+    nonnegative("restart_sideslip", "rad", "beyond the spec: restart when |atan2(v, u)| exceeds "
+                "this; 0 = never"),
     *LOW_SPEED_FIELDS,
 )
 """Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""

@@ -15,6 +15,9 @@ PARAMETERS_PROJECTED = 8
 COVARIANCE_REPAIRED = 16
 """The state covariance was not positive definite; it was repaired (correlations dropped, variances
 kept) before the step used it."""
+FILTER_RESTARTED = 32
+"""The estimate left the plausible envelope (speed far from the measured one, or an implausible
+sideslip angle); the filter restarted from this sample."""
 STATUS_BITS = {"LOW_SPEED": LOW_SPEED, "INVALID_INPUT": INVALID_INPUT,
                "REFERENCE_SUSPECT": REFERENCE_SUSPECT, "PARAMETERS_PROJECTED": PARAMETERS_PROJECTED,
-               "COVARIANCE_REPAIRED": COVARIANCE_REPAIRED}
+               "COVARIANCE_REPAIRED": COVARIANCE_REPAIRED, "FILTER_RESTARTED": FILTER_RESTARTED}

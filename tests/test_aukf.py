@@ -267,3 +267,23 @@ def test_float_code_matches_the_reference_on_every_scenario(config, name):
     for result in results:
         assert result.ok, result
         assert result.outputs[1].name == "vx" and result.outputs[1].max_abs < 1e-3
+
+
+def test_an_estimate_outside_the_envelope_restarts_the_filter(config, vehicle_text):
+    """Beyond the spec: when u leaves the measured v_x by more than restart_speed_error the filter
+    restarts from that sample and says so; with 0 it never does."""
+    est, c = compiled(config, "ukf")
+    log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
+    inputs = log.matrix(est.inputs.names)
+    inputs[300:, est.inputs.index("vx")] += 8.0          # the ECU speed jumps away from the wheels
+    out, states = c.run(inputs)
+    flagged = (out[:, -1].astype(int) & status.FILTER_RESTARTED) > 0
+    assert not flagged[:300].any() and flagged[300]
+    restart = np.array(est.init(inputs[300])).ravel()
+    restart[est.states.index("holding")] = 0
+    assert states[301] == pytest.approx(restart, rel=1e-12, abs=1e-15)
+    assert out[300, 1] == inputs[300, est.inputs.index("vx")] and out[300, 0] == 0.0
+    never = variant(vehicle_text, "ukf", restart_speed_error=0.0, restart_sideslip=0.0)
+    est, c = compiled(never, "ukf")
+    out, _ = c.run(inputs)
+    assert not np.any(out[:, -1].astype(int) & status.FILTER_RESTARTED)

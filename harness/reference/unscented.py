@@ -2,7 +2,8 @@
 model with four-wheel kinematics, HSRI tyres and load transfer (1)-(8), the scaled UT (10)-(11),
 the UKF (12)-(14) with the points not redrawn, and (aukf) the sub-optimal Sage-Husa estimator of q
 and Q (15a)-(15b) with the §2.10 safeguard and
-the ceiling process_noise_max. NumPy only.
+the ceiling process_noise_max; beyond the spec, a restart when the estimate leaves the plausible
+envelope. NumPy only.
 
 The sigma points are propagated and weighted literally, in the difference form of C6, in
 ``numpy.longdouble`` (64-bit mantissa on x86-64): with alpha = 0.001 the weights are about +-1e6,
@@ -24,6 +25,7 @@ COVARIANCE = blocks.upper_names("P", STATE)
 OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
 WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 COVARIANCE_REPAIRED = 16
+FILTER_RESTARTED = 32
 AIR_DENSITY = 1.2
 N = 6
 
@@ -124,8 +126,14 @@ class Variant:
                         **{f"qvar_{n}": Q_new[i] for i, n in enumerate(STATE)},
                         "fading": LD(x["fading"]) * f})
         new["holding"] = 0.0
-        output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]],
-                  status | (COVARIANCE_REPAIRED if repaired else 0)]
+        status |= COVARIANCE_REPAIRED if repaired else 0
+        speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
+        if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
+                or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)):
+            new = dict(zip(state_names, self.init(config, u)), holding=0.0)   # restart here
+            X_new = np.array([new[k] for k in STATE], dtype=LD)
+            status |= FILTER_RESTARTED
+        output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]
         return (np.array([new[k] for k in state_names], dtype=float),
                 np.array(output, dtype=float))
 

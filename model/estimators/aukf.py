@@ -21,7 +21,9 @@ shared/methods/002-aukf-sage-husa.md, §2 with the §3/§5 defaults:
 Hold rule (model.guard, on the logged vx like every estimator): while holding every state is kept
 and beta = 0; ``holding`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
 after a low-speed hold restarts the filter from itself (the speed it stopped with is stale); after
-an invalid input it continues. Initial state [vx_0, 0, 0, 0, 0, 0] (the paper's
+an invalid input it continues. Beyond the spec, an estimate outside the plausible envelope
+(``restart_speed_error``, ``restart_sideslip``) restarts the filter from the current sample
+(status FILTER_RESTARTED). Initial state [vx_0, 0, 0, 0, 0, 0] (the paper's
 X(t_0) = [26.6667, 0, ...] is its test speed), P_0, q_0 = 0, Q_0 from the vehicle file.
 """
 
@@ -147,6 +149,15 @@ def rounding_gain(weights: unscented.Weights, config, name: str) -> float:
     return weights.rounding_gain * 4 * stiffest / (vehicle["mass"] * GRAVITY)
 
 
+def diverged(x: ca.SX, vx_measured: ca.SX, settings) -> ca.SX:
+    """1 when the estimate x left the plausible envelope: |u - v_x,measured| above
+    ``restart_speed_error`` or |atan2(v, u)| above ``restart_sideslip`` (each 0 = never)."""
+    speed, sideslip = settings["restart_speed_error"], settings["restart_sideslip"]
+    return ca.logic_or(
+        ca.logic_and(speed > 0, ca.fabs(x[0] - vx_measured) > speed),
+        ca.logic_and(sideslip > 0, ca.fabs(ca.atan2(x[1], x[0])) > sideslip))
+
+
 def build_adaptive(params: Parameters) -> Estimator:
     """The aukf estimator ([vehicle], [inputs], [estimator.aukf])."""
     return _build(params, NAME, adaptive=True)
@@ -253,16 +264,22 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, "holding": ca.SX(0)})
     held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
-    code = guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
+    restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
+                           "holding": ca.SX(0)})
+    restarted = ca.logic_and(active, diverged(x_new, u["vx"], settings))
+    x_out = ca.if_else(restarted, restart[:N], x_new)
+    code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
+            + ca.if_else(restarted, status.FILTER_RESTARTED, 0))
     output = outputs.pack({
-        "beta": ca.if_else(active, ca.atan2(x_new[1], x_new[0]), 0),
-        **{out: keep(x_new[X_NAMES.index(n)], n) for out, n in
+        "beta": ca.if_else(active, ca.atan2(x_out[1], x_out[0]), 0),
+        **{out: keep(x_out[X_NAMES.index(n)], n) for out, n in
            (("vx", "u"), ("vy", "v"), ("r", "gamma"), ("yaw_moment", "moment"), ("ax", "ax"),
             ("ay", "ay"))},
         "status": code,
     })
 
-    next_state = ca.if_else(active, updated, held)
+    # beyond the spec: an estimate outside the plausible envelope restarts the filter here
+    next_state = ca.if_else(active, ca.if_else(restarted, restart, updated), held)
     repeated, next_state, output = make_repeated(name, state, inputs, offsets, shared, each,
                                                  results, ca.cse(next_state), ca.cse(output), params)
     init, step = make_functions(name, inputs_layout, states, outputs, inputs, state, init_state,
