@@ -36,7 +36,6 @@ class ThreeDof:
     cg_to_rear_axle: float
     track_width: float
     cg_height: float
-    wheel_radius: float
     cornering_front: float
     cornering_rear: float
     longitudinal: float

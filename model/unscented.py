@@ -93,5 +93,6 @@ def statistics(centre: ca.SX, pairs: list[tuple[ca.SX, ca.SX]], weights: Weights
     + (beta - alpha^2) e e' (module docstring)."""
     w = 2 * weights.other
     e = w * sum((g for _, g in pairs[1:]), pairs[0][1])
-    spread = sum((ca.mtimes(o, o.T) + ca.mtimes(g, g.T) for o, g in pairs), ca.SX.zeros(*e.shape[:1], e.shape[0]))
+    n = e.shape[0]
+    spread = sum((ca.mtimes(o, o.T) + ca.mtimes(g, g.T) for o, g in pairs), ca.SX.zeros(n, n))
     return centre + e, w * spread + (weights.beta - weights.alpha ** 2) * ca.mtimes(e, e.T)

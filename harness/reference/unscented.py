@@ -146,7 +146,8 @@ def _inverse3(A):
         for j in range(3):
             rows = [r for r in range(3) if r != i]
             cols = [c for c in range(3) if c != j]
-            minor = A[rows[0], cols[0]] * A[rows[1], cols[1]] - A[rows[0], cols[1]] * A[rows[1], cols[0]]
+            (r0, r1), (c0, c1) = rows, cols
+            minor = A[r0, c0] * A[r1, c1] - A[r0, c1] * A[r1, c0]
             cof[i, j] = (-1) ** (i + j) * minor
     return cof.T / (A[0, :] @ cof[0, :])
 
@@ -174,7 +175,8 @@ def process(config, s, X, delta, rolling):
     from the HSRI tyre forces at X (2)-(7); ``rolling`` = r omega of fl, fr, rl, rr or None for
     free rolling (S_x = 0, a_x a random walk)."""
     v = config.vehicle
-    m, iz, a, b = LD(v["mass"]), LD(v["yaw_inertia"]), LD(v["cg_to_front_axle"]), LD(v["cg_to_rear_axle"])
+    m, iz = LD(v["mass"]), LD(v["yaw_inertia"])
+    a, b = LD(v["cg_to_front_axle"]), LD(v["cg_to_rear_axle"])
     t, h, g = LD(v["track_width"]), LD(v["cg_height"]), LD(blocks.GRAVITY)
     T = LD(config.sample_time)
     mu, cx, floor = LD(s["friction"]), LD(s["longitudinal_stiffness"]), LD(s["slip_speed_floor"])

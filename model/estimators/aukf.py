@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import status, unscented
+from model import kalman, status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import Parameters
 from model.estimator import Estimator, make_functions, make_repeated
@@ -58,8 +58,9 @@ _BASE_INPUTS = (
     Signal("ay", "m/s^2", "lateral acceleration, positive left"),
     Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
 )
+COVARIANCE = kalman.packed_names("P", X_NAMES)
 COVARIANCE_PAIRS = tuple((X_NAMES[i], X_NAMES[j]) for i in range(N) for j in range(i, N))
-COVARIANCE = tuple(f"P_{a}_{b}" for a, b in COVARIANCE_PAIRS)
+"""The state names behind each entry of COVARIANCE."""
 
 
 def force_scales(vehicle) -> dict[str, float]:
@@ -109,7 +110,7 @@ def process_model(params: Parameters, name: str) -> ThreeDof:
     return ThreeDof(
         mass=v["mass"], yaw_inertia=v["yaw_inertia"], cg_to_front_axle=v["cg_to_front_axle"],
         cg_to_rear_axle=v["cg_to_rear_axle"], track_width=v["track_width"],
-        cg_height=v["cg_height"], wheel_radius=v["wheel_radius"],
+        cg_height=v["cg_height"],
         cornering_front=v["cornering_stiffness_front"] / 2,
         cornering_rear=v["cornering_stiffness_rear"] / 2,
         longitudinal=s["longitudinal_stiffness"], friction=s["friction"],
@@ -193,8 +194,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     P0 = settings["initial_covariance"]
     init_state = states.pack({
         "u": vx0, **{n: ca.SX(0) for n in X_NAMES[1:]},
-        **{n: ca.SX(P0[i]) if i == j else ca.SX(0) for n, (i, j) in
-           zip(COVARIANCE, ((i, j) for i in range(N) for j in range(i, N)))},
+        **dict(zip(COVARIANCE, ca.vertsplit(kalman.pack_symmetric(ca.diag(ca.vertcat(*P0)))))),
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
@@ -204,9 +204,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     start = ca.if_else(kept["holding"] > 1.5, init_state, state)
     s = {name: start[i] for i, name in enumerate(states.names)}
     x = ca.vertcat(*[s[n] for n in X_NAMES])
-    P = ca.SX.zeros(N, N)
-    for n, (i, j) in zip(COVARIANCE, ((i, j) for i in range(N) for j in range(i, N))):
-        P[i, j] = P[j, i] = s[n]
+    P = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in COVARIANCE]), N)
     if adaptive:
         q = ca.vertcat(*[s[f"qmean_{n}"] for n in X_NAMES])
         Q = ca.vertcat(*[s[f"qvar_{n}"] for n in X_NAMES])
@@ -260,7 +258,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     def keep(value, key):
         return ca.if_else(active, value, kept[key])
 
-    upper = [P_new[i, j] for i in range(N) for j in range(i, N)]
+    upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, "holding": ca.SX(0)})
     held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
