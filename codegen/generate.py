@@ -19,7 +19,7 @@ import jinja2
 from codegen.kernel import generate_kernel
 from codegen.precision import literal
 from model import status
-from model.estimator import Estimator
+from model.estimator import RNG_WORDS, Estimator
 from model.estimators import build
 from model.params import VehicleConfig
 from model.schema import REALS
@@ -75,6 +75,8 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "ops": _operation_counts(estimator),
         "status_bits": status.STATUS_BITS,
         "kernel": kernel,
+        "rng_words": RNG_WORDS,
+        "f": "f" if real == "float" else "",
     }
     env = _environment()
     files = {}
@@ -124,7 +126,15 @@ def _comment(text: str, style: str) -> str:
 
 
 def _operation_counts(estimator: Estimator) -> dict[str, int]:
-    return {"step": estimator.step.n_instructions(), "init": estimator.init.n_instructions()}
+    """CasADi instructions of init and step; a particle filter's count is its kernels' for its
+    particle count (the template's draws, weights and resampling come on top)."""
+    particles = estimator.particles
+    if particles is None:
+        return {"step": estimator.step.n_instructions(), "init": estimator.init.n_instructions()}
+    n = particles.count
+    return {"step": particles.prepare.n_instructions() + n * particles.propagate.n_instructions()
+            + particles.finish.n_instructions(),
+            "init": particles.init.n_instructions() + n * particles.spawn.n_instructions()}
 
 
 def write(files: dict[str, str], folder: Path) -> None:

@@ -51,7 +51,11 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     base = f"vse_{estimator.name}_kernel"
     options = kernel_options(real, f"{base}_")
     generator = ca.CodeGenerator(f"{base}.c", options)
-    generator.add(estimator.init)
+    if estimator.particles is not None:
+        for function in estimator.particles.functions:
+            generator.add(function)
+    else:
+        generator.add(estimator.init)
     if estimator.schemes is not None:
         generator.add(estimator.schemes.select)
         for _, function in estimator.schemes.branches:
@@ -60,7 +64,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
         for function in (estimator.repeated.prepare, estimator.repeated.each,
                          estimator.repeated.finish):
             generator.add(function)
-    else:
+    elif estimator.particles is None:
         generator.add(estimator.step)
     with tempfile.TemporaryDirectory(prefix="vsegen-kernel-") as tmp:
         generator.generate(tmp + "/")

@@ -22,7 +22,7 @@ def shipped_vehicles() -> list[Path]:
     return sorted(VEHICLES.glob("*.toml"))
 
 
-def with_settings(text: str, section: str, **values: float | str | list[float]) -> str:
+def with_settings(text: str, section: str, **values: float | int | str | list[float]) -> str:
     """``text`` of a vehicle file with ``key = value`` set in table ``[section]`` (e.g.
     "estimator.switching", "vehicle"), for comparing variants of one vehicle. Each key must already
     be in that table; its trailing comment is kept. Strings are written quoted, lists as arrays."""
@@ -39,6 +39,8 @@ def with_settings(text: str, section: str, **values: float | str | list[float]) 
                 rendered = f'"{value}"'
             elif isinstance(value, (list, tuple)):
                 rendered = "[" + ", ".join(repr(float(v)) for v in value) + "]"
+            elif isinstance(value, int) and not isinstance(value, bool):
+                rendered = repr(value)  # a count or a seed stays a whole number
             else:
                 rendered = repr(float(value))
             lines[i] = f"{match.group(1)}{match.group(2)}{match.group(3)}{rendered}{match.group(5) or ''}"

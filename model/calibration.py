@@ -64,14 +64,18 @@ def baked(config: VehicleConfig) -> Parameters:
     return Parameters(config, config)
 
 
+class _Entry(int):
+    """Index of a calibration entry (unlike a whole-number setting, which stays baked)."""
+
+
 def calibratable(config: VehicleConfig, estimator: str) -> Parameters:
     """Symbolic parameters for ``estimator``: one entry per numeric value it may read (a symmetric
     matrix contributes its upper triangle, named ``<key>_<row><column>``)."""
     entries: list[tuple[str, float]] = []
 
-    def entry(name: str, value: float) -> int:
+    def entry(name: str, value: float) -> _Entry:
         entries.append((name, value))
-        return len(entries) - 1
+        return _Entry(len(entries) - 1)
 
     vehicle = {k: entry(k, v) for k, v in config.vehicle.items()}
     limits = {k: entry(k, v) for k, v in config.limits.items()}
@@ -88,13 +92,13 @@ def calibratable(config: VehicleConfig, estimator: str) -> Parameters:
         elif isinstance(value, float):
             settings[key] = entry(key, value)
         else:
-            settings[key] = value  # a choice (e.g. the discretisation) stays baked
+            settings[key] = value  # a choice or a count (e.g. the discretisation) stays baked
     vector = ca.SX.sym("params", len(entries))
 
     def symbolic(value):
         if isinstance(value, tuple):
             return tuple(symbolic(v) for v in value)
-        return vector[value] if isinstance(value, int) else value
+        return vector[value] if isinstance(value, _Entry) else value
 
     config_symbolic = replace(
         config,

@@ -13,6 +13,11 @@ evaluate every branch); ``step`` is their composition, for Python.
 An estimator whose step applies one computation to several items (the unscented transform's
 sigma-point pairs, seed 002) has :class:`Repeated` instead: the generated C loops over the items
 with one copy of that code rather than unrolling it, and ``step`` is again the composition.
+
+A particle filter (seed 003) has :class:`Particles`: its random draws, weights, estimate and
+resampling are generic template C (``codegen/templates/particles.c.j2``); its model is a few
+Functions applied per particle. It has no composed ``step`` (random numbers and resampling are no
+SX expressions); the NumPy reference and the C are compared instead.
 """
 
 from __future__ import annotations
@@ -56,6 +61,53 @@ class Repeated:
     count: int
 
 
+RNG_WORDS = 4
+"""A particle filter's state stores the 64-bit state of its PCG32 random stream as this many
+16-bit words, most significant first, each an integer-valued real (exact in float too), so the
+whole state stays one flat real vector."""
+
+
+@dataclass(frozen=True)
+class Particles:
+    """A particle filter's model-specific Functions; the C around them is template code.
+
+    State = [head (``head_size`` entries), RNG_WORDS random-stream words, ``count`` particles of
+    ``len(particle)`` entries]; a particle's last entry is its normalised weight.
+
+    * ``init(input[, params]) -> (head, shared)``: the head at the first sample and the ``shared``
+      vector that ``spawn`` draws the initial particles with;
+    * ``prepare(head, input[, params]) -> shared``: ``shared[0]`` is the sample's mode: 0 hold
+      (the particles and the stream are left alone), 1 propagate, 2 spawn a new set;
+    * ``spawn(shared, normals[, params]) -> particle`` and
+      ``propagate(shared, particle, normals[, params]) -> particle``, with the particle's
+      log-weight score in its last entry; ``normals`` are standard normal draws, in state order;
+    * ``finish(head, input, shared, summary[, params]) -> (head_next, output)``: ``summary`` is the
+      weighted mean of the particles' entries but the last, then N_eff = 1 / sum w^2.
+
+    ``resampling``: "every_sample" or "effective_size" (only when N_eff < count / 2), systematic.
+    """
+
+    init: ca.Function
+    prepare: ca.Function
+    spawn: ca.Function
+    propagate: ca.Function
+    finish: ca.Function
+    count: int
+    seed: int
+    resampling: str
+    head_size: int
+    particle: Layout
+
+    @property
+    def normals(self) -> int:
+        """Standard normal draws per particle and sample."""
+        return self.propagate.numel_in(2)
+
+    @property
+    def functions(self) -> tuple[ca.Function, ...]:
+        return self.init, self.prepare, self.spawn, self.propagate, self.finish
+
+
 @dataclass(frozen=True)
 class Estimator:
     """A built estimator for one vehicle configuration.
@@ -65,7 +117,8 @@ class Estimator:
         summary: one line: what it estimates and how.
         inputs, states, outputs: layouts of the flat vectors.
         init: Function ``init(input[, params]) -> (state)``.
-        step: Function ``step(state, input[, params]) -> (state_next, output)``.
+        step: Function ``step(state, input[, params]) -> (state_next, output)``; None for a
+            particle filter (see ``particles``).
         parameters: where the parameter values come from (``params`` is an input when they are
             calibratable).
         notes: facts worth printing in generated files (e.g. discretisation error bound).
@@ -80,12 +133,13 @@ class Estimator:
     states: Layout
     outputs: Layout
     init: ca.Function
-    step: ca.Function
+    step: ca.Function | None
     parameters: Parameters
     notes: Mapping[str, str] = field(default_factory=dict)
     schemes: Schemes | None = None
     rounding_gain: float = 1.0
     repeated: Repeated | None = None
+    particles: Particles | None = None
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

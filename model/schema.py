@@ -143,6 +143,19 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
     return Field(key, expected, check, doc)
 
 
+def integer(key: str, low: int, high: int, doc: str = "") -> Field:
+    """A whole number from ``low`` to ``high``; stays an int, so it is structural (baked even in
+    calibratable mode)."""
+    expected = f"a whole number from {low} to {high}"
+
+    def check(value: Any) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise Invalid(expected)
+        return value
+
+    return Field(key, expected, check, doc)
+
+
 def between(key: str, low: float, high: float, doc: str = "", default: float | None = None) -> Field:
     """A number strictly between ``low`` and ``high``."""
     return _number_field(key, f"a number between {low:g} and {high:g} (exclusive)",
@@ -384,6 +397,56 @@ AUKF = EstimatorSchema(
         f"process_noise_max = {list(t['process_noise_max'])!r}: expected every entry above its "
         f"process_noise entry {list(t['process_noise'])!r}")))
 
+PF_FIELDS: tuple[Field, ...] = (
+    integer("particles", 2, 10000, "N, the particle count (fixed at generation time; the state "
+            "holds 6 N reals)"),
+    integer("seed", 0, 2 ** 32 - 1, "seed of the filter's PCG32 random stream"),
+    choice("observation", ("inertial", "wheel_speed"), "z = [a_x, a_y, r] (the paper's (13)) or "
+           "also the logged v_x (D2)"),
+    choice("resampling", ("every_sample", "effective_size"), "systematic resampling at every "
+           "sample (D4 default) or only when N_eff < N / 2"),
+    diagonal("measurement_noise", 3, "[a_x, a_y, r]: m/s^2, m/s^2, rad/s", "R as standard "
+             "deviations sigma_ax,m, sigma_ay,m, sigma_r,m (1 sigma)"),
+    positive("wheel_speed_noise", "m/s", "sigma_vx,w of the logged v_x (observation = "
+             "\"wheel_speed\" only)"),
+    diagonal("initial_spread", 2, "[v_x, v_y]: m/s", "1-sigma spread of the initial particles' "
+             "speeds (2.9)"),
+    diagonal("process_noise", 3, "[a_x, a_y, r] per sample: m/s^2, m/s^2, rad/s", "sigma_ax,0, "
+             "sigma_ay,0, sigma_r,0: random-walk step at rest (16)"),
+    diagonal("process_noise_max", 3, "[a_x, a_y, r] per sample: m/s^2, m/s^2, rad/s", "caps "
+             "sigma_ax,max, sigma_ay,max, sigma_r,max of the adapted random walk (16)"),
+    diagonal("speed_noise", 2, "[v_x, v_y] per sample: m/s", "sigma_vx,0, sigma_vy,0 (16)"),
+    nonnegative("adaptation_gain_acceleration", "-", "kappa_a of (16); 0 = no adaptation"),
+    nonnegative("adaptation_gain_yaw_rate", "-", "kappa_r of (16); 0 = no adaptation"),
+    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
+                "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
+                "0 = none (the spec's literal (13))", default=0.0),
+    *LOW_SPEED_FIELDS,
+)
+"""Seed 003's particle filter: the adaptive PF of its ref. [17] (003-improved-pf-velocity.md §2,
+§3, §5)."""
+
+
+def _caps_above_floors(table: Mapping[str, Any]) -> str:
+    if all(high > low for high, low in zip(table["process_noise_max"], table["process_noise"])):
+        return ""
+    return (f"process_noise_max = {list(table['process_noise_max'])!r}: expected every entry "
+            f"above its process_noise entry {list(table['process_noise'])!r}")
+
+
+PF_RULES = (*LOW_SPEED_RULES, Rule("process_noise_max", _caps_above_floors))
+PF_ADAPTIVE = EstimatorSchema(fields=PF_FIELDS, rules=PF_RULES)
+PF_IMPROVED = EstimatorSchema(
+    fields=(*PF_FIELDS,
+            diagonal("correction_gain", 3, "-, each at most 1", "G of the proposal correction "
+                     "(14): the share of z - [a_x, a_y, r] of each particle it moves towards the "
+                     "measurement per sample", zero_allowed=True),
+            choice("weights", ("likelihood", "exact_importance"), "the paper's likelihood-only "
+                   "weights (D3) or the exact importance ratio of the corrected proposal")),
+    rules=(*PF_RULES, Rule("correction_gain", lambda t: "" if max(t["correction_gain"]) <= 1.0
+                           else f"correction_gain = {list(t['correction_gain'])!r}: expected "
+                                "every entry from 0 to 1")))
+
 ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "kf2dof": KF2DOF,
     "switching": SWITCHING,
@@ -392,4 +455,6 @@ ESTIMATOR_SCHEMAS: dict[str, EstimatorSchema] = {
     "ekf_rls": EKF_RLS,
     "ukf": UKF,
     "aukf": AUKF,
+    "pf_adaptive": PF_ADAPTIVE,
+    "pf_improved": PF_IMPROVED,
 }

@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, switching, unscented
+from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, particle, switching, unscented
 
-REFERENCES: dict[str, ModuleType | unscented.Variant] = {
+REFERENCES: dict[str, ModuleType | unscented.Variant | particle.ParticleFilter] = {
     "kf2dof": kf2dof, "switching": switching, "fusion": fusion, "arx_dual_kf": arx_dual_kf,
     "ekf_rls": ekf_rls, "ukf": unscented.Variant("ukf", adaptive=False),
-    "aukf": unscented.Variant("aukf", adaptive=True)}
+    "aukf": unscented.Variant("aukf", adaptive=True),
+    "pf_adaptive": particle.ParticleFilter("pf_adaptive", improved=False),
+    "pf_improved": particle.ParticleFilter("pf_improved", improved=True)}

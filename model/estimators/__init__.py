@@ -6,7 +6,7 @@ from typing import Callable
 
 from model.calibration import Parameters, parameters
 from model.estimator import Estimator
-from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, switching
+from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
 from model.params import VehicleConfig
 
 BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
@@ -17,6 +17,8 @@ BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
     ekf_rls.NAME: ekf_rls.build,
     aukf.PLAIN_NAME: aukf.build_plain,
     aukf.NAME: aukf.build_adaptive,
+    pf.ADAPTIVE: pf.build_adaptive,
+    pf.IMPROVED: pf.build_improved,
 }
 
 

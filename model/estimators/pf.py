@@ -1,0 +1,245 @@
+"""pf_improved / pf_adaptive: longitudinal and lateral speed from a particle filter on the
+kinematic model, with (pf_improved) or without (pf_adaptive, the baseline of the paper's ref.
+[17]) the proposal correction (seed 003).
+
+shared/methods/003-improved-pf-velocity.md, §2 with the §3/§5 defaults:
+
+* particle state [v_x, v_y, a_x, a_y, r] plus its weight; a_x, a_y, r random walks, the speeds
+  Euler-integrated from (5)-(6) with the particle's own trapezoidal a and r (15);
+* proposal correction (14): each particle's a_x, a_y, r move by G (z - own value) before the
+  random step (G = 0 for pf_adaptive);
+* adaptive process noise (16), the same in both filters, from the innovation of the previous
+  weighted estimate;
+* Gaussian likelihood of z = [a_x, a_y, r] (13) (option D2: also the logged v_x), the paper's
+  likelihood-only weights (D3; option: exact importance ratio); the weighted mean before
+  resampling (D7) and N_eff; systematic resampling at every sample (D4; option: N_eff < N / 2).
+
+The draws, the weights' normalisation, the estimate and the resampling are template C shared by
+every particle filter (``model.estimator.Particles``); this module gives the per-particle
+Functions. Weights are kept as log-scores relative to the best particle, so their sum is at least 1
+and the spec's underflow guard cannot trigger.
+
+Hold rule (model.guard, on the logged v_x like every estimator): an implausible input or low speed
+holds the particles and the random stream (no draws), beta = 0; ``holding`` is 2 for a low-speed
+hold, 1 for an invalid input. The first sample after a low-speed hold draws a new particle set
+from that sample (2.9), as the initialisation does. Active, an estimated v_x below vx_min gives
+beta = 0 and LOW_SPEED (the spec's validity rule). Beyond the spec, a_y is corrected for body roll
+with the vehicle's roll gradient, as seed 000's estimators do (0 = the literal (13)).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model import status
+from model.bicycle import GRAVITY
+from model.calibration import Parameters
+from model.estimator import RNG_WORDS, Estimator, Particles
+from model.guard import first_sample, hold, input_guard
+from model.layout import Layout, Signal
+
+IMPROVED = "pf_improved"
+ADAPTIVE = "pf_adaptive"
+KINEMATIC = (("vx", "m/s", "longitudinal speed"), ("vy", "m/s", "lateral speed"),
+             ("ax", "m/s^2", "longitudinal acceleration"), ("ay", "m/s^2", "lateral acceleration"),
+             ("r", "rad/s", "yaw rate"))
+K_NAMES = tuple(name for name, _, _ in KINEMATIC)
+MEASURED = ("ax", "ay", "r")
+PARTICLE = Layout((*(Signal(n, u, d) for n, u, d in KINEMATIC),
+                   Signal("weight", "-", "normalised weight (during a step: log-weight score)")))
+INPUTS = Layout((
+    Signal("vx", "m/s", "longitudinal speed from the wheels (initial v_x, low-speed rule, D2)"),
+    Signal("ax", "m/s^2", "longitudinal acceleration, positive forward"),
+    Signal("ay", "m/s^2", "lateral acceleration, positive left"),
+    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
+))
+SHARED = ("mode", "vx", "ax", "ay", "r", "sigma_vx", "sigma_vy", "sigma_ax", "sigma_ay", "sigma_r")
+"""The per-sample vector every particle sees: the mode (0 hold, 1 propagate, 2 spawn), the
+measurement z (a_y roll-corrected) and the process-noise standard deviations (16)."""
+HOLD, PROPAGATE, SPAWN = 0, 1, 2
+WEIGHT_FLOOR = 1e-30
+"""Weights below this count as this in the log-score of ``resampling = "effective_size"``
+(a particle that light is dead either way; the floor keeps the score finite in float too)."""
+
+
+def layouts(count: int) -> tuple[Layout, Layout, Layout]:
+    """(inputs, states, outputs) for ``count`` particles."""
+    states = Layout((
+        *(Signal(n, u, f"estimate of the {d} (weighted mean)") for n, u, d in KINEMATIC),
+        Signal("holding", "-", "2 while holding at low speed, 1 on an invalid input, else 0"),
+        *(Signal(f"rng_{i}", "-", f"PCG32 state bits {63 - 16 * i}..{48 - 16 * i}")
+          for i in range(RNG_WORDS)),
+        *(Signal(f"p{i}_{s.name}", s.unit, f"particle {i}: {s.doc}")
+          for i in range(count) for s in PARTICLE.signals),
+    ))
+    outputs = Layout((
+        Signal("beta", "rad", "sideslip angle atan2(v_y, v_x)"),
+        Signal("vx", "m/s", "longitudinal speed"),
+        Signal("vy", "m/s", "lateral speed"),
+        Signal("n_eff", "-", "effective sample size 1 / sum w^2 before resampling"),
+        Signal("sigma_ax", "m/s^2", "adapted random-walk step of a_x (16)"),
+        Signal("sigma_ay", "m/s^2", "adapted random-walk step of a_y (16)"),
+        Signal("sigma_r", "rad/s", "adapted random-walk step of r (16)"),
+        Signal("status", "-", "status bits (model.status)", integer=True),
+    ))
+    return INPUTS, states, outputs
+
+
+def build_improved(params: Parameters) -> Estimator:
+    """The pf_improved estimator ([inputs], [estimator.pf_improved])."""
+    return _build(params, IMPROVED)
+
+
+def build_adaptive(params: Parameters) -> Estimator:
+    """The pf_adaptive estimator ([inputs], [estimator.pf_adaptive])."""
+    return _build(params, ADAPTIVE)
+
+
+def _build(params: Parameters, name: str) -> Estimator:
+    numeric = params.numeric.settings(name)
+    count = numeric["particles"]
+    inputs_layout, states, outputs = layouts(count)
+    head = Layout(states.signals[:len(KINEMATIC) + 1])
+    extra = params.inputs()
+    extra_names = ["params"] * len(extra)
+
+    def function(label, args, results, arg_names, result_names):
+        return ca.Function(f"vse_{name}_kernel_{label}", [*args, *extra],
+                           [ca.densify(ca.cse(r)) for r in results],
+                           [*arg_names, *extra_names], result_names)
+
+    u_sym, u = inputs_layout.symbols("input")
+    head_sym, h = head.symbols("head")
+    shared_sym, shared = Layout(tuple(Signal(n, "", "") for n in SHARED)).symbols("shared")
+    particle_sym, particle = PARTICLE.symbols("particle")
+    normals = ca.SX.sym("normals", len(KINEMATIC))
+    summary = ca.SX.sym("summary", len(KINEMATIC) + 1)
+
+    init_head, init_shared = _initial(params, name, u)
+    prepared = _prepare(params, name, h, u)
+    finish_head, finish_output = _finish(params, name, h, u, shared, summary, head, outputs)
+    particles = Particles(
+        init=function("init", [u_sym], [init_head, init_shared], ["input"], ["head", "shared"]),
+        prepare=function("prepare", [head_sym, u_sym], [prepared], ["head", "input"], ["shared"]),
+        spawn=function("spawn", [shared_sym, normals], [_spawn(params, name, shared, normals)],
+                       ["shared", "normals"], ["particle"]),
+        propagate=function("propagate", [shared_sym, particle_sym, normals],
+                           [_propagate(params, name, shared, particle, normals)],
+                           ["shared", "particle", "normals"], ["particle_next"]),
+        finish=function("finish", [head_sym, u_sym, shared_sym, summary],
+                        [finish_head, finish_output], ["head", "input", "shared", "summary"],
+                        ["head_next", "output"]),
+        count=count, seed=numeric["seed"], resampling=numeric["resampling"],
+        head_size=len(head), particle=PARTICLE)
+    variant = ("improved PF (proposal correction, seed 003)" if name == IMPROVED
+               else "adaptive PF (the baseline of seed 003)")
+    return Estimator(
+        name, f"longitudinal and lateral speed and sideslip: {variant} on the kinematic model, "
+              f"{count} particles", inputs_layout, states, outputs, particles.init, None, params,
+        {"particles": f"{count}, systematic resampling "
+                      f"{'at every sample' if numeric['resampling'] == 'every_sample' else 'when N_eff < N/2'}",
+         "random_stream": f"PCG32 (XSH RR), seed {numeric['seed']}; uniforms of "
+                          "53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)",
+         "observation": numeric["observation"]},
+        particles=particles)
+
+
+def _measured(params: Parameters, name: str, u) -> dict[str, ca.SX]:
+    """z as the filter uses it: a_y without the gravity component of body roll."""
+    settings = params.config.settings(name)
+    return {"ax": u["ax"], "ay": u["ay"] / (1 + GRAVITY * settings["roll_gradient"]), "r": u["r"]}
+
+
+def _initial(params: Parameters, name: str, u) -> tuple[ca.SX, ca.SX]:
+    """The head at the first sample and the shared vector of the initial spawn (2.9)."""
+    config = params.config
+    settings = config.settings(name)
+    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"])
+    vx0 = ca.fmin(ca.fmax(first["vx"], settings["vx_min"]), config.limits["vx_max"])
+    z = _measured(params, name, first)
+    head = ca.vertcat(vx0, 0, z["ax"], z["ay"], z["r"], 2 * holding)
+    speed, accel = settings["speed_noise"], settings["process_noise"]
+    sigma_a = ca.vertcat(*accel)
+    shared = ca.vertcat(SPAWN, vx0, z["ax"], z["ay"], z["r"],
+                        speed[0] + config.sample_time * sigma_a[0],
+                        speed[1] + config.sample_time * sigma_a[1], sigma_a)
+    return head, shared
+
+
+def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
+    """The shared vector of one sample: mode, z and the adapted sigmas (16)."""
+    config = params.config
+    settings = config.settings(name)
+    guard = input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
+                        h["holding"] > 0.5)
+    mode = ca.if_else(guard.active, ca.if_else(h["holding"] > 1.5, SPAWN, PROPAGATE), HOLD)
+    z = _measured(params, name, u)
+    z = {n: hold(z[n], guard.active, h[n]) for n in MEASURED}   # held: innovation 0, sigma_0
+    floor, cap = settings["process_noise"], settings["process_noise_max"]
+    gains = (settings["adaptation_gain_acceleration"],) * 2 + (settings["adaptation_gain_yaw_rate"],)
+    sigma = [ca.fmin(ca.fmax(floor[i] + gains[i] * ca.fabs(z[n] - h[n]), floor[i]), cap[i])
+             for i, n in enumerate(MEASURED)]
+    speed = settings["speed_noise"]
+    T = config.sample_time
+    return ca.vertcat(mode, hold(u["vx"], guard.active, h["vx"]), z["ax"], z["ay"], z["r"],
+                      speed[0] + T * sigma[0], speed[1] + T * sigma[1], *sigma)
+
+
+def _spawn(params: Parameters, name: str, shared, normals) -> ca.SX:
+    """A particle of the initial set (2.9): the measurement plus N(0, diag(spread^2, R)); its
+    log-weight score 0 (all equal)."""
+    settings = params.config.settings(name)
+    spread, noise = settings["initial_spread"], settings["measurement_noise"]
+    return ca.vertcat(shared["vx"] + spread[0] * normals[0], spread[1] * normals[1],
+                      *(shared[n] + noise[i] * normals[2 + i] for i, n in enumerate(MEASURED)),
+                      0)
+
+
+def _propagate(params: Parameters, name: str, shared, particle, normals) -> ca.SX:
+    """One particle through the corrected transition (14)-(15) and its log-weight score."""
+    config = params.config
+    settings = config.settings(name)
+    numeric = params.numeric.settings(name)
+    T = config.sample_time
+    gain = settings["correction_gain"] if name == IMPROVED else (0.0,) * len(MEASURED)
+    old = {n: particle[n] for n in MEASURED}
+    correction = {n: gain[i] * (shared[n] - old[n]) for i, n in enumerate(MEASURED)}
+    new = {n: old[n] + correction[n] + shared[f"sigma_{n}"] * normals[2 + i]
+           for i, n in enumerate(MEASURED)}
+    ax, ay, r = ((old[n] + new[n]) / 2 for n in MEASURED)
+    vx = particle["vx"] + T * (ax + r * particle["vy"]) + shared["sigma_vx"] * normals[0]
+    vy = particle["vy"] + T * (ay - r * particle["vx"]) + shared["sigma_vy"] * normals[1]
+
+    noise = settings["measurement_noise"]
+    score = -0.5 * sum(((shared[n] - new[n]) / noise[i]) ** 2 for i, n in enumerate(MEASURED))
+    if numeric["observation"] == "wheel_speed":
+        score -= 0.5 * ((shared["vx"] - vx) / settings["wheel_speed_noise"]) ** 2
+    if name == IMPROVED and numeric["weights"] == "exact_importance":
+        # log N(x'; f, s^2) - log N(x'; f + c, s^2) with x' = f + c + s n, per corrected entry
+        for i, n in enumerate(MEASURED):
+            c, s = correction[n], shared[f"sigma_{n}"]
+            score -= (c * c + 2 * c * s * normals[2 + i]) / (2 * s * s)
+    if numeric["resampling"] == "effective_size":
+        score += ca.log(ca.fmax(particle["weight"], WEIGHT_FLOOR))
+    return ca.vertcat(vx, vy, new["ax"], new["ay"], new["r"], score)
+
+
+def _finish(params: Parameters, name: str, h, u, shared, summary, head: Layout,
+            outputs: Layout) -> tuple[ca.SX, ca.SX]:
+    """The next head and the outputs from the weighted mean (17) and N_eff."""
+    config = params.config
+    settings = config.settings(name)
+    guard = input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
+                        h["holding"] > 0.5)
+    active = shared["mode"] > 0.5
+    estimate = {n: ca.if_else(active, summary[i], h[n]) for i, n in enumerate(K_NAMES)}
+    holding = ca.if_else(active, 0, ca.if_else(guard.low_speed, 2, ca.fmax(h["holding"], 1)))
+    slow = ca.logic_and(active, estimate["vx"] < settings["vx_min"])
+    output = outputs.pack({
+        "beta": ca.if_else(ca.logic_and(active, ca.logic_not(slow)),
+                           ca.atan2(estimate["vy"], estimate["vx"]), 0),
+        "vx": estimate["vx"], "vy": estimate["vy"], "n_eff": summary[len(K_NAMES)],
+        **{f"sigma_{n}": shared[f"sigma_{n}"] for n in MEASURED},
+        "status": guard.status + ca.if_else(slow, status.LOW_SPEED, 0),
+    })
+    return head.pack({**estimate, "holding": holding}), output
