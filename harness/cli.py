@@ -131,7 +131,7 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
            params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
     from harness.compare import PEAK_FRACTION, TOLERANCES
-    from harness.verify import verify_estimator
+    from harness.verify import FLIP_MARGIN, verify_estimator
 
     config = load_vehicle(vehicle)
     real = real or config.codegen["real"]
@@ -154,6 +154,9 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
             table.add_row(result.estimator, result.case, str(result.samples), diff.name,
                           f"{diff.max_abs:.2e}", "-" if diff.integer else f"{diff.max_rel:.2e}",
                           tolerance, "ok" if diff.ok else "FAIL")
+        if result.flips:
+            table.add_row(result.estimator, result.case, str(result.samples),
+                          "resampling flips", str(result.flips), "-", "explained", "ok")
         table.add_section()
     console.print(table)
     tolerance = TOLERANCES[real]
@@ -162,6 +165,11 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
                   f"{tolerance.relative:.0e} for {real}, wider where an estimator amplifies its "
                   "reference's rounding (the unscented filters; column 'tolerance'; "
                   "harness/compare.py)")
+    if any(r.flips for r in results):
+        console.print("resampling flips: steps of a float particle filter whose resampling chose "
+                      "other particles than the reference because a point lay within float "
+                      f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; their state is not "
+                      "compared, everything else is, from the C's own state at every step")
     failed = [r for r in results if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)

@@ -70,12 +70,17 @@ def difference(name: str, a: np.ndarray, b: np.ndarray, tolerance: Tolerance,
     a, b = np.asarray(a, float), np.asarray(b, float)
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         return Difference(name, np.inf, np.inf, tolerance.relative, integer)
-    delta = np.abs(a - b)
+    return Difference(name, float(np.abs(a - b).max(initial=0.0)),
+                      float(relative_errors(a, b, tolerance, scale).max(initial=0.0)),
+                      tolerance.relative, integer)
+
+
+def relative_errors(a: np.ndarray, b: np.ndarray, tolerance: Tolerance, scale=1.0) -> np.ndarray:
+    """The guarded relative difference of every entry of two finite runs (rows: samples)."""
     magnitude = np.maximum(np.abs(a), np.abs(b))
     peak = magnitude.max(axis=0, initial=0.0) * PEAK_FRACTION  # per column of a state matrix
-    scale = np.maximum(np.maximum(magnitude, tolerance.floor * np.asarray(scale, float)), peak)
-    return Difference(name, float(delta.max(initial=0.0)), float((delta / scale).max(initial=0.0)),
-                      tolerance.relative, integer)
+    guard = np.maximum(np.maximum(magnitude, tolerance.floor * np.asarray(scale, float)), peak)
+    return np.abs(a - b) / guard
 
 
 REFERENCE_PRECISION = float(np.finfo(np.longdouble).eps / np.finfo(np.float64).eps)

@@ -57,12 +57,23 @@ class ParticleFilter:
                                              s["vx_resume"])
         vx0 = min(max(first["vx"], s["vx_min"]), config.limits["vx_max"])
         z = self._measured(s, first)
-        stream = Stream.seeded(s["seed"], self.uniform_bits)
+        stream = Stream.seeded(s["seed"], s["seed"], self.uniform_bits)
         particles = self._spawn(s, vx0, z, stream)
         head = [vx0, 0.0, *z, 2.0 * holding]
         return np.concatenate([head, stream.words(), particles.ravel()])
 
     def step(self, config, state, u):
+        new_state, output, _ = self._advance(config, state, u)
+        return new_state, output
+
+    def resampling_margin(self, config, state, u) -> float:
+        """How close the step from ``state`` came to selecting other particles: the smallest
+        distance between a resampling point and a cumulative weight (inf if it did not
+        resample). Below the float rounding of the cumulative weights, a float build may select
+        differently and still be right."""
+        return self._advance(config, state, u)[2]
+
+    def _advance(self, config, state, u):
         s = config.settings(self.table)
         n = s["particles"]
         head = dict(zip(HEAD, state[:len(HEAD)]))
@@ -91,10 +102,11 @@ class ParticleFilter:
         beta = float(np.arctan2(estimate[1], estimate[0])) if active and not slow else 0.0
         output = [beta, estimate[0], estimate[1], n_eff, *sigma,
                   float(code | (blocks.LOW_SPEED if slow else 0))]
+        margin = np.inf
         if mode == PROPAGATE and (s["resampling"] == "every_sample" or n_eff < n / 2):
-            particles = _resample(particles, stream.uniforms(1)[0])
+            particles, margin = _resample(particles, stream.uniforms(1)[0])
         new_state = np.concatenate([estimate, [holding], stream.words(), particles.ravel()])
-        return new_state, np.array(output, dtype=float)
+        return new_state, np.array(output, dtype=float), margin
 
     # ---- blocks ---------------------------------------------------------------------------------
 
@@ -150,19 +162,23 @@ def _total(terms: np.ndarray) -> np.ndarray:
     return np.cumsum(terms, axis=0)[-1]
 
 
-def _resample(particles: np.ndarray, u: float) -> np.ndarray:
+def _resample(particles: np.ndarray, u: float) -> tuple[np.ndarray, float]:
     """Systematic resampling (D4): point j = (u + j) / N selects the first particle whose
     cumulative weight exceeds it (the last one of positive weight when rounding leaves the point
     beyond the total). Each selected particle keeps its slot; its extra copies fill, in particle
-    order, the slots of the particles not selected. Weights become 1 / N."""
+    order, the slots of the particles not selected. Weights become 1 / N. Also returns the
+    smallest distance between a point and a cumulative weight."""
     n = len(particles)
     weights = particles[:, -1]
     points = (u + np.arange(n)) / n
-    chosen = np.searchsorted(np.cumsum(weights), points, side="right")
+    cumulative = np.cumsum(weights)
+    chosen = np.searchsorted(cumulative, points, side="right")
+    padded = np.concatenate([[-np.inf], cumulative, [np.inf]])   # neighbours of each point
+    margin = float(np.min(np.minimum(padded[chosen + 1] - points, points - padded[chosen])))
     chosen[chosen >= n] = np.flatnonzero(weights > 0)[-1]
     copies = np.bincount(chosen, minlength=n)
     order = np.arange(n)
     order[copies == 0] = np.repeat(np.arange(n), np.maximum(copies - 1, 0))
     result = particles[order].copy()
     result[:, -1] = 1.0 / n
-    return result
+    return result, margin

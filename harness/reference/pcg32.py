@@ -48,11 +48,11 @@ class Stream:
         self.uniform_bits = uniform_bits
 
     @classmethod
-    def seeded(cls, seed: int, uniform_bits: int = 53) -> "Stream":
-        """``pcg32_srandom_r(seed, seed)``."""
-        stream = cls(0, seed, uniform_bits)
+    def seeded(cls, initial: int, sequence: int, uniform_bits: int = 53) -> "Stream":
+        """``pcg32_srandom_r(initial, sequence)``."""
+        stream = cls(0, sequence, uniform_bits)
         stream.outputs(1)
-        stream.state = (stream.state + seed) & MASK
+        stream.state = (stream.state + initial) & MASK
         stream.outputs(1)
         return stream
 

@@ -74,7 +74,8 @@ static unsigned long long read_stream(const casadi_real words[4])
     unsigned long long stream = 0U;
     int i;
     for (i = 0; i < 4; ++i) {
-        stream = (stream << 16U) | (unsigned long long)words[i];
+        /* via unsigned long: a word fits in 16 bits, and this conversion needs no library call */
+        stream = (stream << 16U) | (unsigned long long)(unsigned long)words[i];
     }
     return stream;
 }
@@ -151,9 +152,11 @@ static void summarise(const casadi_real *particles, casadi_real summary[SUMMARY_
     casadi_real squares = 0.0;
     int i;
     int j;
-    for (j = 0; j < WEIGHT; ++j) {
-        summary[j] = 0.0;
-    }
+    summary[0] = 0.0;
+    summary[1] = 0.0;
+    summary[2] = 0.0;
+    summary[3] = 0.0;
+    summary[4] = 0.0;
     for (i = 0; i < N_PARTICLES; ++i) {
         const casadi_real *particle = &particles[i * PARTICLE_SIZE];
         for (j = 0; j < WEIGHT; ++j) {
@@ -250,13 +253,26 @@ void vse_pf_adaptive_step(vse_pf_adaptive_state *state, const vse_pf_adaptive_in
     for (i = 0; i < HEAD_SIZE; ++i) {
         head[i] = state->x[i];
     }
-    /* the kernels write every entry; set first so static analysers see initialised data */
-    for (i = 0; i < SHARED_SIZE; ++i) {
-        shared[i] = 0.0;
-    }
-    for (i = 0; i < 8; ++i) {
-        y[i] = 0.0;
-    }
+    /* the kernels write every entry; set first so static analysers see initialised data
+     * (entry by entry: a loop may become a call to memset) */
+    shared[0] = 0.0;
+    shared[1] = 0.0;
+    shared[2] = 0.0;
+    shared[3] = 0.0;
+    shared[4] = 0.0;
+    shared[5] = 0.0;
+    shared[6] = 0.0;
+    shared[7] = 0.0;
+    shared[8] = 0.0;
+    shared[9] = 0.0;
+    y[0] = 0.0;
+    y[1] = 0.0;
+    y[2] = 0.0;
+    y[3] = 0.0;
+    y[4] = 0.0;
+    y[5] = 0.0;
+    y[6] = 0.0;
+    y[7] = 0.0;
     /* the sample's mode (0 hold, 1 propagate, 2 spawn), measurement and adapted noise */
     arg[0] = head;
     arg[1] = u;

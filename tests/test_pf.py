@@ -1,0 +1,305 @@
+"""Seed 003's particle filters: the random stream (PCG32, uniforms, Box-Muller) in C and NumPy, the
+per-particle kernels (kinematics signs, proposal correction, adaptive noise (16), weights), the
+systematic resampling rule, the hold rule, the resampling modes and observation options, and the
+C against the reference in double (every step and every trajectory) and float (every step, flips
+explained) on every verification scenario."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from codegen.generate import render
+from harness.build import load_estimator
+from harness.reference import REFERENCES
+from harness.reference.particle import _resample
+from harness.reference.pcg32 import MASK, MULTIPLIER, Stream
+from harness.reference.run import run_reference
+from harness.scenarios import VERIFICATION_SET, Case
+from harness.vehicles import load_vehicle, with_settings
+from harness.verify import verify_estimator
+from model import status
+from model.estimators import build, pf
+from model.params import ParameterError, parse_vehicle
+
+NAMES = (pf.IMPROVED, pf.ADAPTIVE)
+HEAD = len(pf.K_NAMES) + 1
+PARTICLES_AT = HEAD + 4
+
+
+def variant(vehicle_text, table=pf.IMPROVED, **keys):
+    return parse_vehicle(with_settings(vehicle_text, f"estimator.{table}", **keys), "v.toml",
+                         "c_class")
+
+
+def particles_of(state, count):
+    return np.asarray(state)[PARTICLES_AT:].reshape(count, len(pf.PARTICLE))
+
+
+# ---- random stream ----------------------------------------------------------------------------
+
+def test_stream_reproduces_the_published_pcg32_demo():
+    """pcg32-demo (pcg-random.org's minimal C library), seeded with pcg32_srandom_r(42, 54)."""
+    stream = Stream.seeded(42, 54)
+    assert [hex(int(x)) for x in stream.outputs(6)] == [
+        "0xa15c02b7", "0x7b47f409", "0xba1d3330", "0x83d2f293", "0xbfa4784b", "0xcbed606e"]
+
+
+def test_jumped_blocks_equal_the_lcg_one_step_at_a_time():
+    stream = Stream.seeded(7, 7)
+    state, increment = stream.state, stream.increment
+    block = stream.outputs(1000)
+    for k in (0, 1, 499, 999):
+        s = state
+        for _ in range(k):
+            s = (s * MULTIPLIER + increment) & MASK
+        x = (((s >> 18) ^ s) >> 27) & 0xFFFFFFFF
+        rotation = s >> 59
+        assert int(block[k]) == ((x >> rotation) | (x << ((32 - rotation) & 31))) & 0xFFFFFFFF
+    for _ in range(1000):
+        state = (state * MULTIPLIER + increment) & MASK
+    assert stream.state == state
+
+
+@pytest.mark.parametrize("bits", [53, 24])
+def test_normals_are_standard_normal(bits):
+    draws = Stream.seeded(3, 3, bits).normals(100_000)
+    assert stats.kstest(draws, "norm").pvalue > 1e-3
+    uniforms = Stream.seeded(3, 3, bits).uniforms(100_000)
+    assert uniforms.min() >= 0.0 and uniforms.max() < 1.0
+    assert np.all(uniforms * 2.0 ** bits == np.floor(uniforms * 2.0 ** bits))  # bits of resolution
+
+
+@pytest.mark.parametrize("real, outputs_per_normal", [("double", 4), ("float", 2)])
+def test_c_init_leaves_the_stream_where_the_spec_says(config, real, outputs_per_normal):
+    """The C seeds pcg32_srandom_r(seed, seed) and draws 5 normals per particle, each from two
+    uniforms of two outputs (double, 53 bits) or one output (float, 24 bits)."""
+    est = build(pf.IMPROVED, config)
+    c = load_estimator(est, render(config, pf.IMPROVED, real))
+    _, states = c.run(np.array([[20.0, 0.0, 0.0, 0.0]]))
+    settings = config.settings(pf.IMPROVED)
+    stream = Stream.seeded(settings["seed"], settings["seed"])
+    stream.outputs(outputs_per_normal * 5 * settings["particles"])
+    assert states[0, HEAD:PARTICLES_AT].tolist() == stream.words()
+
+
+# ---- per-particle kernels ---------------------------------------------------------------------
+
+def shared(config, name, ax, ay, r, vx=20.0, sigmas=(0.2, 0.2, 0.01)):
+    T = config.sample_time
+    speed = config.settings(name)["speed_noise"]
+    return [pf.PROPAGATE, vx, ax, ay, r, speed[0] + T * sigmas[0], speed[1] + T * sigmas[1],
+            *sigmas]
+
+
+@pytest.mark.parametrize("name, gain", [(pf.IMPROVED, 0.5), (pf.ADAPTIVE, 0.0)])
+def test_propagation_signs_and_correction(config, name, gain):
+    """(14)-(15) with zero noise: a, r move by G (z - own value); the speeds follow (5)-(6), ISO
+    signs (a left turn, r > 0, turns v_x into negative v_y)."""
+    propagate = build(name, config).particles.propagate
+    T = config.sample_time
+    particle = [20.0, 0.0, 0.0, 0.0, 0.5, 1.0 / 200]
+    new = np.array(propagate(shared(config, name, 1.0, 2.0, 0.5), particle, [0.0] * 5)).ravel()
+    ax, ay, r = gain * 1.0, gain * 2.0, 0.5
+    assert new[2:5] == pytest.approx([ax, ay, r], abs=1e-15)
+    assert new[0] == pytest.approx(20.0 + T * (ax / 2 + 0.5 * 0.0), rel=1e-15)
+    assert new[1] == pytest.approx(T * (ay / 2 - 0.5 * 20.0), rel=1e-15)
+    sigma = config.settings(name)["measurement_noise"]
+    expected = -0.5 * sum(((z - h) / s) ** 2 for z, h, s in zip((1.0, 2.0, 0.5), (ax, ay, r), sigma))
+    assert new[5] == pytest.approx(expected, rel=1e-14)
+
+
+def test_exact_importance_weight_is_the_density_ratio(vehicle_text):
+    """log p(x'|x) - log q(x'|x, z) over the corrected entries, added to the likelihood."""
+    config = variant(vehicle_text, weights="exact_importance")
+    plain = variant(vehicle_text)
+    normals = [0.3, -0.2, 0.7, -1.1, 0.4]
+    sigmas = (0.5, 0.8, 0.03)
+    s = shared(config, pf.IMPROVED, 1.0, 2.0, 0.3, sigmas=sigmas)
+    particle = [20.0, 0.1, 0.2, -0.5, 0.1, 1.0 / 200]
+    exact = float(build(pf.IMPROVED, config).particles.propagate(s, particle, normals)[5])
+    likelihood = float(build(pf.IMPROVED, plain).particles.propagate(s, particle, normals)[5])
+    ratio = 0.0
+    for old, z, sigma, n in zip(particle[2:5], (1.0, 2.0, 0.3), sigmas, normals[2:]):
+        correction = 0.5 * (z - old)
+        new = old + correction + sigma * n
+        ratio += stats.norm.logpdf(new, old, sigma) - stats.norm.logpdf(new, old + correction, sigma)
+    assert exact - likelihood == pytest.approx(ratio, rel=1e-12)
+
+
+def test_adaptive_noise_follows_16(config):
+    """sigma = clamp(sigma_0 + kappa |z - previous estimate|, sigma_0, sigma_max); the speeds'
+    sigma_v = sigma_v0 + T sigma_a."""
+    prepare = build(pf.IMPROVED, config).particles.prepare
+    s = config.settings(pf.IMPROVED)
+    head = [20.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    small = np.array(prepare(head, [20.0, 1.0, 0.0, 0.02])).ravel()
+    assert small[0] == pf.PROPAGATE
+    assert small[7:] == pytest.approx([0.2 + 0.5 * 1.0, 0.2, 0.01 + 0.5 * 0.02], rel=1e-15)
+    assert small[5] == pytest.approx(s["speed_noise"][0] + config.sample_time * 0.7, rel=1e-15)
+    large = np.array(prepare(head, [20.0, 25.0, -25.0, 2.0])).ravel()
+    assert large[7:] == pytest.approx(s["process_noise_max"], rel=1e-15)
+
+
+def test_roll_correction_of_the_lateral_acceleration(config):
+    prepare = build(pf.IMPROVED, config).particles.prepare
+    z = np.array(prepare([20.0, 0, 0, 0, 0, 0], [20.0, 0.0, 5.0, 0.0])).ravel()
+    assert z[3] == pytest.approx(5.0 / (1 + 9.81 * config.settings(pf.IMPROVED)["roll_gradient"]))
+
+
+# ---- resampling -------------------------------------------------------------------------------
+
+def test_systematic_resampling_rule():
+    """Each particle is copied floor(N w) or ceil(N w) times, never at weight 0; a copied particle
+    keeps its slot; the extra copies fill the empty slots in particle order; weights 1/N."""
+    rng = np.random.default_rng(5)
+    n = 50
+    for _ in range(20):
+        weights = rng.exponential(size=n) ** 3
+        weights[rng.choice(n, 10, replace=False)] = 0.0
+        weights /= weights.sum()
+        particles = np.column_stack([np.arange(n, dtype=float), weights])
+        result, margin = _resample(particles, rng.uniform())
+        source = result[:, 0].astype(int)
+        copies = np.bincount(source, minlength=n)
+        assert np.all((copies == np.floor(n * weights)) | (copies == np.ceil(n * weights)))
+        assert np.all(copies[weights == 0] == 0)
+        kept = copies > 0
+        assert np.all(source[kept] == np.flatnonzero(kept))
+        extra = np.repeat(np.arange(n), np.maximum(copies - 1, 0))
+        assert np.array_equal(source[~kept], extra)
+        assert np.all(result[:, 1] == 1.0 / n) and margin > 0
+
+
+def test_effective_size_mode_resamples_only_below_half(vehicle_text):
+    config = variant(vehicle_text, resampling="effective_size")
+    est = build(pf.IMPROVED, config)
+    log = Case.of("dlc", speed_kmh=120.0).simulate(config, 100.0, 1)
+    inputs = log.matrix(est.inputs.names)
+    outputs, states = load_estimator(est, render(config, pf.IMPROVED)).run(inputs)
+    n = config.settings(pf.IMPROVED)["particles"]
+    n_eff = outputs[:, est.outputs.index("n_eff")]
+    uniform = np.array([np.all(particles_of(s, n)[:, -1] == 1.0 / n) for s in states[1:]])
+    assert np.array_equal(uniform, n_eff < n / 2)
+    assert 0 < np.sum(n_eff < n / 2) < len(n_eff)
+    (result,) = verify_estimator(config, pf.IMPROVED, cases=(Case.of("dlc", speed_kmh=120.0),))
+    assert result.ok, result
+
+
+# ---- hold rule --------------------------------------------------------------------------------
+
+def test_invalid_input_holds_particles_and_stream(config):
+    est = build(pf.IMPROVED, config)
+    c = load_estimator(est, render(config, pf.IMPROVED))
+    _, states = c.run(np.tile([25.0, 0.3, 1.0, 0.1], (50, 1)))
+    state, output = c.step(states[-1], np.array([25.0, np.nan, 1.0, 0.1]))
+    assert int(output[est.outputs.index("status")]) == status.INVALID_INPUT
+    assert output[0] == 0.0
+    assert np.array_equal(state[:HEAD - 1], states[-1][:HEAD - 1])
+    assert state[HEAD - 1] == 1.0                                   # holding: invalid input
+    assert np.array_equal(state[HEAD:], states[-1][HEAD:])          # particles and stream kept
+
+
+def test_low_speed_hold_then_a_new_particle_set(config):
+    est = build(pf.IMPROVED, config)
+    c = load_estimator(est, render(config, pf.IMPROVED))
+    n = config.settings(pf.IMPROVED)["particles"]
+    inputs = np.vstack([np.tile([25.0, 0.0, 0.0, 0.0], (50, 1)),
+                        np.tile([2.0, 0.0, 0.0, 0.0], (20, 1)),       # below vx_min: hold
+                        np.tile([12.0, 0.0, 0.0, 0.0], (5, 1))])      # resume at 12 m/s
+    outputs, states = c.run(inputs)
+    code = outputs[:, est.outputs.index("status")].astype(int)
+    assert np.all(code[50:70] == status.LOW_SPEED)
+    assert np.array_equal(states[70][HEAD:], states[51][HEAD:])       # held, no draws
+    resumed = particles_of(states[71], n)
+    assert resumed[:, 0].mean() == pytest.approx(12.0, abs=0.05)     # drawn around the log's v_x
+    assert not np.array_equal(states[71][HEAD:PARTICLES_AT], states[70][HEAD:PARTICLES_AT])
+    assert code[70] == 0 and outputs[70, 1] == pytest.approx(12.0, abs=0.05)
+
+
+# ---- options ----------------------------------------------------------------------------------
+
+def test_wheel_speed_observation_bounds_the_speed(vehicle_text):
+    """D2: with the logged v_x in z the speed no longer drifts over a long run."""
+    case = Case.of("continuous_dlc")
+    errors = {}
+    for observation in ("inertial", "wheel_speed"):
+        config = variant(vehicle_text, observation=observation)
+        est = build(pf.IMPROVED, config)
+        log = case.simulate(config, 100.0, 1)
+        outputs, _ = load_estimator(est, render(config, pf.IMPROVED)).run(
+            log.matrix(est.inputs.names))
+        errors[observation] = np.mean(np.abs(outputs[:, 1] - log["vx_ref"]))
+    assert errors["wheel_speed"] < 0.1 < errors["inertial"]
+
+
+@pytest.mark.parametrize("old, new, fragments", [
+    ("particles = 200", "particles = 1", ["particles = 1", "whole number from 2 to 10000"]),
+    ("particles = 200", "particles = 200.5", ["particles = 200.5", "whole number"]),
+    ("seed = 1", "seed = -3", ["seed = -3", "whole number from 0"]),
+    ("correction_gain = [0.5, 0.5, 0.5]", "correction_gain = [0.5, 1.5, 0.5]",
+     ["correction_gain", "from 0 to 1"]),
+    ("process_noise_max = [2.0, 2.0, 0.1]", "process_noise_max = [2.0, 0.1, 0.1]",
+     ["process_noise_max", "above its process_noise"]),
+    ('weights = "likelihood"', 'weights = "bayes"', ["weights = 'bayes'", '"exact_importance"']),
+])
+def test_bad_settings_give_one_clear_line(vehicle_text, tmp_path, old, new, fragments):
+    start = vehicle_text.index("[estimator.pf_improved]")
+    text = vehicle_text[:start] + vehicle_text[start:].replace(old, new, 1)
+    assert text != vehicle_text
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ParameterError) as error:
+        load_vehicle(path)
+    message = str(error.value)
+    assert "\n" not in message and message.startswith(str(path))
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+# ---- equivalence ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", NAMES)
+def test_double_c_equals_the_reference_every_step_and_trajectory(config, name):
+    results = verify_estimator(config, name, real="double")
+    assert [r.case for r in results] == [c.label for c in VERIFICATION_SET]
+    for result in results:
+        assert result.ok and result.flips == 0, result
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_float_c_equals_the_reference_every_step_flips_explained(config, name):
+    results = verify_estimator(config, name, real="float")
+    for result in results:
+        assert result.ok, result
+        assert result.flips < 0.01 * result.samples, result   # a rounding coincidence, rare
+
+
+def test_verify_catches_a_wrong_correction_gain(vehicle_text):
+    """The C generated with G = 0.5 against a reference that believes G = 0.51: fails."""
+    config = variant(vehicle_text)
+    wrong = variant(vehicle_text, correction_gain=[0.51, 0.5, 0.5])
+    est = build(pf.IMPROVED, config)
+    c = load_estimator(est, render(config, pf.IMPROVED))
+    inputs = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1).matrix(est.inputs.names)
+    _, c_states = c.run(inputs)
+    _, r_states = run_reference(REFERENCES[pf.IMPROVED], wrong, inputs)
+    assert np.max(np.abs(c_states - r_states)) > 1e-6
+
+
+def test_the_beta_output_and_the_speed_rule(config):
+    est = build(pf.IMPROVED, config)
+    c = load_estimator(est, render(config, pf.IMPROVED))
+    outputs, states = c.run(np.tile([20.0, 0.0, 0.0, 0.0], (10, 1)))
+    state = states[-1].copy()
+    state[0] = 2.0                       # particles say 20 m/s; the head is overwritten anyway
+    _, output = c.step(state, np.array([20.0, 0.0, 0.0, 0.0]))
+    assert output[0] == pytest.approx(math.atan2(output[2], output[1]), abs=1e-15)
+    particles = particles_of(state, config.settings(pf.IMPROVED)["particles"])
+    particles[:, 0] = 1.0                # every particle below vx_min: beta := 0, LOW_SPEED
+    state[PARTICLES_AT:] = particles.ravel()
+    _, output = c.step(state, np.array([20.0, 0.0, 0.0, 0.0]))
+    assert output[0] == 0.0 and int(output[-1]) == status.LOW_SPEED
