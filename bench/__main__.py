@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench import seed003
 from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
 from codegen.generate import render
 from harness.fuzz import fuzz_estimator
@@ -110,6 +111,14 @@ def main(argv: list[str] | None = None) -> None:
                      f"{'met' if g / h <= TARGET_RATIO else 'MISSED'} | "
                      f"{generated.ns_per_step(inputs_file):.1f} | {hand.ns_per_step(inputs_file):.1f} |")
 
+    if any(build(name, config).particles for name in config.estimators):
+        lines += ["", "## Particle filters by particle count (seed 003)", "",
+                  f"{seed003.COSTS_CASE.label}; instructions per step as above; the Cortex-M4F "
+                  "float build's code, the caller-owned state (4 B per entry: 6 per particle and "
+                  "10 more), the step's worst-case stack and their sum with static data as RAM.",
+                  "", *seed003.costs(args.vehicle.read_text(), str(args.vehicle), config.name,
+                                     seed003.COSTS_CASE)]
+
     lines += ["", "## Python, per step (for contrast)", "", "| estimator | NumPy reference (µs) | CasADi Function from Python (µs) |",
               "|---|---|---|"]
     for name in config.estimators:
@@ -118,6 +127,9 @@ def main(argv: list[str] | None = None) -> None:
         inputs = log.matrix(estimator.inputs.names)
         ref_us = _python_step_us(lambda s, u: reference.step(config, s, u)[0],
                                  reference.init(config, inputs[0]), inputs)
+        if estimator.step is None:      # a particle filter has no composed CasADi step
+            lines.append(f"| {name} | {ref_us:.1f} | - |")
+            continue
         cas_us = _python_step_us(lambda s, u: estimator.step(s, u)[0],
                                  np.array(estimator.init(inputs[0])).ravel(), inputs)
         lines.append(f"| {name} | {ref_us:.1f} | {cas_us:.1f} |")

@@ -22,8 +22,10 @@ def config_for_log(config: VehicleConfig, log: Log) -> VehicleConfig:
     return config if sample_time == config.sample_time else config.with_sample_time(sample_time)
 
 
-def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c") -> Log:
-    """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs."""
+def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c",
+                  real: str | None = None) -> Log:
+    """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs; ``real``
+    (C only) defaults to the vehicle file's [codegen] real."""
     config = config_for_log(config, log)
     estimator = build(name, config)
     missing = log.missing(estimator.inputs.names)
@@ -32,7 +34,7 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
                        f"{', '.join(estimator.inputs.names)}")
     inputs = log.matrix(estimator.inputs.names)
     if backend == "c":
-        outputs, _ = load_estimator(estimator, render(config, name)).run(inputs)
+        outputs, _ = load_estimator(estimator, render(config, name, real)).run(inputs)
     else:
         outputs, _ = run_reference(REFERENCES[name], config, inputs)
     columns = {"t": log["t"].copy()}
