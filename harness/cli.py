@@ -167,9 +167,10 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
                   "harness/compare.py)")
     if any(r.flips for r in results):
         console.print("resampling flips: steps of a float particle filter whose resampling chose "
-                      "other particles than the reference because a point lay within float "
-                      f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; their state is not "
-                      "compared, everything else is, from the C's own state at every step")
+                      "another particle than the reference because a point lay within float "
+                      f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; each matches the "
+                      "reference's step with that point moved across the weight (every step is "
+                      "checked from the C's own state)")
     failed = [r for r in results if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)

@@ -66,14 +66,20 @@ class ParticleFilter:
         new_state, output, _ = self._advance(config, state, u)
         return new_state, output
 
-    def resampling_margin(self, config, state, u) -> float:
-        """How close the step from ``state`` came to selecting other particles: the smallest
-        distance between a resampling point and a cumulative weight (inf if it did not
-        resample). Below the float rounding of the cumulative weights, a float build may select
-        differently and still be right."""
-        return self._advance(config, state, u)[2]
+    def alternatives(self, config, state, u, margin: float) -> list[tuple[int, int]]:
+        """(point, particle): the resampling points of the step from ``state`` and the other
+        particles whose cumulative-weight interval lies within ``margin`` of them (none if the
+        step does not resample): where a float build may select differently and still be
+        right."""
+        return self._advance(config, state, u, margin=margin)[2]
 
-    def _advance(self, config, state, u):
+    def step_flipped(self, config, state, u, point: int, particle: int):
+        """The step from ``state`` with resampling point ``point`` selecting ``particle``."""
+        new_state, output, _ = self._advance(config, state, u, flip=(point, particle))
+        return new_state, output
+
+    def _advance(self, config, state, u, margin: float = 0.0,
+                 flip: tuple[int, int] | None = None):
         s = config.settings(self.table)
         n = s["particles"]
         head = dict(zip(HEAD, state[:len(HEAD)]))
@@ -102,11 +108,11 @@ class ParticleFilter:
         beta = float(np.arctan2(estimate[1], estimate[0])) if active and not slow else 0.0
         output = [beta, estimate[0], estimate[1], n_eff, *sigma,
                   float(code | (blocks.LOW_SPEED if slow else 0))]
-        margin = np.inf
+        near: list[tuple[int, int]] = []
         if mode == PROPAGATE and (s["resampling"] == "every_sample" or n_eff < n / 2):
-            particles, margin = _resample(particles, stream.uniforms(1)[0])
+            particles, near = _resample(particles, stream.uniforms(1)[0], margin, flip)
         new_state = np.concatenate([estimate, [holding], stream.words(), particles.ravel()])
-        return new_state, np.array(output, dtype=float), margin
+        return new_state, np.array(output, dtype=float), near
 
     # ---- blocks ---------------------------------------------------------------------------------
 
@@ -162,23 +168,33 @@ def _total(terms: np.ndarray) -> np.ndarray:
     return np.cumsum(terms, axis=0)[-1]
 
 
-def _resample(particles: np.ndarray, u: float) -> tuple[np.ndarray, float]:
+def _resample(particles: np.ndarray, u: float, margin: float = 0.0,
+              flip: tuple[int, int] | None = None) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """Systematic resampling (D4): point j = (u + j) / N selects the first particle whose
     cumulative weight exceeds it (the last one of positive weight when rounding leaves the point
     beyond the total). Each selected particle keeps its slot; its extra copies fill, in particle
-    order, the slots of the particles not selected. Weights become 1 / N. Also returns the
-    smallest distance between a point and a cumulative weight."""
+    order, the slots of the particles not selected. Weights become 1 / N.
+
+    Also returns (point, particle) for every other particle of positive weight whose interval
+    [c_(i-1), c_i) lies within ``margin`` of a point; ``flip`` = (point, particle) makes that
+    point select that particle (see ``ParticleFilter.step_flipped``)."""
     n = len(particles)
     weights = particles[:, -1]
     points = (u + np.arange(n)) / n
     cumulative = np.cumsum(weights)
     chosen = np.searchsorted(cumulative, points, side="right")
-    padded = np.concatenate([[-np.inf], cumulative, [np.inf]])   # neighbours of each point
-    margin = float(np.min(np.minimum(padded[chosen + 1] - points, points - padded[chosen])))
     chosen[chosen >= n] = np.flatnonzero(weights > 0)[-1]
+    near = []
+    if margin > 0:
+        low = np.searchsorted(cumulative, points - margin, side="right")
+        high = np.minimum(np.searchsorted(cumulative, points + margin, side="right"), n - 1)
+        near = [(j, i) for j in np.flatnonzero(high > low) for i in range(low[j], high[j] + 1)
+                if i != chosen[j] and weights[i] > 0]
+    if flip is not None:
+        chosen[flip[0]] = flip[1]
     copies = np.bincount(chosen, minlength=n)
     order = np.arange(n)
     order[copies == 0] = np.repeat(np.arange(n), np.maximum(copies - 1, 0))
     result = particles[order].copy()
     result[:, -1] = 1.0 / n
-    return result, margin
+    return result, near

@@ -85,7 +85,8 @@ static void write_stream(unsigned long long stream, casadi_real words[4])
     unsigned long long rest = stream;
     int i;
     for (i = 3; i >= 0; --i) {
-        words[i] = (casadi_real)(rest & 0xFFFFULL);
+        const unsigned long long word = rest & 0xFFFFULL;
+        words[i] = (casadi_real)word;
         rest >>= 16U;
     }
 }
@@ -180,6 +181,7 @@ static void resample(casadi_real *particles, unsigned long long *stream)
     int j = 0;
     int k;
     int last = 0;
+    int left;
     int hole = 0;
     for (i = 0; i < N_PARTICLES; ++i) {
         casadi_real *weight = &particles[(i * PARTICLE_SIZE) + WEIGHT];
@@ -194,7 +196,8 @@ static void resample(casadi_real *particles, unsigned long long *stream)
         }
         *weight = (casadi_real)copies;  /* the weight entry holds the copy count for now */
     }
-    particles[(last * PARTICLE_SIZE) + WEIGHT] += (casadi_real)(N_PARTICLES - j);
+    left = N_PARTICLES - j;     /* points beyond the rounded total (rounding; usually none) */
+    particles[(last * PARTICLE_SIZE) + WEIGHT] += (casadi_real)left;
     for (i = 0; i < N_PARTICLES; ++i) {
         int copies = (int)particles[(i * PARTICLE_SIZE) + WEIGHT];
         for (; copies > 1; --copies) {
