@@ -1,7 +1,7 @@
 """Accuracy of estimates against ground truth, in the format of seed 000's Table 3.
 
 e = estimate - truth over the samples that have ground truth; max |e|, mean |e| and RMSE.
-Reports show beta and r in degrees (deg, deg/s) and vy in m/s.
+Reports show beta and r in degrees (deg, deg/s), vx and vy in m/s.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from harness.logs import Log, LogError
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
     ("beta", "beta_ref", "deg", 180.0 / np.pi),
+    ("vx", "vx_ref", "m/s", 1.0),
     ("vy", "vy_ref", "m/s", 1.0),
     ("r", "r_ref", "deg/s", 180.0 / np.pi),
 )

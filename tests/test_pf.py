@@ -320,3 +320,15 @@ def test_the_beta_output_and_the_speed_rule(config):
     state[PARTICLES_AT:] = particles.ravel()
     _, output = c.step(state, np.array([20.0, 0.0, 0.0, 0.0]))
     assert output[0] == 0.0 and int(output[-1]) == status.LOW_SPEED
+
+
+def test_speeds_are_scored_against_the_truth(config):
+    """``vsegen score`` reports v_x as well as v_y and beta for an estimator that gives them."""
+    from harness.run import run_estimator
+    from harness.score import score
+
+    log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1)
+    scores = {s.signal: s for s in score(log, run_estimator(config, pf.IMPROVED, log))}
+    assert set(scores) == {"beta", "vx", "vy"}
+    expected = np.sqrt(np.mean((run_estimator(config, pf.IMPROVED, log)["vx"] - log["vx_ref"]) ** 2))
+    assert scores["vx"].rmse == pytest.approx(expected, rel=1e-12)
