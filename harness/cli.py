@@ -149,7 +149,8 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
                    "tolerance", "result"):
         table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
     for result in results:
-        for diff in (*result.outputs, result.states, result.stepwise):
+        stepwise = () if result.stepwise is result.states else (result.stepwise,)
+        for diff in (*result.outputs, result.states, *stepwise):
             tolerance = "identical" if diff.integer else f"{diff.tolerance:.0e}"
             table.add_row(result.estimator, result.case, str(result.samples), diff.name,
                           f"{diff.max_abs:.2e}", "-" if diff.integer else f"{diff.max_rel:.2e}",
