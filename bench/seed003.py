@@ -86,10 +86,11 @@ def table(text: str, source: str, name: str, runs: int = 50) -> list[str]:
 
 def float_against_double(text: str, source: str, name: str, runs: int = 50) -> list[str]:
     """Markdown: MAE of v_x and v_y of the float and the double C over ``runs`` runs of the DLC
-    (D5: float builds are compared statistically; their resampling parts from the double's)."""
+    (D5: float builds are compared statistically; their resampling parts from the double's), with
+    the standard error of the mean of the paired per-run differences."""
     case = CASES[0][1]
-    lines = ["| filter | signal | double C MAE (m/s) | float C MAE (m/s) | difference |",
-             "|---|---|---|---|---|"]
+    lines = ["| filter | signal | double C MAE (m/s) | float C MAE (m/s) | difference | "
+             "± 2 standard errors |", "|---|---|---|---|---|---|"]
     for filter_name in FILTERS:
         mae = {"double": [], "float": []}
         for seed in range(1, runs + 1):
@@ -99,10 +100,13 @@ def float_against_double(text: str, source: str, name: str, runs: int = 50) -> l
                 est = run_estimator(config, filter_name, log, real=real)
                 mae[real].append([np.mean(np.abs(est["vx"] - log["vx_ref"])),
                                   np.mean(np.abs(est["vy"] - log["vy_ref"]))])
-        double, single = np.mean(mae["double"], axis=0), np.mean(mae["float"], axis=0)
+        double, single = np.array(mae["double"]), np.array(mae["float"])
+        error = 2 * np.std(single - double, axis=0, ddof=1) / np.sqrt(runs)
         for i, signal in enumerate(("vx", "vy")):
-            lines.append(f"| {filter_name} | {signal} | {double[i]:.4f} | {single[i]:.4f} | "
-                         f"{100 * (single[i] - double[i]) / double[i]:+.1f} % |")
+            base = double[:, i].mean()
+            lines.append(f"| {filter_name} | {signal} | {base:.4f} | {single[:, i].mean():.4f} | "
+                         f"{100 * (single[:, i].mean() - base) / base:+.1f} % | "
+                         f"{100 * error[i] / base:.1f} % |")
     return lines
 
 
