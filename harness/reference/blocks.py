@@ -89,6 +89,12 @@ def unpacked(values, n: int) -> np.ndarray:
     return P
 
 
+def roll_corrected(ay_measured, roll_gradient):
+    """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
+    to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""
+    return ay_measured * (1.0 / (1.0 + GRAVITY * roll_gradient))
+
+
 def plausible(limits: Mapping[str, float], name: str, value: float) -> bool:
     """Finite and within its [inputs] limit."""
     return math.isfinite(value) and abs(value) <= limits[LIMIT_OF[name]]

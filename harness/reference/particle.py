@@ -119,7 +119,7 @@ class ParticleFilter:
     @staticmethod
     def _measured(s, inputs) -> np.ndarray:
         """z = [a_x, a_y, r], a_y without the gravity component of body roll."""
-        return np.array([inputs["ax"], inputs["ay"] / (1.0 + blocks.GRAVITY * s["roll_gradient"]),
+        return np.array([inputs["ax"], blocks.roll_corrected(inputs["ay"], s["roll_gradient"]),
                          inputs["r"]], dtype=float)
 
     @staticmethod

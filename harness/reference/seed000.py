@@ -17,9 +17,8 @@ GRAVITY = blocks.GRAVITY
 
 
 def roll_corrected(config, table, ay_measured):
-    """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
-    to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""
-    return ay_measured / (1.0 + GRAVITY * config.settings(table)["roll_gradient"])
+    """Accelerometer reading without the gravity component of body roll (``blocks``)."""
+    return blocks.roll_corrected(ay_measured, config.settings(table)["roll_gradient"])
 
 
 def median_length(config, table) -> int:

@@ -32,11 +32,11 @@ from __future__ import annotations
 import casadi as ca
 
 from model import status
-from model.bicycle import GRAVITY
 from model.calibration import Parameters
 from model.estimator import RNG_WORDS, Estimator, Particles
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
+from model.sensors import roll_corrected
 
 IMPROVED = "pf_improved"
 ADAPTIVE = "pf_adaptive"
@@ -146,8 +146,8 @@ def _build(params: Parameters, name: str) -> Estimator:
 
 def _measured(params: Parameters, name: str, u) -> dict[str, ca.SX]:
     """z as the filter uses it: a_y without the gravity component of body roll."""
-    settings = params.config.settings(name)
-    return {"ax": u["ax"], "ay": u["ay"] / (1 + GRAVITY * settings["roll_gradient"]), "r": u["r"]}
+    roll_gradient = params.config.settings(name)["roll_gradient"]
+    return {"ax": u["ax"], "ay": roll_corrected(u["ay"], roll_gradient), "r": u["r"]}
 
 
 def _initial(params: Parameters, name: str, u) -> tuple[ca.SX, ca.SX]:

@@ -12,12 +12,13 @@ from dataclasses import dataclass
 import casadi as ca
 
 from model import filters, kalman, status
-from model.bicycle import GRAVITY, stability_factor
+from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
 from model.guard import (Guard, first_sample, hold, input_guard, plausibility,
                          previous_inputs)
 from model.layout import Layout, Signal
+from model.sensors import roll_corrected
 
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -106,9 +107,8 @@ class Seed000:
         self.P0 = kalman.pack_symmetric(matrix(self.settings["initial_covariance"]))
 
     def roll_corrected(self, ay_measured):
-        """a_y at the CG from a body-fixed accelerometer: a_y,m = a_y cos(phi) + g sin(phi) with
-        phi = k a_y gives, to first order, a_y = a_y,m / (1 + g k) (k = roll_gradient)."""
-        return ay_measured * (1.0 / (1.0 + GRAVITY * self.settings["roll_gradient"]))
+        """a_y at the CG from a body-fixed accelerometer (``model.sensors.roll_corrected``)."""
+        return roll_corrected(ay_measured, self.settings["roll_gradient"])
 
     def speed(self, vx):
         """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""
