@@ -116,7 +116,8 @@ class Estimator:
         name: estimator name (``[estimator.<name>]``, C prefix ``vse_<name>_``).
         summary: one line: what it estimates and how.
         inputs, states, outputs: layouts of the flat vectors.
-        init: Function ``init(input[, params]) -> (state)``.
+        init: Function ``init(input[, params]) -> (state)``; for a particle filter its
+            ``Particles.init`` (the head of the state; the template draws the particles).
         step: Function ``step(state, input[, params]) -> (state_next, output)``; None for a
             particle filter (see ``particles``).
         parameters: where the parameter values come from (``params`` is an input when they are
