@@ -357,6 +357,16 @@ EKF_RLS = EstimatorSchema(
 """Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
 §5)."""
 
+def _caps_above_floors(table: Mapping[str, Any]) -> str:
+    if all(high > low for high, low in zip(table["process_noise_max"], table["process_noise"])):
+        return ""
+    return (f"process_noise_max = {list(table['process_noise_max'])!r}: expected every entry "
+            f"above its process_noise entry {list(table['process_noise'])!r}")
+
+
+CAPS_ABOVE_FLOORS = Rule("process_noise_max", _caps_above_floors)
+"""An adaptive noise's ceilings lie above its floors, entry by entry (aukf, the particle filters)."""
+
 UKF_FIELDS: tuple[Field, ...] = (
     choice("longitudinal_force", ("wheel_speeds", "free_rolling"), "tyre slip ratios from the "
            "measured wheel speeds (C4.1) or free rolling with a_x a random walk (C4.2)"),
@@ -392,10 +402,7 @@ AUKF = EstimatorSchema(
             diagonal("process_noise_max", 6, "SI units squared per step", "ceiling of the adapted "
                      "Q (beyond the spec: without it abusive inputs, e.g. a_y alternating "
                      "+-25 m/s^2, grow Q and P until they overflow)")),
-    rules=(*LOW_SPEED_RULES, Rule("process_noise_max", lambda t: "" if all(
-        high > low for high, low in zip(t["process_noise_max"], t["process_noise"])) else
-        f"process_noise_max = {list(t['process_noise_max'])!r}: expected every entry above its "
-        f"process_noise entry {list(t['process_noise'])!r}")))
+    rules=(*LOW_SPEED_RULES, CAPS_ABOVE_FLOORS))
 
 PF_FIELDS: tuple[Field, ...] = (
     integer("particles", 2, 10000, "N, the particle count (fixed at generation time; the state "
@@ -427,14 +434,7 @@ PF_FIELDS: tuple[Field, ...] = (
 §3, §5)."""
 
 
-def _caps_above_floors(table: Mapping[str, Any]) -> str:
-    if all(high > low for high, low in zip(table["process_noise_max"], table["process_noise"])):
-        return ""
-    return (f"process_noise_max = {list(table['process_noise_max'])!r}: expected every entry "
-            f"above its process_noise entry {list(table['process_noise'])!r}")
-
-
-PF_RULES = (*LOW_SPEED_RULES, Rule("process_noise_max", _caps_above_floors))
+PF_RULES = (*LOW_SPEED_RULES, CAPS_ABOVE_FLOORS)
 PF_ADAPTIVE = EstimatorSchema(fields=PF_FIELDS, rules=PF_RULES)
 PF_IMPROVED = EstimatorSchema(
     fields=(*PF_FIELDS,
