@@ -81,7 +81,7 @@ class Particles:
     * ``spawn(shared, normals[, params]) -> particle`` and
       ``propagate(shared, particle, normals[, params]) -> particle``, with the particle's
       log-weight score in its last entry; ``normals`` are standard normal draws, in state order;
-    * ``finish(head, input, shared, summary[, params]) -> (head_next, output)``: ``summary`` is the
+    * ``finish(head, shared, summary[, params]) -> (head_next, output)``: ``summary`` is the
       weighted mean of the particles' entries but the last, then N_eff = 1 / sum w^2.
 
     ``resampling``: "every_sample" or "effective_size" (only when N_eff < count / 2), systematic.

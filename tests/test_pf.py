@@ -28,6 +28,7 @@ from model.params import ParameterError, parse_vehicle
 NAMES = (pf.IMPROVED, pf.ADAPTIVE)
 HEAD = len(pf.K_NAMES) + 1
 PARTICLES_AT = HEAD + 4
+SIGMAS = slice(pf.SHARED.index("sigma_ax"), pf.SHARED.index("sigma_r") + 1)
 
 
 def variant(vehicle_text, table=pf.IMPROVED, **keys):
@@ -92,7 +93,7 @@ def shared(config, name, ax, ay, r, vx=20.0, sigmas=(0.2, 0.2, 0.01)):
     T = config.sample_time
     speed = config.settings(name)["speed_noise"]
     return [pf.PROPAGATE, vx, ax, ay, r, speed[0] + T * sigmas[0], speed[1] + T * sigmas[1],
-            *sigmas]
+            *sigmas, 0.0, 0.0]                                  # status, holding
 
 
 @pytest.mark.parametrize("name, gain", [(pf.IMPROVED, 0.5), (pf.ADAPTIVE, 0.0)])
@@ -138,10 +139,10 @@ def test_adaptive_noise_follows_16(config):
     head = [20.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     small = np.array(prepare(head, [20.0, 1.0, 0.0, 0.02])).ravel()
     assert small[0] == pf.PROPAGATE
-    assert small[7:] == pytest.approx([0.2 + 0.5 * 1.0, 0.2, 0.01 + 0.5 * 0.02], rel=1e-15)
+    assert small[SIGMAS] == pytest.approx([0.2 + 0.5 * 1.0, 0.2, 0.01 + 0.5 * 0.02], rel=1e-15)
     assert small[5] == pytest.approx(s["speed_noise"][0] + config.sample_time * 0.7, rel=1e-15)
     large = np.array(prepare(head, [20.0, 25.0, -25.0, 2.0])).ravel()
-    assert large[7:] == pytest.approx(s["process_noise_max"], rel=1e-15)
+    assert large[SIGMAS] == pytest.approx(s["process_noise_max"], rel=1e-15)
 
 
 def test_roll_correction_of_the_lateral_acceleration(config):

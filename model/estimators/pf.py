@@ -53,9 +53,11 @@ INPUTS = Layout((
     Signal("ay", "m/s^2", "lateral acceleration, positive left"),
     Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
 ))
-SHARED = ("mode", "vx", "ax", "ay", "r", "sigma_vx", "sigma_vy", "sigma_ax", "sigma_ay", "sigma_r")
+SHARED = ("mode", "vx", "ax", "ay", "r", "sigma_vx", "sigma_vy", "sigma_ax", "sigma_ay", "sigma_r",
+          "status", "holding")
 """The per-sample vector every particle sees: the mode (0 hold, 1 propagate, 2 spawn), the
-measurement z (a_y roll-corrected) and the process-noise standard deviations (16)."""
+measurement z (a_y roll-corrected) and the process-noise standard deviations (16); then, for
+``finish``, the guard's status bits and the ``holding`` value the head keeps if the sample holds."""
 HOLD, PROPAGATE, SPAWN = 0, 1, 2
 WEIGHT_FLOOR = 1e-30
 """Weights below this count as this in the log-score of ``resampling = "effective_size"``
@@ -117,7 +119,7 @@ def _build(params: Parameters, name: str) -> Estimator:
 
     init_head, init_shared = _initial(params, name, u)
     prepared = _prepare(params, name, h, u)
-    finish_head, finish_output = _finish(params, name, h, u, shared, summary, head, outputs)
+    finish_head, finish_output = _finish(params, name, h, shared, summary, head, outputs)
     particles = Particles(
         init=function("init", [u_sym], [init_head, init_shared], ["input"], ["head", "shared"]),
         prepare=function("prepare", [head_sym, u_sym], [prepared], ["head", "input"], ["shared"]),
@@ -126,8 +128,8 @@ def _build(params: Parameters, name: str) -> Estimator:
         propagate=function("propagate", [shared_sym, particle_sym, normals],
                            [_propagate(params, name, shared, particle, normals)],
                            ["shared", "particle", "normals"], ["particle_next"]),
-        finish=function("finish", [head_sym, u_sym, shared_sym, summary],
-                        [finish_head, finish_output], ["head", "input", "shared", "summary"],
+        finish=function("finish", [head_sym, shared_sym, summary],
+                        [finish_head, finish_output], ["head", "shared", "summary"],
                         ["head_next", "output"]),
         count=count, seed=numeric["seed"], resampling=numeric["resampling"],
         head_size=len(head), particle=PARTICLE)
@@ -162,12 +164,12 @@ def _initial(params: Parameters, name: str, u) -> tuple[ca.SX, ca.SX]:
     sigma_a = ca.vertcat(*accel)
     shared = ca.vertcat(SPAWN, vx0, z["ax"], z["ay"], z["r"],
                         speed[0] + config.sample_time * sigma_a[0],
-                        speed[1] + config.sample_time * sigma_a[1], sigma_a)
+                        speed[1] + config.sample_time * sigma_a[1], sigma_a, 0, 2 * holding)
     return head, shared
 
 
 def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
-    """The shared vector of one sample: mode, z and the adapted sigmas (16)."""
+    """The shared vector of one sample: mode, z, the adapted sigmas (16), status, holding."""
     config = params.config
     settings = config.settings(name)
     guard = input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
@@ -181,8 +183,10 @@ def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
              for i, n in enumerate(MEASURED)]
     speed = settings["speed_noise"]
     T = config.sample_time
+    held = ca.if_else(guard.low_speed, 2, ca.fmax(h["holding"], 1))
     return ca.vertcat(mode, hold(u["vx"], guard.active, h["vx"]), z["ax"], z["ay"], z["r"],
-                      speed[0] + T * sigma[0], speed[1] + T * sigma[1], *sigma)
+                      speed[0] + T * sigma[0], speed[1] + T * sigma[1], *sigma, guard.status,
+                      ca.if_else(guard.active, 0, held))
 
 
 def _spawn(params: Parameters, name: str, shared, normals) -> ca.SX:
@@ -224,22 +228,18 @@ def _propagate(params: Parameters, name: str, shared, particle, normals) -> ca.S
     return ca.vertcat(vx, vy, new["ax"], new["ay"], new["r"], score)
 
 
-def _finish(params: Parameters, name: str, h, u, shared, summary, head: Layout,
+def _finish(params: Parameters, name: str, h, shared, summary, head: Layout,
             outputs: Layout) -> tuple[ca.SX, ca.SX]:
     """The next head and the outputs from the weighted mean (17) and N_eff."""
-    config = params.config
-    settings = config.settings(name)
-    guard = input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
-                        h["holding"] > 0.5)
+    settings = params.config.settings(name)
     active = shared["mode"] > 0.5
     estimate = {n: ca.if_else(active, summary[i], h[n]) for i, n in enumerate(K_NAMES)}
-    holding = ca.if_else(active, 0, ca.if_else(guard.low_speed, 2, ca.fmax(h["holding"], 1)))
     slow = ca.logic_and(active, estimate["vx"] < settings["vx_min"])
     output = outputs.pack({
         "beta": ca.if_else(ca.logic_and(active, ca.logic_not(slow)),
                            ca.atan2(estimate["vy"], estimate["vx"]), 0),
         "vx": estimate["vx"], "vy": estimate["vy"], "n_eff": summary[len(K_NAMES)],
         **{f"sigma_{n}": shared[f"sigma_{n}"] for n in MEASURED},
-        "status": guard.status + ca.if_else(slow, status.LOW_SPEED, 0),
+        "status": shared["status"] + ca.if_else(slow, status.LOW_SPEED, 0),
     })
-    return head.pack({**estimate, "holding": holding}), output
+    return head.pack({**estimate, "holding": shared["holding"]}), output

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 66814d8fa2ba6e7abdab214a948a40ca8c64be0d8f30202faa6de7916ded5220
- * Operations: step 13188, init 5860 (CasADi SX instructions).
+ * Operations: step 13165, init 5869 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)
  * observation: inertial
@@ -34,7 +34,7 @@ static void pack_input(const vse_pf_adaptive_input *in, casadi_real u[4])
 #define PARTICLE_SIZE 6
 #define WEIGHT 5
 #define N_NORMALS 5
-#define SHARED_SIZE 10
+#define SHARED_SIZE 12
 #define SUMMARY_SIZE 6
 
 /* PCG32 (M. E. O'Neill, pcg-random.org: pcg32_random_r, XSH RR output) on a 64-bit LCG; stream
@@ -249,7 +249,7 @@ void vse_pf_adaptive_step(vse_pf_adaptive_state *state, const vse_pf_adaptive_in
     unsigned long long stream = read_stream(&state->x[STREAM_AT]);
     casadi_int iw = 0;    /* the SX kernels use no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
-    const casadi_real *arg[4];
+    const casadi_real *arg[3];
     casadi_real *res[2];
     int i;
     pack_input(in, u);
@@ -268,6 +268,8 @@ void vse_pf_adaptive_step(vse_pf_adaptive_state *state, const vse_pf_adaptive_in
     shared[7] = 0.0;
     shared[8] = 0.0;
     shared[9] = 0.0;
+    shared[10] = 0.0;
+    shared[11] = 0.0;
     y[0] = 0.0;
     y[1] = 0.0;
     y[2] = 0.0;
@@ -287,9 +289,8 @@ void vse_pf_adaptive_step(vse_pf_adaptive_state *state, const vse_pf_adaptive_in
     }
     summarise(particles, summary);
     arg[0] = head;
-    arg[1] = u;
-    arg[2] = shared;
-    arg[3] = summary;
+    arg[1] = shared;
+    arg[2] = summary;
     res[0] = state->x;
     res[1] = y;
     (void)vse_pf_adaptive_kernel_finish(arg, res, &iw, &w, 0);

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 66814d8fa2ba6e7abdab214a948a40ca8c64be0d8f30202faa6de7916ded5220
- * Operations: step 13188, init 5860 (CasADi SX instructions).
+ * Operations: step 13165, init 5869 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)
  * observation: inertial
@@ -114,74 +114,83 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel__casadi_real_size(void) { return
 
 static const casadi_int casadi_s0[3] = {4, 1, 1};
 static const casadi_int casadi_s1[3] = {6, 1, 1};
-static const casadi_int casadi_s2[3] = {10, 1, 1};
+static const casadi_int casadi_s2[3] = {12, 1, 1};
 static const casadi_int casadi_s3[3] = {5, 1, 1};
 static const casadi_int casadi_s4[3] = {8, 1, 1};
 
-/* vse_pf_adaptive_kernel_init:(input[4])->(head[6],shared[10]) */
+/* vse_pf_adaptive_kernel_init:(input[4])->(head[6],shared[12]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
-  casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
-  a0=arg[0][0];
-  a1=casadi_fabs(a0);
-  a2=90.;
-  a1=(a1<=a2);
-  a3=(a1?a0:0);
-  a4=(!a1);
-  a5=3.;
-  a4=(a4?a5:0);
-  a3=(a3+a4);
-  a3=casadi_fmax(a3,a5);
-  a3=casadi_fmin(a3,a2);
-  res[0][0]=a3;
-  a2=0.;
-  res[0][1]=a2;
-  a2=arg[0][1];
-  a4=casadi_fabs(a2);
-  a6=30.;
-  a4=(a4<=a6);
-  a2=(a4?a2:0);
-  res[0][2]=a2;
-  a7=arg[0][2];
-  a8=casadi_fabs(a7);
-  a8=(a8<=a6);
-  a6=9.2554713719014980e-01;
-  a6=(a6*a7);
-  a6=(a8?a6:0);
-  res[0][3]=a6;
-  a7=arg[0][3];
-  a9=casadi_fabs(a7);
-  a9=(a9<=a5);
-  a7=(a9?a7:0);
-  res[0][4]=a7;
-  a4=(a1&&a4);
-  a4=(a4&&a8);
-  a4=(a4&&a9);
-  a9=3.5000000000000000e+00;
-  a0=(a0<a9);
-  a9=1.;
-  a9=(a9&&a0);
-  a0=(a0||a9);
-  a1=(a1&&a0);
-  a1=(!a1);
-  a4=(a4&&a1);
-  a4=(!a4);
-  a1=2.;
-  a4=(a4?a1:0);
-  res[0][5]=a4;
-  res[1][0]=a1;
-  res[1][1]=a3;
-  res[1][2]=a2;
-  res[1][3]=a6;
-  res[1][4]=a7;
-  a7=7.0000000000000001e-03;
-  res[1][5]=a7;
-  res[1][6]=a7;
-  a7=2.0000000000000001e-01;
-  res[1][7]=a7;
-  res[1][8]=a7;
-  a7=1.0000000000000000e-02;
-  res[1][9]=a7;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
+  a00=arg[0][0];
+  a01=casadi_fabs(a00);
+  a02=90.;
+  a01=(a01<=a02);
+  a03=(a01?a00:0);
+  a04=(!a01);
+  a05=3.;
+  a04=(a04?a05:0);
+  a03=(a03+a04);
+  a03=casadi_fmax(a03,a05);
+  a03=casadi_fmin(a03,a02);
+  res[0][0]=a03;
+  a02=0.;
+  res[0][1]=a02;
+  a04=arg[0][1];
+  a06=casadi_fabs(a04);
+  a07=30.;
+  a06=(a06<=a07);
+  a04=(a06?a04:0);
+  res[0][2]=a04;
+  a08=arg[0][2];
+  a09=casadi_fabs(a08);
+  a09=(a09<=a07);
+  a07=9.2554713719014980e-01;
+  a07=(a07*a08);
+  a07=(a09?a07:0);
+  res[0][3]=a07;
+  a08=arg[0][3];
+  a10=casadi_fabs(a08);
+  a10=(a10<=a05);
+  a08=(a10?a08:0);
+  res[0][4]=a08;
+  a06=(a01&&a06);
+  a06=(a06&&a09);
+  a06=(a06&&a10);
+  a10=3.5000000000000000e+00;
+  a00=(a00<a10);
+  a10=1.;
+  a09=(a10&&a00);
+  a09=(a00||a09);
+  a09=(a01&&a09);
+  a09=(!a09);
+  a09=(a06&&a09);
+  a09=(!a09);
+  a05=2.;
+  a09=(a09?a05:0);
+  res[0][5]=a09;
+  res[1][0]=a05;
+  res[1][1]=a03;
+  res[1][2]=a04;
+  res[1][3]=a07;
+  res[1][4]=a08;
+  a08=7.0000000000000001e-03;
+  res[1][5]=a08;
+  res[1][6]=a08;
+  a08=2.0000000000000001e-01;
+  res[1][7]=a08;
+  res[1][8]=a08;
+  a08=1.0000000000000000e-02;
+  res[1][9]=a08;
+  res[1][10]=a02;
+  a10=(a10&&a00);
+  a00=(a00||a10);
+  a01=(a01&&a00);
+  a01=(!a01);
+  a06=(a06&&a01);
+  a06=(!a06);
+  a06=(a06?a05:0);
+  res[1][11]=a06;
   return 0;
 }
 
@@ -259,10 +268,11 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_init_work_bytes(casadi_int *sz_a
   return 0;
 }
 
-/* vse_pf_adaptive_kernel_prepare:(head[6],input[4])->(shared[10]) */
+/* vse_pf_adaptive_kernel_prepare:(head[6],input[4])->(shared[12]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
   a02=90.;
@@ -290,72 +300,83 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a09=(a09&&a10);
   a07=(a07||a09);
   a01=(a01&&a07);
-  a01=(!a01);
-  a03=(a03&&a01);
-  a01=1.5000000000000000e+00;
-  a01=(a01<a08);
-  a08=2.;
-  a07=(a01?a08:0);
-  a01=(!a01);
-  a09=1.;
-  a01=(a01?a09:0);
-  a07=(a07+a01);
-  a07=(a03?a07:0);
-  res[0][0]=a07;
-  a00=(a03?a00:0);
-  a07=(!a03);
-  a01=arg[0][0];
-  a01=(a07?a01:0);
-  a00=(a00+a01);
+  a07=(!a01);
+  a09=(a03&&a07);
+  a10=1.5000000000000000e+00;
+  a10=(a10<a08);
+  a11=2.;
+  a12=(a10?a11:0);
+  a10=(!a10);
+  a13=1.;
+  a10=(a10?a13:0);
+  a12=(a12+a10);
+  a12=(a09?a12:0);
+  res[0][0]=a12;
+  a00=(a09?a00:0);
+  a12=(!a09);
+  a10=arg[0][0];
+  a10=(a12?a10:0);
+  a00=(a00+a10);
   res[0][1]=a00;
-  a02=(a03?a02:0);
+  a02=(a09?a02:0);
   a00=arg[0][2];
-  a01=(a07?a00:0);
-  a02=(a02+a01);
+  a10=(a12?a00:0);
+  a02=(a02+a10);
   res[0][2]=a02;
-  a01=9.2554713719014980e-01;
-  a01=(a01*a05);
-  a01=(a03?a01:0);
+  a10=9.2554713719014980e-01;
+  a10=(a10*a05);
+  a10=(a09?a10:0);
   a05=arg[0][3];
-  a09=(a07?a05:0);
-  a01=(a01+a09);
-  res[0][3]=a01;
-  a03=(a03?a06:0);
+  a14=(a12?a05:0);
+  a10=(a10+a14);
+  res[0][3]=a10;
+  a09=(a09?a06:0);
   a06=arg[0][4];
-  a07=(a07?a06:0);
-  a03=(a03+a07);
-  res[0][4]=a03;
-  a07=5.0000000000000001e-03;
-  a09=1.0000000000000000e-02;
-  a10=2.0000000000000001e-01;
+  a14=(a12?a06:0);
+  a09=(a09+a14);
+  res[0][4]=a09;
+  a14=5.0000000000000001e-03;
+  a15=1.0000000000000000e-02;
+  a16=2.0000000000000001e-01;
   a02=(a02-a00);
   a02=casadi_fabs(a02);
   a02=(a04*a02);
-  a02=(a10+a02);
-  a02=casadi_fmax(a02,a10);
-  a02=casadi_fmin(a02,a08);
-  a00=(a09*a02);
-  a00=(a07+a00);
+  a02=(a16+a02);
+  a02=casadi_fmax(a02,a16);
+  a02=casadi_fmin(a02,a11);
+  a00=(a15*a02);
+  a00=(a14+a00);
   res[0][5]=a00;
-  a01=(a01-a05);
-  a01=casadi_fabs(a01);
-  a01=(a04*a01);
-  a01=(a10+a01);
-  a01=casadi_fmax(a01,a10);
-  a01=casadi_fmin(a01,a08);
-  a08=(a09*a01);
-  a07=(a07+a08);
-  res[0][6]=a07;
+  a10=(a10-a05);
+  a10=casadi_fabs(a10);
+  a10=(a04*a10);
+  a10=(a16+a10);
+  a10=casadi_fmax(a10,a16);
+  a10=casadi_fmin(a10,a11);
+  a16=(a15*a10);
+  a14=(a14+a16);
+  res[0][6]=a14;
   res[0][7]=a02;
-  res[0][8]=a01;
-  a03=(a03-a06);
-  a03=casadi_fabs(a03);
-  a04=(a04*a03);
-  a04=(a09+a04);
-  a04=casadi_fmax(a04,a09);
-  a09=1.0000000000000001e-01;
-  a04=casadi_fmin(a04,a09);
+  res[0][8]=a10;
+  a09=(a09-a06);
+  a09=casadi_fabs(a09);
+  a04=(a04*a09);
+  a04=(a15+a04);
+  a04=casadi_fmax(a04,a15);
+  a15=1.0000000000000001e-01;
+  a04=casadi_fmin(a04,a15);
   res[0][9]=a04;
+  a03=(!a03);
+  a03=(a03?a11:0);
+  a04=(a01?a13:0);
+  a03=(a03+a04);
+  res[0][10]=a03;
+  a01=(a01?a11:0);
+  a08=casadi_fmax(a08,a13);
+  a07=(a07?a08:0);
+  a01=(a01+a07);
+  a12=(a12?a01:0);
+  res[0][11]=a12;
   return 0;
 }
 
@@ -433,7 +454,7 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_prepare_work_bytes(casadi_int *s
   return 0;
 }
 
-/* vse_pf_adaptive_kernel_spawn:(shared[10],normals[5])->(particle[6]) */
+/* vse_pf_adaptive_kernel_spawn:(shared[12],normals[5])->(particle[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2;
@@ -543,7 +564,7 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_spawn_work_bytes(casadi_int *sz_
   return 0;
 }
 
-/* vse_pf_adaptive_kernel_propagate:(shared[10],particle[6],normals[5])->(particle_next[6]) */
+/* vse_pf_adaptive_kernel_propagate:(shared[12],particle[6],normals[5])->(particle_next[6]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
@@ -691,106 +712,71 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_propagate_work_bytes(casadi_int 
   return 0;
 }
 
-/* vse_pf_adaptive_kernel_finish:(head[6],input[4],shared[10],summary[6])->(head_next[6],output[8]) */
+/* vse_pf_adaptive_kernel_finish:(head[6],shared[12],summary[6])->(head_next[6],output[8]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12;
-  a00=5.0000000000000000e-01;
-  a01=arg[2][0];
-  a01=(a00<a01);
-  a02=arg[3][0];
-  a02=(a01?a02:0);
-  a03=(!a01);
-  a04=arg[0][0];
-  a04=(a03?a04:0);
-  a02=(a02+a04);
-  res[0][0]=a02;
-  a04=arg[3][1];
-  a04=(a01?a04:0);
-  a05=arg[0][1];
-  a06=(a03?a05:0);
-  a06=(a04+a06);
-  res[0][1]=a06;
-  a06=arg[3][2];
-  a06=(a01?a06:0);
-  a07=arg[0][2];
-  a07=(a03?a07:0);
-  a06=(a06+a07);
-  res[0][2]=a06;
-  a06=arg[3][3];
-  a06=(a01?a06:0);
-  a07=arg[0][3];
-  a07=(a03?a07:0);
-  a06=(a06+a07);
-  res[0][3]=a06;
-  a06=arg[3][4];
-  a06=(a01?a06:0);
-  a07=arg[0][4];
-  a07=(a03?a07:0);
-  a06=(a06+a07);
-  res[0][4]=a06;
-  a06=arg[1][0];
-  a07=casadi_fabs(a06);
-  a08=90.;
-  a07=(a07<=a08);
-  a08=3.;
-  a09=(a06<a08);
-  a10=arg[0][5];
-  a00=(a00<a10);
-  a11=3.5000000000000000e+00;
-  a06=(a06<a11);
-  a00=(a00&&a06);
-  a09=(a09||a00);
-  a09=(a07&&a09);
-  a00=2.;
-  a06=(a09?a00:0);
-  a11=(!a09);
-  a12=1.;
-  a10=casadi_fmax(a10,a12);
-  a11=(a11?a10:0);
-  a06=(a06+a11);
-  a06=(a03?a06:0);
-  res[0][5]=a06;
-  a06=(a02<a08);
-  a06=(a01&&a06);
-  a11=(!a06);
-  a01=(a01&&a11);
-  a03=(a03?a05:0);
-  a04=(a04+a03);
-  a03=atan2(a04,a02);
-  a01=(a01?a03:0);
-  res[1][0]=a01;
-  res[1][1]=a02;
-  res[1][2]=a04;
-  a04=arg[3][5];
-  res[1][3]=a04;
-  a04=arg[2][7];
-  res[1][4]=a04;
-  a04=arg[2][8];
-  res[1][5]=a04;
-  a04=arg[2][9];
-  res[1][6]=a04;
-  a04=arg[1][1];
-  a04=casadi_fabs(a04);
-  a02=30.;
-  a04=(a04<=a02);
-  a07=(a07&&a04);
-  a04=arg[1][2];
-  a04=casadi_fabs(a04);
-  a04=(a04<=a02);
-  a07=(a07&&a04);
-  a04=arg[1][3];
-  a04=casadi_fabs(a04);
-  a04=(a04<=a08);
-  a07=(a07&&a04);
-  a07=(!a07);
-  a07=(a07?a00:0);
-  a09=(a09?a12:0);
-  a07=(a07+a09);
-  a06=(a06?a12:0);
-  a07=(a07+a06);
-  res[1][7]=a07;
+  casadi_real a0, a1, a2, a3, a4, a5, a6;
+  a0=5.0000000000000000e-01;
+  a1=arg[1][0];
+  a0=(a0<a1);
+  a1=arg[2][0];
+  a1=(a0?a1:0);
+  a2=(!a0);
+  a3=arg[0][0];
+  a3=(a2?a3:0);
+  a1=(a1+a3);
+  res[0][0]=a1;
+  a3=arg[2][1];
+  a3=(a0?a3:0);
+  a4=arg[0][1];
+  a5=(a2?a4:0);
+  a5=(a3+a5);
+  res[0][1]=a5;
+  a5=arg[2][2];
+  a5=(a0?a5:0);
+  a6=arg[0][2];
+  a6=(a2?a6:0);
+  a5=(a5+a6);
+  res[0][2]=a5;
+  a5=arg[2][3];
+  a5=(a0?a5:0);
+  a6=arg[0][3];
+  a6=(a2?a6:0);
+  a5=(a5+a6);
+  res[0][3]=a5;
+  a5=arg[2][4];
+  a5=(a0?a5:0);
+  a6=arg[0][4];
+  a6=(a2?a6:0);
+  a5=(a5+a6);
+  res[0][4]=a5;
+  a5=arg[1][11];
+  res[0][5]=a5;
+  a5=3.;
+  a5=(a1<a5);
+  a5=(a0&&a5);
+  a6=(!a5);
+  a0=(a0&&a6);
+  a2=(a2?a4:0);
+  a3=(a3+a2);
+  a2=atan2(a3,a1);
+  a0=(a0?a2:0);
+  res[1][0]=a0;
+  res[1][1]=a1;
+  res[1][2]=a3;
+  a3=arg[2][5];
+  res[1][3]=a3;
+  a3=arg[1][7];
+  res[1][4]=a3;
+  a3=arg[1][8];
+  res[1][5]=a3;
+  a3=arg[1][9];
+  res[1][6]=a3;
+  a3=arg[1][10];
+  a1=1.;
+  a5=(a5?a1:0);
+  a3=(a3+a5);
+  res[1][7]=a3;
   return 0;
 }
 
@@ -812,7 +798,7 @@ CASADI_SYMBOL_EXPORT void vse_pf_adaptive_kernel_finish_incref(void) {
 CASADI_SYMBOL_EXPORT void vse_pf_adaptive_kernel_finish_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_adaptive_kernel_finish_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int vse_pf_adaptive_kernel_finish_n_in(void) { return 3;}
 
 CASADI_SYMBOL_EXPORT casadi_int vse_pf_adaptive_kernel_finish_n_out(void) { return 2;}
 
@@ -825,9 +811,8 @@ CASADI_SYMBOL_EXPORT casadi_real vse_pf_adaptive_kernel_finish_default_in(casadi
 CASADI_SYMBOL_EXPORT const char* vse_pf_adaptive_kernel_finish_name_in(casadi_int i) {
   switch (i) {
     case 0: return "head";
-    case 1: return "input";
-    case 2: return "shared";
-    case 3: return "summary";
+    case 1: return "shared";
+    case 2: return "summary";
     default: return 0;
   }
 }
@@ -843,9 +828,8 @@ CASADI_SYMBOL_EXPORT const char* vse_pf_adaptive_kernel_finish_name_out(casadi_i
 CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s1;
-    case 1: return casadi_s0;
-    case 2: return casadi_s2;
-    case 3: return casadi_s1;
+    case 1: return casadi_s2;
+    case 2: return casadi_s1;
     default: return 0;
   }
 }
@@ -859,7 +843,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_ou
 }
 
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_finish_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4;
+  if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 2;
   if (sz_iw) *sz_iw = 0;
   if (sz_w) *sz_w = 0;
@@ -867,7 +851,7 @@ CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_finish_work(casadi_int *sz_arg, 
 }
 
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_finish_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 2*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 66814d8fa2ba6e7abdab214a948a40ca8c64be0d8f30202faa6de7916ded5220
- * Operations: step 13188, init 5860 (CasADi SX instructions).
+ * Operations: step 13165, init 5869 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)
  * observation: inertial
@@ -116,7 +116,7 @@ const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_in(casadi_int i);
 const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_out(casadi_int i);
 int vse_pf_adaptive_kernel_finish_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
 int vse_pf_adaptive_kernel_finish_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_finish_SZ_ARG 4
+#define vse_pf_adaptive_kernel_finish_SZ_ARG 3
 #define vse_pf_adaptive_kernel_finish_SZ_RES 2
 #define vse_pf_adaptive_kernel_finish_SZ_IW 0
 #define vse_pf_adaptive_kernel_finish_SZ_W 0

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9223231a7d3cb0c96c1c091e2f22510c2fa1cadcc2f9a0f4d996b0181ab11f07
- * Operations: step 15188, init 5860 (CasADi SX instructions).
+ * Operations: step 15165, init 5869 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)
  * observation: inertial
