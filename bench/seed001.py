@@ -1,9 +1,9 @@
 """Seed 001 reproduction: the 80 km/h DLC and the 0.05 rad step steer at μ 1.0 and 0.5 with 1 kHz
 logs (the paper's sample time); max |e| and standard deviation of e = β̂ − β (rad) for the plain EKF
-(constant stiffness), the integral method alone and the fused method (literal left/right
-regressor, and the spec's B2 per-axle option), beside the paper's Tables 3–4 (fused only). Also a
-plot of the estimated axle stiffness against the truth plant's secant stiffness F_y / α over the
-DLC."""
+(constant stiffness), the integral method alone and the fused method with three stiffness
+regressors (the paper's literal left/right one, the spec's B2 per-axle option, and the vehicle
+file's kinematic slip), beside the paper's Tables 3–4 (fused only). Also a plot of the estimated
+axle stiffness against the truth plant's secant stiffness F_y / α over the DLC."""
 
 from __future__ import annotations
 
@@ -34,16 +34,24 @@ MIN_SLIP = 0.002
 """Smallest |slip angle| (rad) at which the truth's secant stiffness is plotted."""
 
 
+LITERAL = {"stiffness_regressor": "literal", "forgetting_factor": 0.9, "roll_gradient": 0.0}
+"""The paper as the spec reconstructs it: side-wise regressor, tau = 0.9 per 1 ms, literal a_y."""
+FUSED_PAPER = "fused, the paper's regressor (literal)"
+FUSED_OURS = "fused, kinematic slip (vehicle file)"
+
+
 def variants(vehicle_text: str, source: str, name: str) -> tuple[tuple[str, VehicleConfig], ...]:
-    """(label, configuration at T = 1 ms) of each compared method."""
-    def with_keys(**keys: str) -> VehicleConfig:
+    """(label, configuration at T = 1 ms) of each compared method; the fused ones last."""
+    def with_keys(**keys) -> VehicleConfig:
         return parse_vehicle(with_settings(vehicle_text, f"estimator.{NAME}", **keys), source,
                              name).with_sample_time(1.0 / RATE_HZ)
 
     return (("plain EKF (constant stiffness)", with_keys(stiffness="constant")),
             ("integral method alone", with_keys(weighting="integral_only")),
-            ("fused (the method)", with_keys()),
-            ("fused, per-axle regressor (B2)", with_keys(stiffness_regressor="ekf_slip")))
+            (FUSED_PAPER, with_keys(**LITERAL)),
+            ("fused, per-axle EKF slip (B2)", with_keys(**{**LITERAL,
+                                                          "stiffness_regressor": "ekf_slip"})),
+            (FUSED_OURS, with_keys()))
 
 
 def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
@@ -58,7 +66,7 @@ def table(vehicle_text: str, source: str, name: str, seeds: int) -> list[str]:
                 e = run_estimator(config, NAME, log)["beta"] - log["beta_ref"]
                 values.append((np.abs(e).max(), e.std()))
             v = np.array(values).mean(axis=0)
-            cite = f"{paper[0]} / {paper[1]}" if label.startswith("fused (") else "-"
+            cite = f"{paper[0]} / {paper[1]}" if label in (FUSED_PAPER, FUSED_OURS) else "-"
             lines.append(f"| {case.label} | {label} | {v[0]:.5f} | {v[1]:.5f} | {cite} |")
     return lines
 

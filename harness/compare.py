@@ -19,8 +19,9 @@ Two refinements, both declared by the estimator's model, not chosen per run:
   that is the balance of tyre forces of order g) has its floor multiplied by its
   ``Signal.scale``;
 * an algorithm that amplifies rounding (``Estimator.rounding_gain``: the unscented transform's
-  weights of +-1e6 at the paper's alpha = 0.001) is compared against a long-double reference, and
-  the double tolerance is widened by what the long double cannot absorb (:func:`for_estimator`).
+  weights of +-1e6 at the paper's alpha = 0.001; ekf_rls's stiffness rate, a difference quotient
+  over one sample) has its double tolerance widened by what its reference cannot absorb: the
+  unscented references compute in long double, ekf_rls's in double (:func:`for_estimator`).
   Measured for ukf and aukf over the verification set: up to 1.1e-9 relative against a tolerance
   of 2.1e-8; the float check is unchanged and passes at up to 6.2e-5 (low-speed restart), 2.8e-5
   elsewhere.
@@ -87,17 +88,21 @@ REFERENCE_PRECISION = float(np.finfo(np.longdouble).eps / np.finfo(np.float64).e
 """Rounding unit of the long-double reference (the unscented filters') relative to double."""
 
 
-def for_estimator(real: str, rounding_gain: float) -> Tolerance:
+def for_estimator(real: str, rounding_gain: float, long_double_reference: bool = False) -> Tolerance:
     """The tolerance for code of type ``real`` of an estimator whose algorithm amplifies rounding
-    by ``rounding_gain`` (``model.estimator.Estimator``; for the unscented filters the UT's sum of
-    |weights|, 2e6 at the paper's alpha = 0.001, times the tyres' force-per-speed conditioning,
-    about 20). Their reference computes in long double; what remains of the gain after that,
-    gain x REFERENCE_PRECISION (about 2e4), is the factor by which the reference itself is less
-    exact than double arithmetic on a plain filter, so the double tolerance is widened by it (never
-    narrowed). The float tolerance lies far above and stays."""
+    by ``rounding_gain`` (``model.estimator.Estimator``). The double tolerance is widened by what
+    the reference cannot absorb of that gain (never narrowed); the float tolerance lies far above
+    and stays.
+
+    * The unscented filters: the UT's sum of |weights|, 2e6 at the paper's alpha = 0.001, times the
+      tyres' force-per-speed conditioning, about 20. Their reference computes in long double
+      (``long_double_reference``), so what remains is gain x REFERENCE_PRECISION (about 2e4).
+    * ekf_rls: its fusion weight differences the cornering stiffness over one sample (about 1e2);
+      its reference computes in double, so the whole gain remains."""
     base = TOLERANCES[real]
     if real == "double":
-        return Tolerance(base.relative * max(1.0, rounding_gain * REFERENCE_PRECISION), base.floor)
+        remaining = rounding_gain * (REFERENCE_PRECISION if long_double_reference else 1.0)
+        return Tolerance(base.relative * max(1.0, remaining), base.floor)
     return base
 
 

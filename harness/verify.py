@@ -9,7 +9,7 @@ import numpy as np
 from codegen.generate import render
 from harness.build import load_estimator
 from harness.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
-from harness.reference import REFERENCES
+from harness.reference import LONG_DOUBLE, REFERENCES
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
 from model.estimators import build
@@ -58,7 +58,7 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
     if estimator.particles is not None and real == "float":
         reference = reference.drawing(24)    # the float C draws 24-bit uniforms (D5)
     compiled = load_estimator(estimator, render(config, name, real, params))
-    tolerance = for_estimator(real, estimator.rounding_gain)
+    tolerance = for_estimator(real, estimator.rounding_gain, name in LONG_DOUBLE)
     state_scales = np.array(estimator.states.scales)
     step_scales = np.concatenate([state_scales, estimator.outputs.scales])
     results = []

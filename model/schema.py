@@ -334,22 +334,28 @@ EKF_RLS = EstimatorSchema(
                "method) or the vehicle file's C_f, C_r (the plain EKF)"),
         choice("weighting", ("stiffness_rate", "integral_only"), "fusion weight lambda: from the "
                "stiffness rate (the method) or 1 (the integral method alone)"),
-        choice("stiffness_regressor", ("literal", "ekf_slip"), "RLS regression: side-wise over "
-               "alpha_eq = |delta - L r / vx| (the paper) or per axle over the EKF prior's slip "
-               "angles (B2, unbiased)"),
+        choice("stiffness_regressor", ("literal", "ekf_slip", "kinematic_slip"), "RLS regression: "
+               "side-wise over alpha_eq = |delta - L r / vx| (the paper), or per axle over the slip "
+               "angles of the EKF prior (B2) or of the integral method (forces and slip angles "
+               "low-passed alike)"),
         spd_matrix("process_noise", 2, "[beta, r]: rad^2*s, (rad/s)^2*s", "Q_c; Q_d = Q_c*T"),
         positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
         spd_matrix("initial_covariance", 2, "[beta, r]: rad^2, (rad/s)^2", "P_0 of the EKF"),
         fraction("forgetting_factor", "RLS forgetting factor per 1 ms (rescaled to T)"),
         positive("rls_initial_covariance", "1/rad^2", "P_RLS,0 = this times I"),
         positive("rls_covariance_max", "1/rad^2", "bound on trace(P_RLS) (wind-up guard)"),
-        positive("slip_min", "rad", "update the RLS only while alpha_eq is at least this"),
+        positive("slip_min", "rad", "update the RLS only while alpha_eq (per-axle regressors: both "
+                 "|slip angles|) is at least this"),
         positive("stiffness_min", "-", "lower clamp of C0 as a factor of C0_nom"),
         positive("stiffness_max", "-", "upper clamp of C0 as a factor of C0_nom"),
-        positive("derivative_time_constant", "s", "tau_d of the filtered yaw acceleration"),
+        positive("derivative_time_constant", "s", "tau_d of the filtered yaw acceleration, and of "
+                 "the low-pass of kinematic_slip"),
         positive("indicator_time_constant", "s", "tau_D of the low-passed stiffness rate"),
         nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
+        nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
+                    "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
+                    "0 = none (the paper's literal a_y)", default=0.0),
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),

@@ -1,6 +1,6 @@
 """Reference ekf_rls (shared/methods/001-stiffness-rate-fusion.md §2, §3 and §5 defaults):
 filtered yaw acceleration, axle forces and wheel loads, RLS of the left/right normalised
-stiffness, the EKF in beta form (Euler, y = r), the stiffness-rate weight and the integral method
+stiffness (or per axle against the EKF prior's or a kinematic slip angle), the EKF in beta form (Euler, y = r), the stiffness-rate weight and the integral method
 re-seeded from the fused beta. NumPy/SciPy only."""
 
 from __future__ import annotations
@@ -20,10 +20,18 @@ RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
 STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
           "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
 OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
+KINEMATIC = ("beta_kin", "ax_f", "ay_f", "r_f", "delta_f", "beta_f")
+"""States of the ``kinematic_slip`` regressor: its integral method (re-seeded from the fused beta
+only while lambda = 0) and the low-passed a_x, a_y, r, delta and beta_kin."""
 
 
 def names(config):
-    return INPUTS, STATES, OUTPUTS
+    return INPUTS, states(config), OUTPUTS
+
+
+def states(config) -> tuple[str, ...]:
+    kinematic = config.settings(TABLE)["stiffness_regressor"] == "kinematic_slip"
+    return (*STATES, *(KINEMATIC if kinematic else ()))
 
 
 def _loads(v, ax, ay):
@@ -41,7 +49,8 @@ def _c0_nominal(v):
 
 
 def _axles(regressor, c0_1, c0_2, loads):
-    """C_f, C_r: from left/right normalised stiffness [24, 25], or front/rear (ekf_slip)."""
+    """C_f, C_r: from left/right normalised stiffness [24, 25], or front/rear (per-axle
+    regressors)."""
     fl, fr, rl, rr = loads
     if regressor == "literal":
         return c0_1 * fl + c0_2 * fr, c0_1 * rl + c0_2 * rr
@@ -66,32 +75,44 @@ def _jacobian(v, delta, vx, cf, cr):
     ])
 
 
+def _integral(beta_prev, T, vx, ax, ay, r):
+    """One Euler step of the integral method [35, 36]."""
+    return beta_prev + T * ((ay * math.cos(beta_prev) - ax * math.sin(beta_prev))
+                            / (vx / math.cos(beta_prev)) - r)
+
+
 def init(config, u0):
     s, v = config.settings(TABLE), config.vehicle
     first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
                                          s["vx_resume"])
     c0 = _c0_nominal(v)
+    ay0 = blocks.roll_corrected(first["ay"], s["roll_gradient"])
     if s["stiffness"] == "rls":
-        cf, cr = _axles(s["stiffness_regressor"], c0, c0, _loads(v, first["ax"], first["ay"]))
+        cf, cr = _axles(s["stiffness_regressor"], c0, c0, _loads(v, first["ax"], ay0))
     else:
         cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
     P0 = np.array(s["initial_covariance"])
     p = s["rls_initial_covariance"]
+    kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
+                 "delta_f": first["delta"], "beta_f": 0.0}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
-                     first["r"], 0.0, 0.0, 0.0, holding])
+                     first["r"], 0.0, 0.0, 0.0, holding,
+                     *(kinematic[k] for k in states(config)[len(STATES):])])
 
 
 def step(config, state, u):
     s, v, T = config.settings(TABLE), config.vehicle, config.sample_time
-    x = dict(zip(STATES, state))
+    names = states(config)
+    x = dict(zip(names, state))
     inputs = dict(zip(INPUTS, u))
     active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                          x["holding"] > 0.5)
     if not active:
         held = dict(x, holding=1.0)
-        return (np.array([held[k] for k in STATES]),
+        return (np.array([held[k] for k in names]),
                 np.array([0.0, 0.0, 0.0, x["r_ekf"], 0.0, x["c_front"], x["c_rear"], float(status)]))
-    delta, vx, ax, ay, r = inputs["delta"], inputs["vx"], inputs["ax"], inputs["ay"], inputs["r"]
+    delta, vx, ax, r = inputs["delta"], inputs["vx"], inputs["ax"], inputs["r"]
+    ay = blocks.roll_corrected(inputs["ay"], s["roll_gradient"])
     vx = min(max(vx, s["vx_min"]), config.limits["vx_max"])
     m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
     L = a + b
@@ -101,25 +122,43 @@ def step(config, state, u):
                                               fs=1.0 / T)
     r_dot = b0 * r + b1 * x["r_last"] - a1 * x["r_dot"]
 
-    # forces [21, 22], loads [23], side coefficients (load-proportional split), alpha_eq [18]
+    # forces [21, 22], loads [23], the integral method re-seeded from the fused beta [36]
     fyf = (b * m * ay + iz * r_dot) / (L * math.cos(delta))
     fyr = (a * m * ay - iz * r_dot) / L
     fl, fr, rl, rr = _loads(v, ax, ay)
     xe = np.array([x["beta_ekf"], x["r_ekf"]])
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
-    if s["stiffness_regressor"] == "literal":
+    beta_int = _integral(x["beta"], T, vx, ax, ay, r)
+
+    # the stiffness regression y = A X
+    new = {}
+    regressor = s["stiffness_regressor"]
+    if regressor == "literal":              # side coefficients (load-proportional split), alpha_eq [18]
         fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
               "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
         y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
-        A = abs(delta - L * r / vx) * np.eye(2)                                    # alpha_eq [18]
-    else:                                                      # B2: per axle, EKF prior slip angles
-        y = np.abs([fyf / (fl + fr), fyr / (rl + rr)])
-        A = np.diag(np.abs([delta - x_pred[0] - a * x_pred[1] / vx, -x_pred[0] + b * x_pred[1] / vx]))
+        A = abs(delta - L * r / vx) * np.eye(2)
+    else:
+        if regressor == "ekf_slip":                              # B2: the EKF prior's slip angles
+            beta_s, r_s, delta_s = x_pred[0], x_pred[1], delta
+        else:   # kinematic_slip: its own integral method; everything low-passed alike
+            seeded = s["weighting"] == "stiffness_rate" and x["indicator"] <= s["indicator_low"]
+            beta_kin = _integral(x["beta"] if seeded else x["beta_kin"], T, vx, ax, ay, r)
+            share = 1.0 - math.exp(-T / s["derivative_time_constant"])
+            raw = {"ax_f": ax, "ay_f": ay, "r_f": r, "delta_f": delta, "beta_f": beta_kin}
+            new = {"beta_kin": beta_kin, **{k: x[k] + share * (raw[k] - x[k]) for k in raw}}
+            r_dot_f = (new["r_f"] - x["r_f"]) / T
+            fyf = (b * m * new["ay_f"] + iz * r_dot_f) / (L * math.cos(new["delta_f"]))
+            fyr = (a * m * new["ay_f"] - iz * r_dot_f) / L
+            fl, fr, rl, rr = _loads(v, new["ax_f"], new["ay_f"])
+            beta_s, r_s, delta_s = new["beta_f"], new["r_f"], new["delta_f"]
+        y = np.array([fyf / (fl + fr), fyr / (rl + rr)])
+        A = np.diag([delta_s - beta_s - a * r_s / vx, -beta_s + b * r_s / vx])
 
     # RLS [30-33]
     X = np.array([x["c0_1"], x["c0_2"]])
     P = blocks.unpacked([x[k] for k in RLS_P], 2)
-    if min(A[0, 0], A[1, 1]) >= s["slip_min"]:
+    if min(abs(A[0, 0]), abs(A[1, 1])) >= s["slip_min"]:
         tau = s["forgetting_factor"] ** (T / 0.001)
         K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
         X = X + K @ (y - A @ X)
@@ -139,7 +178,7 @@ def step(config, state, u):
     xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
                               np.zeros((1, 1)), np.zeros(1), np.array([[s["measurement_noise"]]]))
 
-    # weight [37], integral method re-seeded from the fused beta, fusion
+    # weight [37], fusion
     rate = max(abs(cf - x["c_front"]) / (T * v["cornering_stiffness_front"]),
                abs(cr - x["c_rear"]) / (T * v["cornering_stiffness_rear"]))
     indicator = x["indicator"] + (1 - math.exp(-T / s["indicator_time_constant"])) * (rate - x["indicator"])
@@ -147,13 +186,11 @@ def step(config, state, u):
         weight = min(max((indicator - s["indicator_low"]) / (s["indicator_high"] - s["indicator_low"]), 0.0), 1.0)
     else:
         weight = 1.0
-    bp = x["beta"]
-    beta_int = bp + T * ((ay * math.cos(bp) - ax * math.sin(bp)) / (vx / math.cos(bp)) - r)
     beta = (1 - weight) * xe[0] + weight * beta_int
 
-    new = {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
+    new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
            "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,
            "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
            "holding": 0.0}
-    return (np.array([new[k] for k in STATES]),
+    return (np.array([new[k] for k in names]),
             np.array([beta, xe[0], beta_int, xe[1], weight, cf, cr, float(status)]))

@@ -8,12 +8,19 @@ reconstructed; numbers in brackets are the spec's):
   [21, 22]; wheel loads with load transfer, each at least 5 % of a static corner load [23];
   load-proportional left/right split and lateral force coefficients f_L, f_R (B3);
   alpha_eq = |delta - L r / vx| [18];
-* RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32] (or, ``stiffness_regressor =
-  "ekf_slip"`` (B2), X = [C0_f, C0_r] against each axle's slip angle from the EKF prior),
-  forgetting factor tau^(T / 1 ms) (B6),
-  updated only while alpha_eq >= alpha_min, trace(P) bounded by p_max, X clamped to
+* RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32], forgetting factor tau^(T / 1 ms)
+  (B6), updated only while alpha_eq >= alpha_min, trace(P) bounded by p_max, X clamped to
   [0.3, 1.5] C0_nom [33]; C_f, C_r [24, 25]; ``stiffness = "constant"`` gives the plain EKF with
   the vehicle file's C_f, C_r;
+* per-axle regressors, X = [C0_f, C0_r] against each axle's slip angle [3], updated while both
+  |alpha| >= alpha_min: ``stiffness_regressor = "ekf_slip"`` (B2) takes beta from the EKF prior;
+  ``"kinematic_slip"`` (ours) takes it from a second integral method that is re-seeded from the
+  fused beta only while lambda = 0, so that the stiffness it learns in a manoeuvre comes from
+  kinematics and not from the EKF it feeds (in steady cornering the two would agree on any
+  stiffness). Its forces [21, 22], slip angles and wheel loads all come from the same first-order
+  low-pass (tau_d) of a_x, a_y, r, delta and that beta, so both sides of y = A X lag alike and the
+  load noise of a_x does not reach the stiffness rate;
+* ``roll_gradient`` removes body roll from the body-fixed a_y (model.sensors; 0 = literal);
 * EKF on x = [beta, r], Euler, with the previous sample's C_f, C_r (B7), measurement y = r
   [9-15], Joseph update (model.kalman);
 * nonlinearity indicator D = max(|dC_f/dt| / C_f,nom, |dC_r/dt| / C_r,nom), low-passed (tau_D),
@@ -27,6 +34,8 @@ Hold rule (model.guard): while not active every state is kept and beta = 0.
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from model import filters, kalman
@@ -35,6 +44,7 @@ from model.calibration import Parameters, matrix
 from model.estimator import Estimator, make_functions
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
+from model.sensors import roll_corrected
 
 NAME = "ekf_rls"
 REFERENCE_PERIOD = 0.001
@@ -66,6 +76,15 @@ STATES = Layout((
     Signal("beta", "rad", "fused sideslip angle of the last sample"),
     Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
 ))
+KINEMATIC_STATES = Layout((
+    Signal("beta_kin", "rad", "integral method for the slip angles, re-seeded only while lambda = 0"),
+    Signal("ax_f", "m/s^2", "low-passed a_x"),
+    Signal("ay_f", "m/s^2", "low-passed a_y (roll-corrected)"),
+    Signal("r_f", "rad/s", "low-passed yaw rate"),
+    Signal("delta_f", "rad", "low-passed steer angle"),
+    Signal("beta_f", "rad", "low-passed beta_kin"),
+))
+"""Extra states of ``stiffness_regressor = "kinematic_slip"``."""
 OUTPUTS = Layout((
     Signal("beta", "rad", "fused sideslip angle"),
     Signal("beta_ekf", "rad", "EKF sideslip angle"),
@@ -118,30 +137,52 @@ def nominal_c0(vehicle):
         vehicle["mass"] * GRAVITY)
 
 
+def states(regressor: str) -> Layout:
+    """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals."""
+    if regressor == "kinematic_slip":
+        return Layout((*STATES.signals, *KINEMATIC_STATES.signals))
+    return STATES
+
+
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
     """C_f, C_r from the normalised stiffness and the wheel loads: left/right [24, 25], or front/rear
-    (``ekf_slip``, B2)."""
+    (the per-axle regressors)."""
     if regressor == "literal":
         return c0[0] * loads["fl"] + c0[1] * loads["fr"], c0[0] * loads["rl"] + c0[1] * loads["rr"]
     return c0[0] * (loads["fl"] + loads["fr"]), c0[1] * (loads["rl"] + loads["rr"])
 
 
-def stiffness_regression(regressor: str, vehicle, delta, vx, ay, r_m, r_dot, loads, x_prior):
-    """(y, A, excitation) of the RLS y = A X: the literal side-wise coefficients over
-    alpha_eq = |delta - L r / vx| [18, 27-29], or (B2 ``ekf_slip``) each axle's force over load
-    against its slip angle from the EKF prior [3]; excitation = the smallest regressor entry."""
+def side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads):
+    """(y, A, excitation) of the literal RLS y = A X: the side-wise coefficients over
+    alpha_eq = |delta - L r / vx| [18, 27-29]; excitation = alpha_eq."""
     L = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
-    if regressor == "literal":
-        f_left, f_right = side_coefficients(vehicle, delta, ay, r_dot, loads)
-        alpha_eq = ca.fabs(delta - L * r_m / vx)
-        return ca.vertcat(ca.fabs(f_left), ca.fabs(f_right)), alpha_eq * ca.SX.eye(2), alpha_eq
-    fy_front, fy_rear = axle_forces(vehicle, delta, ay, r_dot)
+    f_left, f_right = side_coefficients(vehicle, delta, ay, r_dot, loads)
+    alpha_eq = ca.fabs(delta - L * r_m / vx)
+    return ca.vertcat(ca.fabs(f_left), ca.fabs(f_right)), alpha_eq * ca.SX.eye(2), alpha_eq
+
+
+def axle_regression(vehicle, delta, vx, ay, r, r_dot, beta, loads):
+    """(y, A, excitation) of a per-axle RLS y = A X: each axle's force [21, 22] over its load against
+    its slip angle [3] at sideslip ``beta``; excitation = the smaller |slip angle|."""
     a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
-    alpha_f = ca.fabs(delta - x_prior[0] - a * x_prior[1] / vx)
-    alpha_r = ca.fabs(-x_prior[0] + b * x_prior[1] / vx)
-    y = ca.vertcat(ca.fabs(fy_front) / (loads["fl"] + loads["fr"]),
-                   ca.fabs(fy_rear) / (loads["rl"] + loads["rr"]))
-    return y, ca.diag(ca.vertcat(alpha_f, alpha_r)), ca.fmin(alpha_f, alpha_r)
+    fy_front, fy_rear = axle_forces(vehicle, delta, ay, r_dot)
+    alpha_f, alpha_r = delta - beta - a * r / vx, -beta + b * r / vx
+    y = ca.vertcat(fy_front / (loads["fl"] + loads["fr"]), fy_rear / (loads["rl"] + loads["rr"]))
+    return (y, ca.diag(ca.vertcat(alpha_f, alpha_r)),
+            ca.fmin(ca.fabs(alpha_f), ca.fabs(alpha_r)))
+
+
+def integral_step(beta_prev, T, vx, ax, ay, r):
+    """One Euler step of the integral method [35, 36] from ``beta_prev`` (rad)."""
+    speed = vx / ca.cos(beta_prev)
+    return beta_prev + T * ((ay * ca.cos(beta_prev) - ax * ca.sin(beta_prev)) / speed - r)
+
+
+def fusion_weight(weighting: str, indicator, d1, d2):
+    """lambda [37]: clamp((D - D1) / (D2 - D1), 0, 1), or 1 for ``integral_only``."""
+    if weighting == "stiffness_rate":
+        return ca.fmin(ca.fmax((indicator - d1) / (d2 - d1), 0), 1)
+    return ca.SX(1)
 
 
 def rls_update(X, P, y, A, forgetting, p_max):
@@ -166,22 +207,48 @@ def ekf_model(vehicle, x, delta, vx, c_front, c_rear):
     return f, ca.jacobian(f, x)
 
 
+def rounding_gain(vehicle, settings, T: float) -> float:
+    """How much lambda amplifies a rounding of the stiffness (``Estimator.rounding_gain``): D
+    differences C over one sample, so a rounding dC moves lambda by
+    dC / C_nom (1 - exp(-T / tau_D)) / (T (D2 - D1)); C is at most C0_max m g (every load on one
+    axle), judged against the softer axle's C_nom."""
+    c_max = settings["stiffness_max"] * nominal_c0(vehicle) * vehicle["mass"] * GRAVITY
+    softer = min(vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"])
+    share = 1 - math.exp(-T / settings["indicator_time_constant"])
+    return c_max / softer * share / (T * (settings["indicator_high"] - settings["indicator_low"]))
+
+
+def kinematic_slip_signals(s, T, time_constant, seed_from_fused, vx, ax, ay, r_m, delta):
+    """Next values of KINEMATIC_STATES: the integral method re-seeded from the fused beta where
+    ``seed_from_fused``, and the first-order low-pass exp(-T / time_constant) of a_x, a_y, r, delta
+    and of that beta."""
+    beta_kin = integral_step(ca.if_else(seed_from_fused, s["beta"], s["beta_kin"]), T, vx, ax, ay,
+                             r_m)
+    share = 1 - ca.exp(-T / time_constant)
+    raw = {"ax_f": ax, "ay_f": ay, "r_f": r_m, "delta_f": delta, "beta_f": beta_kin}
+    return {"beta_kin": beta_kin, **{n: s[n] + share * (value - s[n]) for n, value in raw.items()}}
+
+
 def build(params: Parameters) -> Estimator:
     """The ekf_rls estimator ([vehicle], [inputs], [estimator.ekf_rls])."""
     config = params.config
     vehicle, T = config.vehicle, config.sample_time
     settings = config.settings(NAME)
     choices = params.numeric.settings(NAME)
+    regressor = choices["stiffness_regressor"]
+    layout = states(regressor)
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
     c_front_nom = vehicle["cornering_stiffness_front"]
     c_rear_nom = vehicle["cornering_stiffness_rear"]
     c0_nom = nominal_c0(vehicle)
+    d1, d2 = settings["indicator_low"], settings["indicator_high"]
 
-    state, s = STATES.symbols("state")
+    state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
     guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
     ok, active = guard.plausible, guard.active
-    delta, ax, ay, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
+    delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
+    ay = roll_corrected(ay_measured, settings["roll_gradient"])
     vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
 
     # ---- stiffness: filtered r_dot, forces, loads, RLS ------------------------------------------
@@ -190,8 +257,21 @@ def build(params: Parameters) -> Estimator:
     loads = wheel_loads(vehicle, ax, ay)
     x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
     f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
-    y, A, excitation = stiffness_regression(choices["stiffness_regressor"], vehicle, delta, vx,
-                                            ay, r_m, r_dot, loads, x + T * f)
+    kinematic = {}
+    if regressor == "literal":
+        y, A, excitation = side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads)
+    elif regressor == "ekf_slip":
+        prior = x + T * f
+        y, A, excitation = axle_regression(vehicle, delta, vx, ay, prior[1], r_dot, prior[0],
+                                           loads)
+    else:
+        seed_from_fused = s["indicator"] <= d1 if choices["weighting"] == "stiffness_rate" else 0
+        kinematic = kinematic_slip_signals(s, T, settings["derivative_time_constant"],
+                                           seed_from_fused, vx, ax, ay, r_m, delta)
+        loads = wheel_loads(vehicle, kinematic["ax_f"], kinematic["ay_f"])
+        y, A, excitation = axle_regression(vehicle, kinematic["delta_f"], vx, kinematic["ay_f"],
+                                           kinematic["r_f"], (kinematic["r_f"] - s["r_f"]) / T,
+                                           kinematic["beta_f"], loads)
     X = ca.vertcat(s["c0_1"], s["c0_2"])
     P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
     forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
@@ -201,7 +281,7 @@ def build(params: Parameters) -> Estimator:
     X_next = ca.fmin(ca.fmax(ca.if_else(excited, X_upd, X), low), high)
     P_rls_next = ca.if_else(excited, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_rls))
     if choices["stiffness"] == "rls":
-        c_front, c_rear = axle_stiffness(choices["stiffness_regressor"], X_next, loads)
+        c_front, c_rear = axle_stiffness(regressor, X_next, loads)
     else:
         c_front, c_rear = ca.SX(c_front_nom), ca.SX(c_rear_nom)
 
@@ -213,25 +293,19 @@ def build(params: Parameters) -> Estimator:
                                            ca.SX.zeros(1, 1), ca.SX(0),
                                            settings["measurement_noise"])
 
-    # ---- weight, integral method, fusion ---------------------------------------------------------
+    # ---- weight, integral method re-seeded from the fused beta, fusion ---------------------------
     rate = ca.fmax(ca.fabs(c_front - s["c_front"]) / (T * c_front_nom),
                    ca.fabs(c_rear - s["c_rear"]) / (T * c_rear_nom))
     indicator = s["indicator"] + (1 - ca.exp(-T / settings["indicator_time_constant"])) * (
         rate - s["indicator"])
-    d1, d2 = settings["indicator_low"], settings["indicator_high"]
-    if choices["weighting"] == "stiffness_rate":
-        weight = ca.fmin(ca.fmax((indicator - d1) / (d2 - d1), 0), 1)
-    else:
-        weight = ca.SX(1)
-    beta_prev = s["beta"]
-    speed = vx / ca.cos(beta_prev)
-    beta_int = beta_prev + T * ((ay * ca.cos(beta_prev) - ax * ca.sin(beta_prev)) / speed - r_m)
+    weight = fusion_weight(choices["weighting"], indicator, d1, d2)
+    beta_int = integral_step(s["beta"], T, vx, ax, ay, r_m)
     beta = (1 - weight) * x_ekf[0] + weight * beta_int
 
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
-    next_state = STATES.pack({
+    next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
         "c0_1": keep(X_next[0], "c0_1"), "c0_2": keep(X_next[1], "c0_2"),
@@ -240,6 +314,7 @@ def build(params: Parameters) -> Estimator:
         "r_last": keep(r_m, "r_last"), "r_dot": keep(r_dot, "r_dot"),
         "indicator": keep(indicator, "indicator"), "beta": keep(beta, "beta"),
         "holding": ca.if_else(active, 0, 1),
+        **{n: keep(value, n) for n, value in kinematic.items()},
     })
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, beta, 0), "beta_ekf": ca.if_else(active, x_ekf[0], 0),
@@ -250,25 +325,31 @@ def build(params: Parameters) -> Estimator:
 
     # ---- initialisation (§2.7) -------------------------------------------------------------------
     first, holding = first_sample(u, config.limits, vx_min, vx_resume)
+    ay0 = roll_corrected(first["ay"], settings["roll_gradient"])
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])
     if choices["stiffness"] == "rls":
-        c_front0, c_rear0 = axle_stiffness(choices["stiffness_regressor"], (c0_nom, c0_nom),
-                                           wheel_loads(vehicle, first["ax"], first["ay"]))
+        c_front0, c_rear0 = axle_stiffness(regressor, (c0_nom, c0_nom),
+                                           wheel_loads(vehicle, first["ax"], ay0))
     else:
         c_front0, c_rear0 = ca.SX(c_front_nom), ca.SX(c_rear_nom)
-    init_state = STATES.pack({
+    kinematic0 = {"beta_kin": ca.SX(0), "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
+                  "delta_f": first["delta"], "beta_f": ca.SX(0)}
+    init_state = layout.pack({
         "beta_ekf": ca.SX(0), "r_ekf": first["r"],
         **{n: P0[i] for i, n in enumerate(_EKF)},
         "c0_1": c0_nom, "c0_2": c0_nom, **{n: P_rls0[i] for i, n in enumerate(_RLS)},
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
+        **{n: kinematic0[n] for n in kinematic},
     })
-    init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
+    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",
-                     INPUTS, STATES, OUTPUTS, init, step, params,
-                     {"stiffness": choices["stiffness"], "weighting": choices["weighting"],
-                      "stiffness_regressor": choices["stiffness_regressor"],
+                     INPUTS, layout, OUTPUTS, init, step, params,
+                     rounding_gain=rounding_gain(params.numeric.vehicle, params.numeric.settings(NAME),
+                                                 params.numeric.sample_time),
+                     notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
+                      "stiffness_regressor": regressor,
                       "forgetting_factor_per_sample": f"{choices['forgetting_factor'] ** (params.numeric.sample_time / REFERENCE_PERIOD):.6g}"})
