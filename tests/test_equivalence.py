@@ -10,7 +10,7 @@ import pytest
 
 from codegen.generate import render
 from harness.build import load_estimator
-from harness.compare import TOLERANCES, Tolerance, difference
+from harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
 from harness.reference import kf2dof as reference
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
@@ -80,6 +80,34 @@ def test_difference_guard_and_failures():
     assert not difference("x", np.array([np.nan]), np.array([np.nan]), tol).ok
     assert not difference("s", np.array([1.0]), np.array([2.0]), tol, integer=True).ok
     assert difference("s", np.array([2.0]), np.array([2.0]), tol, integer=True).ok
+
+
+def test_declared_rounding_gains_widen_only_the_double_tolerance():
+    """A gain widens the double tolerance by what the reference cannot absorb: all of it for a
+    double reference (ekf_rls), gain x REFERENCE_PRECISION for a long-double one (the unscented
+    filters); never narrower than the base, and the float tolerance stays."""
+    base = TOLERANCES["double"].relative
+    assert for_estimator("double", 1.0).relative == base
+    assert for_estimator("double", 0.01).relative == base
+    assert for_estimator("double", 100.0).relative == pytest.approx(100.0 * base)
+    assert for_estimator("double", 4e7, long_double_reference=True).relative == pytest.approx(
+        4e7 * REFERENCE_PRECISION * base)
+    assert for_estimator("float", 1e6) == TOLERANCES["float"]
+
+
+def test_ekf_rls_rounding_gain_follows_its_stiffness_rate(config):
+    """ekf_rls declares the amplification of its stiffness rate: C_max / C_soft x
+    (1 - exp(-T / tau_D)) / (T (D2 - D1)); about 1e2 on the default vehicle, and larger at 1 kHz."""
+    from model.estimators.ekf_rls import nominal_c0
+
+    s, v, T = config.settings("ekf_rls"), config.vehicle, config.sample_time
+    c_max = s["stiffness_max"] * nominal_c0(v) * v["mass"] * 9.81
+    expected = (c_max / min(v["cornering_stiffness_front"], v["cornering_stiffness_rear"])
+                * (1 - np.exp(-T / s["indicator_time_constant"]))
+                / (T * (s["indicator_high"] - s["indicator_low"])))
+    assert build("ekf_rls", config).rounding_gain == pytest.approx(expected, rel=1e-3)
+    assert 10.0 < expected < 1e3
+    assert build("ekf_rls", config.with_sample_time(1e-3)).rounding_gain > expected
 
 
 def test_reference_never_imports_casadi():

@@ -1,7 +1,8 @@
 """Reference ekf_rls (shared/methods/001-stiffness-rate-fusion.md §2, §3 and §5 defaults):
 filtered yaw acceleration, axle forces and wheel loads, RLS of the left/right normalised
-stiffness (or per axle against the EKF prior's or a kinematic slip angle), the EKF in beta form (Euler, y = r), the stiffness-rate weight and the integral method
-re-seeded from the fused beta. NumPy/SciPy only."""
+stiffness (or per axle against the EKF prior's or a kinematic slip angle), the EKF in beta form
+(Euler, y = r), the stiffness-rate weight and the integral method re-seeded from the fused beta.
+NumPy/SciPy only."""
 
 from __future__ import annotations
 
@@ -133,7 +134,7 @@ def step(config, state, u):
     # the stiffness regression y = A X
     new = {}
     regressor = s["stiffness_regressor"]
-    if regressor == "literal":              # side coefficients (load-proportional split), alpha_eq [18]
+    if regressor == "literal":        # side coefficients (load-proportional split), alpha_eq [18]
         fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
               "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
         y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
@@ -189,8 +190,8 @@ def step(config, state, u):
     beta = (1 - weight) * xe[0] + weight * beta_int
 
     new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
-           "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,
-           "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
-           "holding": 0.0}
+            "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,
+            "c_rear": cr, "r_last": r, "r_dot": r_dot, "indicator": indicator, "beta": beta,
+            "holding": 0.0}
     return (np.array([new[k] for k in names]),
             np.array([beta, xe[0], beta_int, xe[1], weight, cf, cr, float(status)]))

@@ -345,11 +345,12 @@ def build(params: Parameters) -> Estimator:
     })
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)
+    per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",
                      INPUTS, layout, OUTPUTS, init, step, params,
-                     rounding_gain=rounding_gain(params.numeric.vehicle, params.numeric.settings(NAME),
-                                                 params.numeric.sample_time),
                      notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
-                      "stiffness_regressor": regressor,
-                      "forgetting_factor_per_sample": f"{choices['forgetting_factor'] ** (params.numeric.sample_time / REFERENCE_PERIOD):.6g}"})
+                            "stiffness_regressor": regressor,
+                            "forgetting_factor_per_sample": f"{per_sample:.6g}"},
+                     rounding_gain=rounding_gain(params.numeric.vehicle, choices,
+                                                 params.numeric.sample_time))
