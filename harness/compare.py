@@ -88,7 +88,8 @@ REFERENCE_PRECISION = float(np.finfo(np.longdouble).eps / np.finfo(np.float64).e
 """Rounding unit of the long-double reference (the unscented filters') relative to double."""
 
 
-def for_estimator(real: str, rounding_gain: float, long_double_reference: bool = False) -> Tolerance:
+def for_estimator(real: str, rounding_gain: float,
+                  long_double_reference: bool = False) -> Tolerance:
     """The tolerance for code of type ``real`` of an estimator whose algorithm amplifies rounding
     by ``rounding_gain`` (``model.estimator.Estimator``). The double tolerance is widened by what
     the reference cannot absorb of that gain (never narrowed); the float tolerance lies far above

@@ -77,7 +77,7 @@ STATES = Layout((
     Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
 ))
 KINEMATIC_STATES = Layout((
-    Signal("beta_kin", "rad", "integral method for the slip angles, re-seeded only while lambda = 0"),
+    Signal("beta_kin", "rad", "integral method for slip angles, re-seeded only while lambda = 0"),
     Signal("ax_f", "m/s^2", "low-passed a_x"),
     Signal("ay_f", "m/s^2", "low-passed a_y (roll-corrected)"),
     Signal("r_f", "rad/s", "low-passed yaw rate"),
@@ -162,8 +162,8 @@ def side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads):
 
 
 def axle_regression(vehicle, delta, vx, ay, r, r_dot, beta, loads):
-    """(y, A, excitation) of a per-axle RLS y = A X: each axle's force [21, 22] over its load against
-    its slip angle [3] at sideslip ``beta``; excitation = the smaller |slip angle|."""
+    """(y, A, excitation) of a per-axle RLS y = A X: each axle's force [21, 22] over its load
+    against its slip angle [3] at sideslip ``beta``; excitation = the smaller |slip angle|."""
     a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
     fy_front, fy_rear = axle_forces(vehicle, delta, ay, r_dot)
     alpha_f, alpha_r = delta - beta - a * r / vx, -beta + b * r / vx

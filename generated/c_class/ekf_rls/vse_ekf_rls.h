@@ -77,7 +77,7 @@ enum {
     VSE_EKF_RLS_STATE_INDICATOR = 14, /* 1/s: low-passed nonlinearity indicator D */
     VSE_EKF_RLS_STATE_BETA = 15, /* rad: fused sideslip angle of the last sample */
     VSE_EKF_RLS_STATE_HOLDING = 16, /* -: 1 while holding (low speed or invalid input), else 0 */
-    VSE_EKF_RLS_STATE_BETA_KIN = 17, /* rad: integral method for the slip angles, re-seeded only while lambda = 0 */
+    VSE_EKF_RLS_STATE_BETA_KIN = 17, /* rad: integral method for slip angles, re-seeded only while lambda = 0 */
     VSE_EKF_RLS_STATE_AX_F = 18, /* m/s^2: low-passed a_x */
     VSE_EKF_RLS_STATE_AY_F = 19, /* m/s^2: low-passed a_y (roll-corrected) */
     VSE_EKF_RLS_STATE_R_F = 20, /* rad/s: low-passed yaw rate */
