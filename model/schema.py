@@ -274,6 +274,13 @@ KF_FIELDS: tuple[Field, ...] = (
 
 KF2DOF = EstimatorSchema(fields=KF_FIELDS, rules=LOW_SPEED_RULES)
 
+ROLL_CORRECTION = nonnegative(
+    "roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove the gravity "
+    "component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); 0 = none (the paper's "
+    "literal a_y)", default=0.0)
+"""The roll correction of a_y (model.sensors) that seed 000's estimators, ekf_rls and the particle
+filters share."""
+
 SEED000_FIELDS: tuple[Field, ...] = (
     choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "
            "10000/(s^2+200s+10000) or a phase-normalised 2nd-order Bessel at prefilter_omega"),
@@ -283,9 +290,7 @@ SEED000_FIELDS: tuple[Field, ...] = (
     positive("lateral_acceleration_band", "m/s^2", "half-width of the band around vx r"),
     positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
-    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
-                "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
-                "0 = no compensation (the paper's literal behaviour)"),
+    ROLL_CORRECTION,
 )
 """Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
 
@@ -353,9 +358,7 @@ EKF_RLS = EstimatorSchema(
         positive("indicator_time_constant", "s", "tau_D of the low-passed stiffness rate"),
         nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
-        nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
-                    "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
-                    "0 = none (the paper's literal a_y)", default=0.0),
+        ROLL_CORRECTION,
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
@@ -431,9 +434,7 @@ PF_FIELDS: tuple[Field, ...] = (
     diagonal("speed_noise", 2, "[v_x, v_y] per sample: m/s", "sigma_vx,0, sigma_vy,0 (16)"),
     nonnegative("adaptation_gain_acceleration", "-", "kappa_a of (16); 0 = no adaptation"),
     nonnegative("adaptation_gain_yaw_rate", "-", "kappa_r of (16); 0 = no adaptation"),
-    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration, to remove "
-                "the gravity component a body-fixed accelerometer reads: a_y = a_y,m / (1 + g k); "
-                "0 = none (the spec's literal (13))", default=0.0),
+    ROLL_CORRECTION,
     *LOW_SPEED_FIELDS,
 )
 """Seed 003's particle filter: the adaptive PF of its ref. [17] (003-improved-pf-velocity.md §2,

@@ -98,10 +98,11 @@ def test_declared_rounding_gains_widen_only_the_double_tolerance():
 def test_ekf_rls_rounding_gain_follows_its_stiffness_rate(config):
     """ekf_rls declares the amplification of its stiffness rate: C_max / C_soft x
     (1 - exp(-T / tau_D)) / (T (D2 - D1)); about 1e2 on the default vehicle, and larger at 1 kHz."""
+    from model.bicycle import GRAVITY
     from model.estimators.ekf_rls import nominal_c0
 
     s, v, T = config.settings("ekf_rls"), config.vehicle, config.sample_time
-    c_max = s["stiffness_max"] * nominal_c0(v) * v["mass"] * 9.81
+    c_max = s["stiffness_max"] * nominal_c0(v) * v["mass"] * GRAVITY
     expected = (c_max / min(v["cornering_stiffness_front"], v["cornering_stiffness_rear"])
                 * (1 - np.exp(-T / s["indicator_time_constant"]))
                 / (T * (s["indicator_high"] - s["indicator_low"])))
