@@ -123,36 +123,34 @@ def step(config, state, u):
                                               fs=1.0 / T)
     r_dot = b0 * r + b1 * x["r_last"] - a1 * x["r_dot"]
 
-    # forces [21, 22], loads [23], the integral method re-seeded from the fused beta [36]
-    fyf = (b * m * ay + iz * r_dot) / (L * math.cos(delta))
-    fyr = (a * m * ay - iz * r_dot) / L
-    fl, fr, rl, rr = _loads(v, ax, ay)
+    # the integral method re-seeded from the fused beta [36]; the EKF prior
+    beta_int = _integral(x["beta"], T, vx, ax, ay, r)
     xe = np.array([x["beta_ekf"], x["r_ekf"]])
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
-    beta_int = _integral(x["beta"], T, vx, ax, ay, r)
 
-    # the stiffness regression y = A X
+    # the stiffness regression y = A X: forces [21, 22] and loads [23]
     new = {}
     regressor = s["stiffness_regressor"]
+    if regressor == "kinematic_slip":  # its own integral method; everything low-passed alike
+        seeded = s["weighting"] == "stiffness_rate" and x["indicator"] <= s["indicator_low"]
+        beta_kin = _integral(x["beta"] if seeded else x["beta_kin"], T, vx, ax, ay, r)
+        share = 1.0 - math.exp(-T / s["derivative_time_constant"])
+        raw = {"ax_f": ax, "ay_f": ay, "r_f": r, "delta_f": delta, "beta_f": beta_kin}
+        new = {"beta_kin": beta_kin, **{k: x[k] + share * (raw[k] - x[k]) for k in raw}}
+        beta_s, r_s, delta_s, ay_s = new["beta_f"], new["r_f"], new["delta_f"], new["ay_f"]
+        r_dot_s = (new["r_f"] - x["r_f"]) / T
+        fl, fr, rl, rr = _loads(v, new["ax_f"], new["ay_f"])
+    else:
+        beta_s, r_s, delta_s, ay_s, r_dot_s = x_pred[0], x_pred[1], delta, ay, r_dot
+        fl, fr, rl, rr = _loads(v, ax, ay)
+    fyf = (b * m * ay_s + iz * r_dot_s) / (L * math.cos(delta_s))
+    fyr = (a * m * ay_s - iz * r_dot_s) / L
     if regressor == "literal":        # side coefficients (load-proportional split), alpha_eq [18]
         fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
               "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
         y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
         A = abs(delta - L * r / vx) * np.eye(2)
-    else:
-        if regressor == "ekf_slip":                              # B2: the EKF prior's slip angles
-            beta_s, r_s, delta_s = x_pred[0], x_pred[1], delta
-        else:   # kinematic_slip: its own integral method; everything low-passed alike
-            seeded = s["weighting"] == "stiffness_rate" and x["indicator"] <= s["indicator_low"]
-            beta_kin = _integral(x["beta"] if seeded else x["beta_kin"], T, vx, ax, ay, r)
-            share = 1.0 - math.exp(-T / s["derivative_time_constant"])
-            raw = {"ax_f": ax, "ay_f": ay, "r_f": r, "delta_f": delta, "beta_f": beta_kin}
-            new = {"beta_kin": beta_kin, **{k: x[k] + share * (raw[k] - x[k]) for k in raw}}
-            r_dot_f = (new["r_f"] - x["r_f"]) / T
-            fyf = (b * m * new["ay_f"] + iz * r_dot_f) / (L * math.cos(new["delta_f"]))
-            fyr = (a * m * new["ay_f"] - iz * r_dot_f) / L
-            fl, fr, rl, rr = _loads(v, new["ax_f"], new["ay_f"])
-            beta_s, r_s, delta_s = new["beta_f"], new["r_f"], new["delta_f"]
+    else:                         # per axle: the EKF prior's (B2) or the kinematic slip angles
         y = np.array([fyf / (fl + fr), fyr / (rl + rr)])
         A = np.diag([delta_s - beta_s - a * r_s / vx, -beta_s + b * r_s / vx])
 

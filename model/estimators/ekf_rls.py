@@ -254,17 +254,10 @@ def build(params: Parameters) -> Estimator:
     # ---- stiffness: filtered r_dot, forces, loads, RLS ------------------------------------------
     n_dot, d_dot = filters.tustin_derivative(settings["derivative_time_constant"], T)
     r_dot = n_dot * (r_m - s["r_last"]) - d_dot * s["r_dot"]
-    loads = wheel_loads(vehicle, ax, ay)
     x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
     f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
     kinematic = {}
-    if regressor == "literal":
-        y, A, excitation = side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads)
-    elif regressor == "ekf_slip":
-        prior = x + T * f
-        y, A, excitation = axle_regression(vehicle, delta, vx, ay, prior[1], r_dot, prior[0],
-                                           loads)
-    else:
+    if regressor == "kinematic_slip":
         seed_from_fused = s["indicator"] <= d1 if choices["weighting"] == "stiffness_rate" else 0
         kinematic = kinematic_slip_signals(s, T, settings["derivative_time_constant"],
                                            seed_from_fused, vx, ax, ay, r_m, delta)
@@ -272,6 +265,14 @@ def build(params: Parameters) -> Estimator:
         y, A, excitation = axle_regression(vehicle, kinematic["delta_f"], vx, kinematic["ay_f"],
                                            kinematic["r_f"], (kinematic["r_f"] - s["r_f"]) / T,
                                            kinematic["beta_f"], loads)
+    elif regressor == "ekf_slip":
+        loads = wheel_loads(vehicle, ax, ay)
+        prior = x + T * f
+        y, A, excitation = axle_regression(vehicle, delta, vx, ay, prior[1], r_dot, prior[0],
+                                           loads)
+    else:
+        loads = wheel_loads(vehicle, ax, ay)
+        y, A, excitation = side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads)
     X = ca.vertcat(s["c0_1"], s["c0_2"])
     P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
     forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
