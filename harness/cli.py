@@ -19,6 +19,7 @@ from rich.table import Table
 
 from codegen import generate as codegen
 from harness.logs import LogError, read_estimates, read_log, write_log
+from harness.progress import RunProgress
 from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
 from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
@@ -131,18 +132,15 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
            params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
     from harness.compare import PEAK_FRACTION, TOLERANCES
-    from harness.verify import FLIP_MARGIN, verify_estimator
+    from harness.verify import FLIP_MARGIN, verify as verify_all
 
     config = load_vehicle(vehicle)
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
     names = _estimators(config, estimators)
-    results = []
-    with Progress(console=console, transient=True) as progress:
-        task = progress.add_task("verifying", total=len(names) * len(VERIFICATION_SET))
-        for name in names:
-            results += verify_estimator(config, name, seed=seed, real=real, params=params,
-                                        progress=lambda: progress.advance(task))
+    with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
+        results = verify_all(config, names, seed=seed, real=real, params=params,
+                             on_done=lambda result: progress.done(result.estimator, result.ok))
     table = Table(title=f"generated C vs NumPy reference, vehicle {config.name}, "
                         f"T = {config.sample_time} s, {real}, {params} parameters")
     for column in ("estimator", "scenario", "samples", "signal", "max |diff|", "max rel diff",

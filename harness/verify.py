@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from codegen.generate import render
 from harness.build import load_estimator
+from harness.parallel import Workers
 from harness.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
 from harness.reference import LONG_DOUBLE, REFERENCES
 from harness.reference.run import run_reference
@@ -41,49 +43,92 @@ class CaseResult:
         return self.states.ok and self.stepwise.ok and all(d.ok for d in self.outputs)
 
 
-def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
-                     seed: int = 1, real: str | None = None, params: str | None = None,
-                     progress=None) -> list[CaseResult]:
-    """Build ``name`` for ``config``, run C and reference over ``cases``, compare step by step.
-    ``real`` and ``params`` default to the vehicle file's [codegen] settings."""
+def verify(config: VehicleConfig, names: tuple[str, ...], cases: tuple[Case, ...] = VERIFICATION_SET,
+           seed: int = 1, real: str | None = None, params: str | None = None,
+           on_done: Callable[[CaseResult], None] | None = None,
+           workers: Workers | None = None) -> list[CaseResult]:
+    """Every estimator of ``names`` on every case: C and reference compared step by step, the
+    runs spread over ``workers`` (default: a pool sized by ``harness.parallel.worker_count``).
+    ``real`` and ``params`` default to the vehicle file's [codegen] settings. Results come
+    estimator by estimator, case by case; ``on_done`` is called as each run finishes."""
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
-    estimator = build(name, config, params)
-    reference = REFERENCES[name]
-    for label, model_layout, ref_names in zip(("inputs", "states", "outputs"),
-                                              (estimator.inputs, estimator.states, estimator.outputs),
-                                              reference.names(config)):
-        if tuple(model_layout.names) != tuple(ref_names):
-            raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
-    if estimator.particles is not None and real == "float":
-        reference = reference.drawing(24)    # the float C draws 24-bit uniforms (D5)
-    compiled = load_estimator(estimator, render(config, name, real, params))
-    tolerance = for_estimator(real, estimator.rounding_gain, name in LONG_DOUBLE)
+    for name in names:
+        _check_layouts(config, name, build(name, config, params))
+    own_pool = workers is None
+    workers = workers or Workers()
+    try:
+        rate_hz = 1.0 / config.sample_time
+        workers.map(_simulate, [(config, case, rate_hz, seed) for case in cases])
+        workers.map(_compile, [(config, name, real, params) for name in names])
+        jobs = [(config, name, case, seed, real, params) for name in names for case in cases]
+        return workers.map(verify_case, jobs,
+                           on_done=(lambda _, result: on_done(result)) if on_done else None)
+    finally:
+        if own_pool:
+            workers.__exit__(None, None, None)
+
+
+def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
+                     seed: int = 1, real: str | None = None,
+                     params: str | None = None) -> list[CaseResult]:
+    """:func:`verify` for one estimator."""
+    return verify(config, (name,), cases, seed, real, params)
+
+
+def verify_case(config: VehicleConfig, name: str, case: Case, seed: int, real: str,
+                params: str) -> CaseResult:
+    """Build ``name`` (memoised per process), run C and reference over ``case``, compare."""
+    estimator, reference, compiled, tolerance = _prepared(config, name, real, params)
     state_scales = np.array(estimator.states.scales)
     step_scales = np.concatenate([state_scales, estimator.outputs.scales])
-    results = []
-    for case in cases:
-        log = case.simulate(config, 1.0 / config.sample_time, seed)
-        inputs = as_seen_by(real, log.matrix(estimator.inputs.names))
-        c_out, c_states = compiled.run(inputs)
+    log = case.simulate(config, 1.0 / config.sample_time, seed)
+    inputs = as_seen_by(real, log.matrix(estimator.inputs.names))
+    c_out, c_states = compiled.run(inputs)
+    if estimator.particles is not None and real == "float":
+        return _particles_in_float(estimator, reference, config, case, len(log), c_states, c_out,
+                                   inputs, tolerance, step_scales)
+    r_out, r_states = run_reference(reference, config, inputs)
+    outputs = tuple(
+        difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer, s.scale)
+        for i, s in enumerate(estimator.outputs.signals)
+    )
+    states = difference("state (all entries)", c_states, r_states, tolerance, scale=state_scales)
+    stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
+    return CaseResult(name, real, case.label, len(log), outputs, states, stepwise)
+
+
+def _check_layouts(config: VehicleConfig, name: str, estimator) -> None:
+    for label, model_layout, ref_names in zip(("inputs", "states", "outputs"),
+                                              (estimator.inputs, estimator.states, estimator.outputs),
+                                              REFERENCES[name].names(config)):
+        if tuple(model_layout.names) != tuple(ref_names):
+            raise LayoutMismatch(f"{name}: {label} of model {model_layout.names} != reference {ref_names}")
+
+
+def _simulate(config: VehicleConfig, case: Case, rate_hz: float, seed: int) -> None:
+    case.simulate(config, rate_hz, seed)        # fills the log cache for the comparison jobs
+
+
+def _compile(config: VehicleConfig, name: str, real: str, params: str) -> None:
+    _prepared(config, name, real, params)       # fills the build cache for the comparison jobs
+
+
+_PREPARED: dict[tuple, tuple] = {}
+
+
+def _prepared(config: VehicleConfig, name: str, real: str, params: str):
+    """(estimator, reference, compiled C, tolerance) of ``name``, memoised in this process."""
+    key = (config.fingerprint(), name, real, params)
+    if key not in _PREPARED:
+        estimator = build(name, config, params)
+        reference = REFERENCES[name]
         if estimator.particles is not None and real == "float":
-            results.append(_particles_in_float(estimator, reference, config, case, len(log),
-                                               c_states, c_out, inputs, tolerance, step_scales))
-            if progress:
-                progress()
-            continue
-        r_out, r_states = run_reference(reference, config, inputs)
-        outputs = tuple(
-            difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer, s.scale)
-            for i, s in enumerate(estimator.outputs.signals)
-        )
-        states = difference("state (all entries)", c_states, r_states, tolerance,
-                            scale=state_scales)
-        stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
-        results.append(CaseResult(name, real, case.label, len(log), outputs, states, stepwise))
-        if progress:
-            progress()
-    return results
+            reference = reference.drawing(24)    # the float C draws 24-bit uniforms (D5)
+        compiled = load_estimator(estimator, render(config, name, real, params))
+        tolerance = for_estimator(real, estimator.rounding_gain, name in LONG_DOUBLE)
+        _PREPARED[key] = (estimator, reference, compiled, tolerance)
+    return _PREPARED[key]
 
 
 FLIP_MARGIN = 1e-5

@@ -91,6 +91,19 @@ class VehicleConfig:
         text = json.dumps(everything, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
 
+    def truth_fingerprint(self) -> str:
+        """SHA-256 of the tables a simulation of this car reads ([vehicle], [plant], [sensors]):
+        equal for two files that differ only in estimator settings, limits or sampling."""
+        truth = {"vehicle": _plain(self.vehicle), "plant": _plain(self.plant or {}),
+                 "sensors": _plain(self.sensors or {})}
+        text = json.dumps(truth, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def __reduce__(self):
+        """Pickle as plain data (read-only mappings do not pickle), e.g. for worker processes."""
+        return (_unpickle, ({name: _thawed(getattr(self, name))
+                             for name in self.__dataclass_fields__},))
+
     def parameter_hash(self, estimator: str) -> str:
         """SHA-256 (hex) of :meth:`canonical` serialised as sorted JSON with exact float reprs."""
         text = json.dumps(self.canonical(estimator), sort_keys=True, separators=(",", ":"))
@@ -207,6 +220,24 @@ def _check_wheelbase(vehicle: dict, where: "_Locator") -> None:
 def _show(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _thawed(value: Any) -> Any:
+    """``value`` with every read-only mapping (recursively) a dict, for pickling."""
+    if isinstance(value, MappingProxyType):
+        return {k: _thawed(v) for k, v in value.items()}
+    return value
+
+
+def _frozen(value: Any) -> Any:
+    """The inverse of :func:`_thawed`."""
+    if isinstance(value, dict):
+        return MappingProxyType({k: _frozen(v) for k, v in value.items()})
+    return value
+
+
+def _unpickle(fields: dict[str, Any]) -> VehicleConfig:
+    return VehicleConfig(**{k: _frozen(v) for k, v in fields.items()})
 
 
 def _plain(value: Any) -> Any:

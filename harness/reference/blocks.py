@@ -5,10 +5,12 @@ filter and the shared input-hold rule (shared/methods/README.md; 000-switch-side
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Mapping
 
 import numpy as np
 import scipy.linalg
+import scipy.signal
 
 GRAVITY = 9.81
 """m/s^2, as in the model."""
@@ -52,6 +54,17 @@ def discretise(method: str, A: np.ndarray, B: np.ndarray, T: float):
         E = scipy.linalg.expm(augmented * T)
         return E[:n, :n], E[:n, n:]
     raise ValueError(method)
+
+
+@lru_cache(maxsize=64)
+def tustin(num: tuple[float, ...], den: tuple[float, ...], T: float) -> tuple[np.ndarray, np.ndarray]:
+    """(b, a) of the analog filter num(s)/den(s) discretised by Tustin at sample time T
+    (scipy.signal.bilinear), normalised so a[0] = 1; memoised, since a filter designed once per
+    configuration is asked for at every step."""
+    bz, az = scipy.signal.bilinear(num, den, fs=1.0 / T)
+    bz, az = bz / az[0], az / az[0]
+    bz.flags.writeable = az.flags.writeable = False
+    return bz, az
 
 
 def kf_predict(x, P, Phi, Gamma, u, Qd):

@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.signal
 
 from harness.reference import blocks
 
@@ -119,8 +118,7 @@ def step(config, state, u):
     L = a + b
 
     # filtered yaw acceleration s / (tau_d s + 1), Tustin (scipy)
-    (b0, b1), (_, a1) = scipy.signal.bilinear([1.0, 0.0], [s["derivative_time_constant"], 1.0],
-                                              fs=1.0 / T)
+    (b0, b1), (_, a1) = blocks.tustin((1.0, 0.0), (s["derivative_time_constant"], 1.0), T)
     r_dot = b0 * r + b1 * x["r_last"] - a1 * x["r_dot"]
 
     # the integral method re-seeded from the fused beta [36]; the EKF prior

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 import scipy.signal
@@ -40,14 +41,18 @@ def state_names(config, table) -> tuple[str, ...]:
 
 
 def prefilter(config, table):
-    """(b, a) of the Tustin-discretised prefilter, scipy.signal.bilinear."""
+    """(b, a) of the Tustin-discretised prefilter (blocks.tustin)."""
     s = config.settings(table)
-    if s["prefilter"] == "printed":
-        num, den = [10000.0], [1.0, 200.0, 10000.0]
+    return _prefilter(s["prefilter"], s["prefilter_omega"], config.sample_time)
+
+
+@lru_cache(maxsize=16)
+def _prefilter(kind: str, omega: float, T: float):
+    if kind == "printed":
+        num, den = (10000.0,), (1.0, 200.0, 10000.0)
     else:
-        num, den = scipy.signal.bessel(2, s["prefilter_omega"], analog=True, norm="phase")
-    bz, az = scipy.signal.bilinear(num, den, fs=1.0 / config.sample_time)
-    return bz / az[0], az / az[0]
+        num, den = scipy.signal.bessel(2, omega, analog=True, norm="phase")
+    return blocks.tustin(tuple(num), tuple(den), T)
 
 
 def reference_yaw_rate(config, delta, vx):

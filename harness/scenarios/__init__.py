@@ -12,6 +12,7 @@ from typing import Any, Callable
 
 from harness.logs import Log
 from harness.scenarios import manoeuvres
+from harness.scenarios.log_cache import cached_log, log_key
 from model.params import ParameterError, VehicleConfig
 
 
@@ -94,22 +95,28 @@ class Case:
 
     def simulate(self, config: VehicleConfig, rate_hz: float, seed: int = 1,
                  progress: Callable[[float], None] | None = None) -> Log:
-        """The log of this case (memoised per vehicle configuration, rate and seed)."""
-        key = (self, config.fingerprint(), rate_hz, seed)
+        """The log of this case, simulated once per truth car, rate and seed: memoised in
+        memory and kept on disk (``harness.scenarios.log_cache``); each call gets its own copy."""
+        scenario = SCENARIOS[self.scenario]
+        options = {**scenario.defaults, **dict(self.options)}
+        key = log_key(config, self.scenario, options, rate_hz, seed)
         if key not in _MEMO:
-            scenario = SCENARIOS[self.scenario]
-            try:
-                _MEMO[key] = scenario.simulate(config, rate_hz, seed, progress=progress,
-                                               **{**scenario.defaults, **dict(self.options)})
-            except ValueError as exc:
-                if isinstance(exc, (ScenarioError, ParameterError)):
-                    raise
-                raise ScenarioError(f"scenario {self.label}: {exc}") from None
+            _MEMO[key] = cached_log(key, lambda: self._simulate(config, rate_hz, seed, progress))
         log = _MEMO[key]
         return Log({k: v.copy() for k, v in log.columns.items()}, log.source, dict(log.notes))
 
+    def _simulate(self, config, rate_hz, seed, progress) -> Log:
+        scenario = SCENARIOS[self.scenario]
+        try:
+            return scenario.simulate(config, rate_hz, seed, progress=progress,
+                                     **{**scenario.defaults, **dict(self.options)})
+        except ValueError as exc:
+            if isinstance(exc, (ScenarioError, ParameterError)):
+                raise
+            raise ScenarioError(f"scenario {self.label}: {exc}") from None
 
-_MEMO: dict[tuple, Log] = {}
+
+_MEMO: dict[str, Log] = {}
 
 
 VERIFICATION_SET: tuple[Case, ...] = (

@@ -236,7 +236,7 @@ class YawMomentPulses:
 
 def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress,
            yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
-    key = (config.fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment)
+    key = (config.truth_fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment)
     if key not in _RUNS:
         dt = 1.0 / (rate_hz * substeps(rate_hz))
         steer = PathFollower(config.vehicle, course.centre_line, dt)
