@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import seed003
+from bench import feedback, seed003
 from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
 from codegen.generate import render
 from harness.fuzz import fuzz_estimator
@@ -75,7 +75,8 @@ def main(argv: list[str] | None = None) -> None:
              "machines).", ""]
 
     lines += ["## Generated C", "",
-              "| estimator | real | instructions/step | ns/step | host .text (B) | M4F .text (B) | M4F stack step (B) |",
+              "| estimator | real | instructions/step | ns/step | host .text (B) | M4F .text (B) "
+              "| M4F stack step (B) |",
               "|---|---|---|---|---|---|---|"]
     for name in config.estimators:
         estimator = build(name, config)
@@ -94,7 +95,8 @@ def main(argv: list[str] | None = None) -> None:
               "`bench/handwritten/kf2dof_hand.c`: the same estimator written by hand (constants "
               "derived once, 1/vx once, P as three entries, closed-form 2x2 inverse with one "
               "division, no pointer checks); tested equal to the reference.", "",
-              "| discretisation | generated instr/step | hand-written instr/step | ratio | target | generated ns | hand-written ns |",
+              "| discretisation | generated instr/step | hand-written instr/step | ratio | target "
+              "| generated ns | hand-written ns |",
               "|---|---|---|---|---|---|---|"]
     text = args.vehicle.read_text()
     for method in ("zoh", "euler"):
@@ -119,18 +121,19 @@ def main(argv: list[str] | None = None) -> None:
                   "", *seed003.costs(args.vehicle.read_text(), str(args.vehicle), config.name,
                                      seed003.COSTS_CASE)]
 
-    lines += ["", "## Python, per step (for contrast)", "", "| estimator | NumPy reference (µs) | CasADi Function from Python (µs) |",
+    lines += ["", "## Python, per step (for contrast)", "",
+              "| estimator | NumPy reference (µs) | CasADi Function from Python (µs) |",
               "|---|---|---|"]
     for name in config.estimators:
         estimator = build(name, config)
         reference = REFERENCES[name]
         inputs = log.matrix(estimator.inputs.names)
-        ref_us = _python_step_us(lambda s, u: reference.step(config, s, u)[0],
+        ref_us = _python_step_us(lambda s, u, reference=reference: reference.step(config, s, u)[0],
                                  reference.init(config, inputs[0]), inputs)
         if estimator.step is None:      # a particle filter has no composed CasADi step
             lines.append(f"| {name} | {ref_us:.1f} | - |")
             continue
-        cas_us = _python_step_us(lambda s, u: estimator.step(s, u)[0],
+        cas_us = _python_step_us(lambda s, u, estimator=estimator: estimator.step(s, u)[0],
                                  np.array(estimator.init(inputs[0])).ravel(), inputs)
         lines.append(f"| {name} | {ref_us:.1f} | {cas_us:.1f} |")
 
@@ -143,7 +146,8 @@ def main(argv: list[str] | None = None) -> None:
                          f"{'clean' if report.ok else 'FAILED: ' + report.message} |")
     lines.append("")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text("\n".join(lines))
+    kept = feedback.section_of(args.out.read_text()) if args.out.exists() else []
+    args.out.write_text(feedback.with_section("\n".join(lines), kept) if kept else "\n".join(lines))
     print("\n".join(lines))
 
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from codegen.generate import library_sources
 from harness.targets import link_to_api
-from model.discretize import plan_zoh
 from model.bicycle import state_matrix_norm_bound
+from model.discretize import plan_zoh
 from model.estimator import Estimator
 from model.params import VehicleConfig
 

@@ -11,15 +11,14 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-import numpy as np  # noqa: E402
-
-from bench.figures import save_figure  # noqa: E402
-from harness.run import run_estimator  # noqa: E402
-from harness.scenarios import Case  # noqa: E402
-from harness.vehicles import with_settings  # noqa: E402
-from model.params import parse_vehicle  # noqa: E402
+from bench.figures import save_figure
+from harness.run import run_estimator
+from harness.scenarios import Case
+from harness.vehicles import with_settings
+from model.params import parse_vehicle
 
 NAME = "arx_dual_kf"
 CASES = (Case.of("dlc", speed_kmh=80.0, yaw_moment=1000.0),

@@ -19,8 +19,8 @@ from rich.table import Table
 
 from codegen import generate as codegen
 from harness.logs import LogError, read_estimates, read_log, write_log
-from harness.progress import RunProgress
 from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
+from harness.progress import RunProgress
 from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
 from model.estimators import BUILDERS
@@ -132,7 +132,8 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
            params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
     from harness.compare import PEAK_FRACTION, TOLERANCES
-    from harness.verify import FLIP_MARGIN, verify as verify_all
+    from harness.verify import FLIP_MARGIN
+    from harness.verify import verify as verify_all
 
     config = load_vehicle(vehicle)
     real = real or config.codegen["real"]
@@ -305,8 +306,8 @@ def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
                 except TargetError as exc:
                     failures.append(f"{name} on {target.name} ({mode}): {exc}")
                     continue
-                table.add_row(name, r.target, r.real, mode, str(r.text), str(r.data), str(r.bss), str(r.stack_init), str(r.stack_step),
-                              ", ".join(r.library_calls))
+                table.add_row(name, r.target, r.real, mode, str(r.text), str(r.data), str(r.bss),
+                              str(r.stack_init), str(r.stack_step), ", ".join(r.library_calls))
     console.print(table)
     if failures:
         for failure in failures:

@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
 PEAK_FRACTION = 1e-2
 
 

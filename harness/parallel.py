@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from typing import Any, Callable, Sequence
+from typing import Any
 
 MIN_PARALLEL_JOBS = 4
 """Fewer jobs than this run in-process: starting the workers costs about a second."""
@@ -46,7 +47,7 @@ class Workers:
         self.count = worker_count() if count is None else count
         self._pool: ProcessPoolExecutor | None = None
 
-    def __enter__(self) -> "Workers":
+    def __enter__(self) -> Workers:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -23,7 +23,7 @@ class RunProgress:
         self._task = self._bar.add_task(label, total=sum(groups.values()))
         self._start = time.monotonic()
 
-    def __enter__(self) -> "RunProgress":
+    def __enter__(self) -> RunProgress:
         self._bar.__enter__()
         return self
 

@@ -8,7 +8,7 @@ See shared/methods/README.md, "2-DOF linear bicycle model".
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import casadi as ca
 

@@ -22,8 +22,8 @@ SX expressions); the NumPy reference and the C are compared instead.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 import casadi as ca
 

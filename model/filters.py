@@ -7,8 +7,8 @@ against a reference with hold-last-valid. Specified in shared/methods/000-switch
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import casadi as ca
 

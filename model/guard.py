@@ -12,8 +12,8 @@ Rule (design.md, "Generated C"; shared/methods/README.md, "Low speed / invalid i
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 import casadi as ca
 

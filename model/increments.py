@@ -21,7 +21,6 @@ directly; the function is continuous there, so the parts stay of the order of th
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Union
 
 import casadi as ca
 
@@ -41,22 +40,22 @@ class Pair:
         """The value at x + s (sign 1) or x - s (sign -1)."""
         return self.base + sign * self.odd + self.even
 
-    def __add__(self, other: "Value") -> "Pair":
+    def __add__(self, other: Value) -> Pair:
         other = lift(other)
         return Pair(self.base + other.base, self.odd + other.odd, self.even + other.even)
 
     __radd__ = __add__
 
-    def __neg__(self) -> "Pair":
+    def __neg__(self) -> Pair:
         return Pair(-self.base, -self.odd, -self.even)
 
-    def __sub__(self, other: "Value") -> "Pair":
+    def __sub__(self, other: Value) -> Pair:
         return self + (-lift(other))
 
-    def __rsub__(self, other: "Value") -> "Pair":
+    def __rsub__(self, other: Value) -> Pair:
         return lift(other) + (-self)
 
-    def __mul__(self, other: "Value") -> "Pair":
+    def __mul__(self, other: Value) -> Pair:
         other = lift(other)
         a, p, f = self.base, self.odd, self.even
         b, q, g = other.base, other.odd, other.even
@@ -64,7 +63,7 @@ class Pair:
 
     __rmul__ = __mul__
 
-    def __truediv__(self, other: "Value") -> "Pair":
+    def __truediv__(self, other: Value) -> Pair:
         """(a +- p + f)/(b +- q + g) - a/b = (+-P + E)/(b +- q + g) with P = (p b - a q)/b,
         E = (f b - a g)/b; then odd = (P (b + g) - E q)/D and even = (E (b + g) - P q)/D with
         D = (b + q + g)(b - q + g)."""
@@ -75,11 +74,11 @@ class Pair:
         D = other.at(1) * other.at(-1)
         return Pair(a / b, (P * (b + g) - E * q) / D, (E * (b + g) - P * q) / D)
 
-    def __rtruediv__(self, other: "Value") -> "Pair":
+    def __rtruediv__(self, other: Value) -> Pair:
         return lift(other) / self
 
 
-Value = Union[Pair, ca.SX, float]
+Value = Pair | ca.SX | float
 
 
 def lift(value: Value) -> Pair:

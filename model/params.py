@@ -15,12 +15,22 @@ import json
 import math
 import re
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
-from model.schema import (CODEGEN, ESTIMATOR_SCHEMAS, INPUT_LIMITS, PLANT, SAMPLING, SENSORS,
-                          VEHICLE, Field, Invalid)
+from model.schema import (
+    CODEGEN,
+    ESTIMATOR_SCHEMAS,
+    INPUT_LIMITS,
+    PLANT,
+    SAMPLING,
+    SENSORS,
+    VEHICLE,
+    Field,
+    Invalid,
+)
 
 WHEELBASE_TOLERANCE = 1e-3
 """Allowed |a + b - l| in metres."""
@@ -66,7 +76,7 @@ class VehicleConfig:
             )
         return self.estimators[estimator]
 
-    def with_sample_time(self, sample_time: float) -> "VehicleConfig":
+    def with_sample_time(self, sample_time: float) -> VehicleConfig:
         """The same vehicle for another sample time (e.g. that of a log)."""
         value = SAMPLING[0].check(sample_time)
         return replace(self, sample_time=value)
@@ -169,7 +179,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
 # validation helpers
 
 
-def _table(data: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: "_Locator") -> dict:
+def _table(data: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: _Locator) -> dict:
     node: Any = data
     for part in path:
         if not isinstance(node, dict) or part not in node:
@@ -182,7 +192,7 @@ def _table(data: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: 
     return _fields(node, path, fields, where)
 
 
-def _fields(node: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: "_Locator") -> dict:
+def _fields(node: dict, path: tuple[str, ...], fields: tuple[Field, ...], where: _Locator) -> dict:
     values = {}
     table = ".".join(path)
     for spec in fields:
@@ -200,7 +210,7 @@ def _fields(node: dict, path: tuple[str, ...], fields: tuple[Field, ...], where:
     return values
 
 
-def _reject_unknown(node: dict, allowed: set[str], path: tuple[str, ...], where: "_Locator") -> None:
+def _reject_unknown(node: dict, allowed: set[str], path: tuple[str, ...], where: _Locator) -> None:
     for key in node:
         if key not in allowed:
             table = f"[{'.'.join(path)}] " if path else ""
@@ -208,7 +218,7 @@ def _reject_unknown(node: dict, allowed: set[str], path: tuple[str, ...], where:
                                  f"of {', '.join(sorted(allowed))}")
 
 
-def _check_wheelbase(vehicle: dict, where: "_Locator") -> None:
+def _check_wheelbase(vehicle: dict, where: _Locator) -> None:
     a, b, l = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], vehicle["wheelbase"]
     if abs(a + b - l) > WHEELBASE_TOLERANCE:
         raise ParameterError(

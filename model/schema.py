@@ -7,8 +7,9 @@ adds one :class:`EstimatorSchema` to :data:`ESTIMATOR_SCHEMAS`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import numpy as np
 

@@ -5,7 +5,6 @@ equivalence to the reference over every scenario is in verify."""
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 import scipy.signal

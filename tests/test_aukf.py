@@ -258,10 +258,11 @@ def test_settings_errors_are_one_line(vehicle_text, edit, message):
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ukf", "aukf"])
-def test_float_code_matches_the_reference_on_every_scenario(config, name):
+def test_float_code_keeps_the_speed_within_a_millimetre_per_second(config, name):
     """The pair arithmetic keeps float32 within the float tolerance at alpha = 0.001 (the spec's
-    C6 reports tenths of a m/s lost on u by the printed weighted sums); double is in test_cli."""
+    C6 reports tenths of a m/s lost on u by the printed weighted sums)."""
     results = verify_estimator(config, name, real="float")
     assert len(results) == len(VERIFICATION_SET)
     for result in results:

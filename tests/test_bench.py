@@ -50,3 +50,14 @@ def test_handwritten_baseline_equals_the_reference(vehicle_text, method):
         for i, name in enumerate(reference.OUTPUTS):
             assert difference(name, outputs[:, i], expected[:, i], TOLERANCES["double"],
                               integer=name == "status").ok, (case.label, name)
+
+
+def test_feedback_section_is_replaced_in_place_and_kept_by_the_suite():
+    from bench import feedback
+    body = [feedback.SECTION, "", "| new |"]
+    document = "# Benchmarks\n\n## A\n\na\n\n## Feedback times\n\n| old |\n\n## B\n\nb\n"
+    updated = feedback.with_section(document, body)
+    assert updated == "# Benchmarks\n\n## A\n\na\n\n## Feedback times\n\n| new |\n\n## B\n\nb\n"
+    assert feedback.section_of(updated) == body + [""]
+    assert feedback.with_section("# Benchmarks\n", body).endswith("# Benchmarks\n\n## Feedback times\n\n| new |\n")
+    assert feedback.section_of("# Benchmarks\n") == []

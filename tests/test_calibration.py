@@ -10,21 +10,9 @@ from harness.build import load_estimator
 from harness.compare import TOLERANCES, difference
 from harness.reference import kf2dof as reference
 from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.verify import verify_estimator
+from harness.scenarios import Case
 from model.estimators import build
 from model.params import parse_vehicle
-
-
-def test_calibratable_passes_verify(config):
-    results = verify_estimator(config, "kf2dof", params="calibratable")
-    assert len(results) == len(VERIFICATION_SET) and all(r.ok for r in results), results
-
-
-def test_calibratable_float_passes_verify(config):
-    results = verify_estimator(config, "kf2dof", cases=VERIFICATION_SET[:4], real="float",
-                               params="calibratable")
-    assert all(r.ok for r in results), results
 
 
 def test_calibration_file_and_struct(config):

@@ -16,11 +16,20 @@ def vsegen(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
                           capture_output=True, text=True)
 
 
+def test_verify_prints_the_table_and_a_progress_line_per_estimator():
+    result = vsegen("verify", "--estimator", "kf2dof", "--estimator", "switching")
+    assert result.returncode == 0, result.stderr
+    assert "verify passed: 26 runs" in result.stdout
+    assert "dlc(speed_kmh=120.0)" in result.stdout and "max rel diff" in result.stdout
+    progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
+    assert sorted(progress) == ["verifying kf2dof: ok", "verifying switching: ok"]
+
+
+@pytest.mark.slow
 def test_verify_default_vehicle_prints_table():
     result = vsegen("verify")
     assert result.returncode == 0, result.stderr
-    assert "verify passed" in result.stdout
-    assert "dlc(speed_kmh=120.0)" in result.stdout and "max rel diff" in result.stdout
+    assert "verify passed: 117 runs" in result.stdout
 
 
 def test_generate_check_is_clean_on_the_repository():

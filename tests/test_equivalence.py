@@ -11,31 +11,45 @@ import pytest
 from codegen.generate import render
 from harness.build import load_estimator
 from harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
+from harness.paths import DEFAULT_VEHICLE
 from harness.reference import kf2dof as reference
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
+from harness.vehicles import load_vehicle
 from harness.verify import verify_estimator
 from model.estimators import build
 from model.params import parse_vehicle
 
+ESTIMATORS = tuple(load_vehicle(DEFAULT_VEHICLE).estimators)
+FORMS = [("float", "baked"), ("double", "calibratable"), ("float", "calibratable")]
 
-def test_verify_passes_on_every_scenario(config):
-    results = verify_estimator(config, "kf2dof")
+
+def check_every_scenario(config, name, real, params):
+    results = verify_estimator(config, name, real=real, params=params)
     assert [r.case for r in results] == [c.label for c in VERIFICATION_SET]
     for result in results:
         assert result.ok, result
         assert result.samples > 600
-        for diff in result.outputs:
-            assert diff.max_rel <= TOLERANCES["double"].relative or diff.integer
+    return results
 
 
-def test_float_code_matches_the_reference(config):
-    results = verify_estimator(config, "kf2dof", real="float")
-    assert len(results) == len(VERIFICATION_SET)
-    for result in results:
-        assert result.ok, result
+@pytest.mark.parametrize("name", ESTIMATORS)
+def test_generated_c_equals_the_reference_on_every_scenario(config, name):
+    check_every_scenario(config, name, "double", "baked")
+
+
+@pytest.mark.parametrize("real,params", FORMS)
+def test_kf2dof_equals_the_reference_in_every_form(config, real, params):
+    for result in check_every_scenario(config, "kf2dof", real, params):
         beta = result.outputs[0]
-        assert beta.name == "beta" and beta.max_abs <= 1e-4
+        assert beta.name == "beta" and beta.max_abs <= (1e-4 if real == "float" else 1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("real,params", FORMS)
+@pytest.mark.parametrize("name", [n for n in ESTIMATORS if n != "kf2dof"])
+def test_every_estimator_equals_the_reference_in_every_form(config, name, real, params):
+    check_every_scenario(config, name, real, params)
 
 
 def test_one_millisecond_sample_time(config):

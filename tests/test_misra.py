@@ -29,6 +29,7 @@ def counts(config):
     return total
 
 
+@pytest.mark.slow
 def test_no_rule_grows_past_the_baseline_and_all_are_justified(counts):
     assert misra.regressions(misra.by_rule(counts), misra.load_baseline()) == []
 

@@ -9,7 +9,7 @@ import pytest
 from rich.console import Console
 
 from harness import parallel
-from harness.parallel import Workers, WorkerCountError, worker_count
+from harness.parallel import WorkerCountError, Workers, worker_count
 from harness.progress import RunProgress
 from harness.scenarios import Case, log_cache
 from harness.vehicles import load_vehicle

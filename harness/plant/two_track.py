@@ -26,8 +26,8 @@ about 9500/vx 1/s, so RK4 at 1 ms is stable above ~3.5 m/s).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Mapping
 
 import casadi as ca
 import numpy as np

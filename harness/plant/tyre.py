@@ -14,7 +14,7 @@ F_y > 0 (project convention), kappa > 0 (driving) gives F_x > 0.
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import casadi as ca
 

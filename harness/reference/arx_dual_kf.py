@@ -23,7 +23,8 @@ def _theta_names(config):
 
 def names(config):
     theta = _theta_names(config)
-    states = ("x_1", "x_2", *blocks.upper_names("P", ("x_1", "x_2")), *theta, *blocks.upper_names("Pt", theta), "mz_prev",
+    states = ("x_1", "x_2", *blocks.upper_names("P", ("x_1", "x_2")), *theta,
+              *blocks.upper_names("Pt", theta), "mz_prev",
               *(("delta_prev",) if "b_delta" in theta else ()), "holding")
     return INPUTS, states, ("r", *theta, "gain", "status")
 

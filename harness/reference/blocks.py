@@ -5,8 +5,8 @@ filter and the shared input-hold rule (shared/methods/README.md; 000-switch-side
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from functools import lru_cache
-from typing import Mapping
 
 import numpy as np
 import scipy.linalg

@@ -42,7 +42,7 @@ class ParticleFilter:
     improved: bool
     uniform_bits: int = 53
 
-    def drawing(self, uniform_bits: int) -> "ParticleFilter":
+    def drawing(self, uniform_bits: int) -> ParticleFilter:
         """The same filter drawing uniforms of ``uniform_bits`` bits."""
         return replace(self, uniform_bits=uniform_bits)
 

@@ -48,7 +48,7 @@ class Stream:
         self.uniform_bits = uniform_bits
 
     @classmethod
-    def seeded(cls, initial: int, sequence: int, uniform_bits: int = 53) -> "Stream":
+    def seeded(cls, initial: int, sequence: int, uniform_bits: int = 53) -> Stream:
         """``pcg32_srandom_r(initial, sequence)``."""
         stream = cls(0, sequence, uniform_bits)
         stream.outputs(1)
@@ -57,7 +57,7 @@ class Stream:
         return stream
 
     @classmethod
-    def from_words(cls, words, sequence: int, uniform_bits: int = 53) -> "Stream":
+    def from_words(cls, words, sequence: int, uniform_bits: int = 53) -> Stream:
         """The stream whose state is stored as 16-bit words, most significant first."""
         state = 0
         for word in words:

@@ -7,8 +7,9 @@ options; the names are stable (scripts rely on them). ``VERIFICATION_SET`` is th
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from harness.logs import Log
 from harness.scenarios import manoeuvres
@@ -85,7 +86,7 @@ class Case:
     options: tuple[tuple[str, Any], ...] = ()
 
     @staticmethod
-    def of(scenario: str, **options: Any) -> "Case":
+    def of(scenario: str, **options: Any) -> Case:
         return Case(scenario, tuple(sorted(options.items())))
 
     @property

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from model.calibration import Parameters, parameters
 from model.estimator import Estimator

@@ -20,10 +20,10 @@ import casadi as ca
 
 from model import discretize, kalman
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
+from model.calibration import Parameters, matrix
 from model.estimator import Estimator, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
 from model.layout import Layout, Signal
-from model.calibration import Parameters, matrix
 
 NAME = "kf2dof"
 

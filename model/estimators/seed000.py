@@ -15,8 +15,7 @@ from model import filters, kalman, status
 from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
-from model.guard import (Guard, first_sample, hold, input_guard, plausibility,
-                         previous_inputs)
+from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
 from model.layout import Layout, Signal
 from model.sensors import roll_corrected
 
