@@ -327,12 +327,12 @@ def misra(update_baseline: bool, out: Path) -> None:
     from harness.files import write_text_atomic
 
     sections, total = [], Counter()
-    for path in shipped_vehicles():
-        config = load_vehicle(path)
-        for name in _estimators(config, ()):
-            for form, counts in checks.estimator_findings(config, name):
-                sections.append((f"{config.name}/{name} ({form})", counts))
-                total.update(counts)
+    configs = [load_vehicle(path) for path in shipped_vehicles()]
+    estimators = [(config, name) for config in configs for name in _estimators(config, ())]
+    for (config, name), forms in zip(estimators, checks.all_findings(estimators)):
+        for form, counts in forms:
+            sections.append((f"{config.name}/{name} ({form})", counts))
+            total.update(counts)
     per_rule = checks.by_rule(total)
     write_text_atomic(out, checks.report(sections))
     if update_baseline:

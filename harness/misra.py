@@ -92,6 +92,15 @@ def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
     return results
 
 
+def all_findings(estimators: list[tuple]) -> list[list[tuple[str, Counter]]]:
+    """:func:`estimator_findings` of every (config, name) pair, spread over worker processes
+    (cppcheck runs one process per folder)."""
+    from harness.parallel import Workers
+
+    with Workers() as workers:
+        return workers.map(estimator_findings, estimators)
+
+
 def by_rule(counts: Counter) -> dict[str, int]:
     """Total per rule, sorted by rule."""
     totals: Counter = Counter()
