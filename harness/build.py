@@ -18,9 +18,11 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
-from codegen.generate import library_sources
+from codegen.generate import library_sources, render
 from harness.paths import cache_dir
 from model.estimator import Estimator
+from model.estimators import build
+from model.params import VehicleConfig
 
 WARNING_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror")
 """The generated code must compile cleanly with these (design.md, "Generated C")."""
@@ -101,6 +103,13 @@ class CEstimator:
 
 def _ptr(array: np.ndarray):
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def compile_estimator(config: VehicleConfig, name: str, real: str = "double",
+                      params: str = "baked") -> tuple[Estimator, CEstimator]:
+    """(symbolic estimator, its generated C compiled and loaded) of ``name`` for ``config``."""
+    estimator = build(name, config, params)
+    return estimator, load_estimator(estimator, render(config, name, real, params))
 
 
 def load_estimator(estimator: Estimator, files: dict[str, str]) -> CEstimator:

@@ -7,8 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator
 from harness.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
 from harness.parallel import Workers
 from harness.reference import LONG_DOUBLE, REFERENCES
@@ -121,11 +120,10 @@ def _prepared(config: VehicleConfig, name: str, real: str, params: str):
     """(estimator, reference, compiled C, tolerance) of ``name``, memoised in this process."""
     key = (config.fingerprint(), name, real, params)
     if key not in _PREPARED:
-        estimator = build(name, config, params)
+        estimator, compiled = compile_estimator(config, name, real, params)
         reference = REFERENCES[name]
         if estimator.particles is not None and real == "float":
             reference = reference.drawing(24)    # the float C draws 24-bit uniforms (D5)
-        compiled = load_estimator(estimator, render(config, name, real, params))
         tolerance = for_estimator(real, estimator.rounding_gain, name in LONG_DOUBLE)
         _PREPARED[key] = (estimator, reference, compiled, tolerance)
     return _PREPARED[key]

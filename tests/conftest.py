@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 
 from harness.paths import DEFAULT_VEHICLE
-from harness.vehicles import load_vehicle
+from harness.vehicles import load_vehicle, with_settings
+from model.params import VehicleConfig, parse_vehicle
 
 
 @pytest.fixture(scope="session")
@@ -18,6 +19,18 @@ def config():
 @pytest.fixture(scope="session")
 def vehicle_text() -> str:
     return DEFAULT_VEHICLE.read_text()
+
+
+@pytest.fixture(scope="session")
+def variant(vehicle_text: str):
+    """The default vehicle with ``key = value`` set in one table:
+    ``variant("estimator.aukf", forgetting_factor=0.97)``; ``text`` starts from other file text."""
+
+    def make(table: str, text: str | None = None, **keys) -> VehicleConfig:
+        edited = with_settings(vehicle_text if text is None else text, table, **keys)
+        return parse_vehicle(edited, "variant.toml", "c_class")
+
+    return make
 
 
 @pytest.fixture

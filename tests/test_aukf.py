@@ -9,25 +9,18 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator
 from harness.compare import as_seen_by
 from harness.reference import REFERENCES
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
-from harness.vehicles import with_settings
 from harness.verify import verify_estimator
 from model import status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import baked
-from model.estimators import aukf, build
+from model.estimators import aukf
 from model.increments import Pair, fmax, lift, sqrt
-from model.params import ParameterError, parse_vehicle
-
-
-def variant(vehicle_text, table="aukf", **keys):
-    return parse_vehicle(with_settings(vehicle_text, f"estimator.{table}", **keys), "v.toml",
-                         "c_class")
+from model.params import ParameterError
 
 
 def pair_function(f):
@@ -149,11 +142,6 @@ def test_hsri_saturates_at_the_friction_limit(config):
     assert float(lifted[0]) == 0.0 and float(lifted[2]) == 0.0      # inner wheels lift, no negative load
 
 
-def compiled(config, name, real="double"):
-    est = build(name, config)
-    return est, load_estimator(est, render(config, name, real))
-
-
 def steady_turn(config, est, n=600, vx=20.0, delta=0.02):
     """Noise-free steady cornering: the same sample n times."""
     v = config.vehicle
@@ -166,13 +154,13 @@ def steady_turn(config, est, n=600, vx=20.0, delta=0.02):
 
 
 @pytest.mark.parametrize("real", ["double", "float"])
-def test_non_positive_definite_covariance_is_repaired_and_flagged(vehicle_text, real):
+def test_non_positive_definite_covariance_is_repaired_and_flagged(variant, real):
     """The classic Sage-Husa failure: noise-free steady driving makes the bracket of (15b)
     negative. Without the floor Q turns negative, the covariance loses positive definiteness and
     the repair must catch it, in C and reference alike, with finite states; with the floor (the
     default) it never happens."""
-    literal = variant(vehicle_text, noise_safeguard="none")
-    est, c = compiled(literal, "aukf", real)
+    literal = variant("estimator.aukf", noise_safeguard="none")
+    est, c = compile_estimator(literal, "aukf", real)
     inputs = as_seen_by(real, steady_turn(literal, est))
     out, states = c.run(inputs)
     repaired = (out[:, -1].astype(int) & status.COVARIANCE_REPAIRED) > 0
@@ -181,14 +169,14 @@ def test_non_positive_definite_covariance_is_repaired_and_flagged(vehicle_text, 
     ref_out, _ = run_reference(REFERENCES["aukf"], literal, inputs)
     assert np.array_equal(ref_out[:, -1], out[:, -1])                # same steps flagged
     assert out[:, 0] == pytest.approx(ref_out[:, 0], abs=1e-9 if real == "double" else 1e-4)
-    default = variant(vehicle_text)
-    est, c = compiled(default, "aukf", real)
+    default = variant("estimator.aukf")
+    est, c = compile_estimator(default, "aukf", real)
     out, _ = c.run(as_seen_by(real, steady_turn(default, est)))
     assert not np.any(out[:, -1].astype(int) & status.COVARIANCE_REPAIRED)
 
 
 def test_sage_husa_keeps_q_between_floor_and_ceiling(config):
-    est, c = compiled(config, "aukf")
+    est, c = compile_estimator(config, "aukf")
     log = Case.of("dlc", speed_kmh=120.0).simulate(config, 100.0)
     _, states = c.run(log.matrix(est.inputs.names))
     s = config.settings("aukf")
@@ -203,7 +191,7 @@ def test_sage_husa_keeps_q_between_floor_and_ceiling(config):
 
 @pytest.mark.parametrize("name", ["ukf", "aukf"])
 def test_abusive_inputs_stay_finite(config, name):
-    est, c = compiled(config, name)
+    est, c = compile_estimator(config, name)
     log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
     inputs = log.matrix(est.inputs.names)
     column = est.inputs.index("ay")
@@ -213,7 +201,7 @@ def test_abusive_inputs_stay_finite(config, name):
 
 
 def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(config):
-    est, c = compiled(config, "ukf")
+    est, c = compile_estimator(config, "ukf")
     log = Case.of("low_speed").simulate(config, 100.0)
     inputs = log.matrix(est.inputs.names)
     out, states = c.run(inputs)
@@ -235,13 +223,13 @@ def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(conf
     assert np.array_equal(np.delete(states[k + 1], holding), np.delete(states[k], holding))
 
 
-def test_wheel_speed_mode_tracks_speed_and_free_rolling_does_not_need_wheels(config, vehicle_text):
+def test_wheel_speed_mode_tracks_speed_and_free_rolling_does_not_need_wheels(config, variant):
     log = Case.of("dlc", speed_kmh=120.0).simulate(config, 100.0)
-    est, c = compiled(config, "ukf")
+    est, c = compile_estimator(config, "ukf")
     out, _ = c.run(log.matrix(est.inputs.names))
     assert np.abs(out[:, 1] - log["vx_ref"]).max() < 0.2
-    free = variant(vehicle_text, "ukf", longitudinal_force="free_rolling")
-    est, c = compiled(free, "ukf")
+    free = variant("estimator.ukf", longitudinal_force="free_rolling")
+    est, c = compile_estimator(free, "ukf")
     assert not any(n.startswith("omega") for n in est.inputs.names)
     out, states = c.run(log.matrix(est.inputs.names))
     assert np.all(np.isfinite(out))
@@ -252,9 +240,9 @@ def test_wheel_speed_mode_tracks_speed_and_free_rolling_does_not_need_wheels(con
     ({"process_noise": [1e-5, 1e-5]}, "expected a list of 6 numbers > 0"),
     ({"process_noise_max": [1e-6, 1, 1, 1, 1, 1]}, "expected every entry above its process_noise entry"),
 ])
-def test_settings_errors_are_one_line(vehicle_text, edit, message):
+def test_settings_errors_are_one_line(variant, edit, message):
     with pytest.raises(ParameterError) as error:
-        variant(vehicle_text, **edit)
+        variant("estimator.aukf", **edit)
     assert message in str(error.value) and "\n" not in str(error.value)
 
 
@@ -270,10 +258,10 @@ def test_float_code_keeps_the_speed_within_a_millimetre_per_second(config, name)
         assert result.outputs[1].name == "vx" and result.outputs[1].max_abs < 1e-3
 
 
-def test_an_estimate_outside_the_envelope_restarts_the_filter(config, vehicle_text):
+def test_an_estimate_outside_the_envelope_restarts_the_filter(config, variant):
     """Beyond the spec: when u leaves the measured v_x by more than restart_speed_error the filter
     restarts from that sample and says so; with 0 it never does."""
-    est, c = compiled(config, "ukf")
+    est, c = compile_estimator(config, "ukf")
     log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
     inputs = log.matrix(est.inputs.names)
     inputs[300:, est.inputs.index("vx")] += 8.0          # the ECU speed jumps away from the wheels
@@ -284,7 +272,7 @@ def test_an_estimate_outside_the_envelope_restarts_the_filter(config, vehicle_te
     restart[est.states.index("holding")] = 0
     assert states[301] == pytest.approx(restart, rel=1e-12, abs=1e-15)
     assert out[300, 1] == inputs[300, est.inputs.index("vx")] and out[300, 0] == 0.0
-    never = variant(vehicle_text, "ukf", restart_speed_error=0.0, restart_sideslip=0.0)
-    est, c = compiled(never, "ukf")
+    never = variant("estimator.ukf", restart_speed_error=0.0, restart_sideslip=0.0)
+    est, c = compile_estimator(never, "ukf")
     out, _ = c.run(inputs)
     assert not np.any(out[:, -1].astype(int) & status.FILTER_RESTARTED)

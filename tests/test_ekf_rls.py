@@ -12,28 +12,21 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator
 from harness.scenarios import Case
-from harness.vehicles import with_settings
 from model import filters, status
 from model.bicycle import GRAVITY
-from model.estimators import build, ekf_rls
+from model.estimators import ekf_rls
 from model.params import parse_vehicle
 
 NAME = "ekf_rls"
 
 
-def variant(vehicle_text, **keys):
-    return parse_vehicle(with_settings(vehicle_text, f"estimator.{NAME}", **keys), "ekf_rls.toml",
-                         "c_class")
-
-
 def run(config, case, rate=100.0):
     config = config.with_sample_time(1.0 / rate) if rate != 100.0 else config
-    est = build(NAME, config)
+    est, compiled = compile_estimator(config, NAME)
     log = case.simulate(config, rate)
-    outputs, states = load_estimator(est, render(config, NAME)).run(log.matrix(est.inputs.names))
+    outputs, states = compiled.run(log.matrix(est.inputs.names))
     return est, log, outputs, states
 
 
@@ -76,10 +69,10 @@ def test_filtered_derivative_matches_scipy():
     assert (n, -n, d) == pytest.approx((b0, b1, a1), rel=1e-12)
 
 
-def test_integral_only_is_the_free_integration_of_the_spec(vehicle_text):
+def test_integral_only_is_the_free_integration_of_the_spec(variant):
     """weighting = integral_only: beta_k = beta_k-1 + T((a_y cos b - a_x sin b) / (vx / cos b) - r)
     [36], from beta_0 = 0."""
-    config = variant(vehicle_text, weighting="integral_only", roll_gradient=0.0)
+    config = variant(f"estimator.{NAME}", weighting="integral_only", roll_gradient=0.0)
     est, log, outputs, _ = run(config, Case.of("dlc", speed_kmh=80.0))
     beta = 0.0
     expected = []
@@ -90,8 +83,8 @@ def test_integral_only_is_the_free_integration_of_the_spec(vehicle_text):
     assert np.all(outputs[:, est.outputs.index("weight")] == 1.0)
 
 
-def test_plain_ekf_keeps_the_vehicle_file_stiffness_and_never_blends(vehicle_text):
-    config = variant(vehicle_text, stiffness="constant")
+def test_plain_ekf_keeps_the_vehicle_file_stiffness_and_never_blends(variant):
+    config = variant(f"estimator.{NAME}", stiffness="constant")
     est, _, outputs, _ = run(config, Case.of("dlc", speed_kmh=80.0))
     assert np.all(outputs[:, est.outputs.index("c_front")] == config.vehicle["cornering_stiffness_front"])
     assert np.all(outputs[:, est.outputs.index("weight")] == 0.0)
@@ -133,14 +126,14 @@ def test_inverted_bands_are_one_line_errors(vehicle_text, edit, message):
 
 
 @pytest.fixture(scope="module")
-def dlc_at_1khz(vehicle_text):
+def dlc_at_1khz(variant):
     """(estimator, log, outputs, states) of the vehicle file's ekf_rls (kinematic_slip) and of the
     paper's literal regressor on the 80 km/h DLC, mu 1.0, at the paper's 1 kHz."""
     from bench.seed001 import LITERAL
 
     runs = {}
     for label, keys in (("kinematic", {}), ("literal", LITERAL)):
-        runs[label] = run(variant(vehicle_text, **keys), Case.of("dlc", speed_kmh=80.0), 1000.0)
+        runs[label] = run(variant(f"estimator.{NAME}", **keys), Case.of("dlc", speed_kmh=80.0), 1000.0)
     return runs
 
 

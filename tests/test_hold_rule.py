@@ -7,11 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator
 from harness.reference import kf2dof as reference
 from model import status
-from model.estimators import build
 
 NAN, INF = math.nan, math.inf
 GOOD = [0.02, 25.0, 1.5, 0.1]  # delta, vx, ay, r
@@ -19,7 +17,7 @@ GOOD = [0.02, 25.0, 1.5, 0.1]  # delta, vx, ay, r
 
 @pytest.fixture(scope="module")
 def compiled(config):
-    return load_estimator(build("kf2dof", config), render(config, "kf2dof"))
+    return compile_estimator(config, "kf2dof")[1]
 
 
 @pytest.fixture(scope="module")

@@ -12,28 +12,23 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator
 from harness.reference import REFERENCES
 from harness.reference.particle import _resample
 from harness.reference.pcg32 import MASK, MULTIPLIER, Stream
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
-from harness.vehicles import load_vehicle, with_settings
+from harness.vehicles import load_vehicle
 from harness.verify import verify_estimator
 from model import status
 from model.estimators import build, pf
-from model.params import ParameterError, parse_vehicle
+from model.params import ParameterError
 
 NAMES = (pf.IMPROVED, pf.ADAPTIVE)
+TABLE = f"estimator.{pf.IMPROVED}"
 HEAD = len(pf.K_NAMES) + 1
 PARTICLES_AT = HEAD + 4
 SIGMAS = slice(pf.SHARED.index("sigma_ax"), pf.SHARED.index("sigma_r") + 1)
-
-
-def variant(vehicle_text, table=pf.IMPROVED, **keys):
-    return parse_vehicle(with_settings(vehicle_text, f"estimator.{table}", **keys), "v.toml",
-                         "c_class")
 
 
 def particles_of(state, count):
@@ -78,8 +73,7 @@ def test_normals_are_standard_normal(bits):
 def test_c_init_leaves_the_stream_where_the_spec_says(config, real, outputs_per_normal):
     """The C seeds pcg32_srandom_r(seed, seed) and draws 5 normals per particle, each from two
     uniforms of two outputs (double, 53 bits) or one output (float, 24 bits)."""
-    est = build(pf.IMPROVED, config)
-    c = load_estimator(est, render(config, pf.IMPROVED, real))
+    est, c = compile_estimator(config, pf.IMPROVED, real)
     _, states = c.run(np.array([[20.0, 0.0, 0.0, 0.0]]))
     settings = config.settings(pf.IMPROVED)
     stream = Stream.seeded(settings["seed"], settings["seed"])
@@ -113,10 +107,10 @@ def test_propagation_signs_and_correction(config, name, gain):
     assert new[5] == pytest.approx(expected, rel=1e-14)
 
 
-def test_exact_importance_weight_is_the_density_ratio(vehicle_text):
+def test_exact_importance_weight_is_the_density_ratio(variant):
     """log p(x'|x) - log q(x'|x, z) over the corrected entries, added to the likelihood."""
-    config = variant(vehicle_text, weights="exact_importance")
-    plain = variant(vehicle_text)
+    config = variant(TABLE, weights="exact_importance")
+    plain = variant(TABLE)
     normals = [0.3, -0.2, 0.7, -1.1, 0.4]
     sigmas = (0.5, 0.8, 0.03)
     s = shared(config, pf.IMPROVED, 1.0, 2.0, 0.3, sigmas=sigmas)
@@ -190,12 +184,11 @@ def test_points_near_a_cumulative_weight_and_their_alternatives():
     assert sorted(flipped[:, 0].tolist()) == [0.0, 2.0, 4.0, 4.0, 4.0]
 
 
-def test_effective_size_mode_resamples_only_below_half(vehicle_text):
-    config = variant(vehicle_text, resampling="effective_size")
-    est = build(pf.IMPROVED, config)
+def test_effective_size_mode_resamples_only_below_half(variant):
+    config = variant(TABLE, resampling="effective_size")
+    est, c = compile_estimator(config, pf.IMPROVED)
     log = Case.of("dlc", speed_kmh=120.0).simulate(config, 100.0, 1)
-    inputs = log.matrix(est.inputs.names)
-    outputs, states = load_estimator(est, render(config, pf.IMPROVED)).run(inputs)
+    outputs, states = c.run(log.matrix(est.inputs.names))
     n = config.settings(pf.IMPROVED)["particles"]
     n_eff = outputs[:, est.outputs.index("n_eff")]
     uniform = np.array([np.all(particles_of(s, n)[:, -1] == 1.0 / n) for s in states[1:]])
@@ -208,8 +201,7 @@ def test_effective_size_mode_resamples_only_below_half(vehicle_text):
 # ---- hold rule --------------------------------------------------------------------------------
 
 def test_invalid_input_holds_particles_and_stream(config):
-    est = build(pf.IMPROVED, config)
-    c = load_estimator(est, render(config, pf.IMPROVED))
+    est, c = compile_estimator(config, pf.IMPROVED)
     _, states = c.run(np.tile([25.0, 0.3, 1.0, 0.1], (50, 1)))
     state, output = c.step(states[-1], np.array([25.0, np.nan, 1.0, 0.1]))
     assert int(output[est.outputs.index("status")]) == status.INVALID_INPUT
@@ -220,8 +212,7 @@ def test_invalid_input_holds_particles_and_stream(config):
 
 
 def test_low_speed_hold_then_a_new_particle_set(config):
-    est = build(pf.IMPROVED, config)
-    c = load_estimator(est, render(config, pf.IMPROVED))
+    est, c = compile_estimator(config, pf.IMPROVED)
     n = config.settings(pf.IMPROVED)["particles"]
     inputs = np.vstack([np.tile([25.0, 0.0, 0.0, 0.0], (50, 1)),
                         np.tile([2.0, 0.0, 0.0, 0.0], (20, 1)),       # below vx_min: hold
@@ -238,16 +229,15 @@ def test_low_speed_hold_then_a_new_particle_set(config):
 
 # ---- options ----------------------------------------------------------------------------------
 
-def test_wheel_speed_observation_bounds_the_speed(vehicle_text):
+def test_wheel_speed_observation_bounds_the_speed(variant):
     """D2: with the logged v_x in z the speed no longer drifts over a long run."""
     case = Case.of("continuous_dlc")
     errors = {}
     for observation in ("inertial", "wheel_speed"):
-        config = variant(vehicle_text, observation=observation)
-        est = build(pf.IMPROVED, config)
+        config = variant(TABLE, observation=observation)
+        est, c = compile_estimator(config, pf.IMPROVED)
         log = case.simulate(config, 100.0, 1)
-        outputs, _ = load_estimator(est, render(config, pf.IMPROVED)).run(
-            log.matrix(est.inputs.names))
+        outputs, _ = c.run(log.matrix(est.inputs.names))
         errors[observation] = np.mean(np.abs(outputs[:, 1] - log["vx_ref"]))
     assert errors["wheel_speed"] < 0.1 < errors["inertial"]
 
@@ -296,12 +286,11 @@ def test_float_c_equals_the_reference_every_step_flips_explained(config, name):
         assert result.flips < 0.05 * result.samples, result
 
 
-def test_verify_catches_a_wrong_correction_gain(vehicle_text):
+def test_verify_catches_a_wrong_correction_gain(variant):
     """The C generated with G = 0.5 against a reference that believes G = 0.51: fails."""
-    config = variant(vehicle_text)
-    wrong = variant(vehicle_text, correction_gain=[0.51, 0.5, 0.5])
-    est = build(pf.IMPROVED, config)
-    c = load_estimator(est, render(config, pf.IMPROVED))
+    config = variant(TABLE)
+    wrong = variant(TABLE, correction_gain=[0.51, 0.5, 0.5])
+    est, c = compile_estimator(config, pf.IMPROVED)
     inputs = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1).matrix(est.inputs.names)
     _, c_states = c.run(inputs)
     _, r_states = run_reference(REFERENCES[pf.IMPROVED], wrong, inputs)
@@ -309,8 +298,7 @@ def test_verify_catches_a_wrong_correction_gain(vehicle_text):
 
 
 def test_the_beta_output_and_the_speed_rule(config):
-    est = build(pf.IMPROVED, config)
-    c = load_estimator(est, render(config, pf.IMPROVED))
+    est, c = compile_estimator(config, pf.IMPROVED)
     outputs, states = c.run(np.tile([20.0, 0.0, 0.0, 0.0], (10, 1)))
     state = states[-1].copy()
     state[0] = 2.0                       # particles say 20 m/s; the head is overwritten anyway

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator, load_estimator
 from harness.scenarios import Case
 from model import status
 from model.calibration import baked
@@ -24,8 +24,8 @@ def estimator(config):
 
 
 @pytest.fixture(scope="module")
-def compiled(config, estimator):
-    return load_estimator(estimator, render(config, "switching"))
+def compiled(config):
+    return compile_estimator(config, "switching")[1]
 
 
 def run(compiled, estimator, config, case):
