@@ -30,6 +30,7 @@ from harness.reference import REFERENCES
 from harness.scenarios import Case
 from harness.targets import TARGETS, available, build_for_target
 from harness.vehicles import load_vehicle
+from model.estimator import Particles
 from model.estimators import build
 from model.params import parse_vehicle
 
@@ -113,7 +114,7 @@ def main(argv: list[str] | None = None) -> None:
                      f"{'met' if g / h <= TARGET_RATIO else 'MISSED'} | "
                      f"{generated.ns_per_step(inputs_file):.1f} | {hand.ns_per_step(inputs_file):.1f} |")
 
-    if any(build(name, config).particles for name in config.estimators):
+    if any(isinstance(build(name, config).structure, Particles) for name in config.estimators):
         lines += ["", "## Particle filters by particle count (seed 003)", "",
                   f"{seed003.COSTS_CASE.label}; instructions per step as above; the Cortex-M4F "
                   "float build's code, the caller-owned state (4 B per entry: 6 per particle and "

@@ -19,7 +19,7 @@ import jinja2
 from codegen.kernel import generate_kernel
 from codegen.precision import literal
 from model import status
-from model.estimator import RNG_WORDS, Estimator
+from model.estimator import RNG_WORDS
 from model.estimators import build
 from model.params import VehicleConfig
 from model.schema import REALS
@@ -72,7 +72,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "version": generator_version(),
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
-        "ops": _operation_counts(estimator),
+        "ops": estimator.operation_counts,
         "status_bits": status.STATUS_BITS,
         "kernel": kernel,
         "rng_words": RNG_WORDS,
@@ -123,18 +123,6 @@ def _comment(text: str, style: str) -> str:
     if style == "hash":
         return "".join(f"# {line}".rstrip() + "\n" for line in lines)
     return "<!--\n" + "\n".join(lines) + "\n-->\n"
-
-
-def _operation_counts(estimator: Estimator) -> dict[str, int]:
-    """CasADi instructions of init and step; a particle filter's count is its kernels' for its
-    particle count (the template's draws, weights and resampling come on top)."""
-    particles = estimator.particles
-    if particles is None:
-        return {"step": estimator.step.n_instructions(), "init": estimator.init.n_instructions()}
-    n = particles.count
-    return {"step": particles.prepare.n_instructions() + n * particles.propagate.n_instructions()
-            + particles.finish.n_instructions(),
-            "init": particles.init.n_instructions() + n * particles.spawn.n_instructions()}
 
 
 def write(files: dict[str, str], folder: Path) -> None:

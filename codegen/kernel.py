@@ -51,21 +51,8 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     base = f"vse_{estimator.name}_kernel"
     options = kernel_options(real, f"{base}_")
     generator = ca.CodeGenerator(f"{base}.c", options)
-    if estimator.particles is not None:
-        for function in estimator.particles.functions:
-            generator.add(function)
-    else:
-        generator.add(estimator.init)
-    if estimator.schemes is not None:
-        generator.add(estimator.schemes.select)
-        for _, function in estimator.schemes.branches:
-            generator.add(function)
-    elif estimator.repeated is not None:
-        for function in (estimator.repeated.prepare, estimator.repeated.each,
-                         estimator.repeated.finish):
-            generator.add(function)
-    elif estimator.particles is None:
-        generator.add(estimator.step)
+    for function in (estimator.init, *estimator.structure.kernel_functions):
+        generator.add(function)
     with tempfile.TemporaryDirectory(prefix="vsegen-kernel-") as tmp:
         generator.generate(tmp + "/")
         c_text = (Path(tmp) / f"{base}.c").read_text()

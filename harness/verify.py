@@ -13,6 +13,7 @@ from harness.parallel import Workers
 from harness.reference import LONG_DOUBLE, REFERENCES
 from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
+from model.estimator import Particles
 from model.estimators import build
 from model.params import VehicleConfig
 
@@ -84,7 +85,7 @@ def verify_case(config: VehicleConfig, name: str, case: Case, seed: int, real: s
     log = case.simulate(config, 1.0 / config.sample_time, seed)
     inputs = as_seen_by(real, log.matrix(estimator.inputs.names))
     c_out, c_states = compiled.run(inputs)
-    if estimator.particles is not None and (real == "float" or params == "calibratable"):
+    if isinstance(estimator.structure, Particles) and (real == "float" or params == "calibratable"):
         return _particles_step_by_step(estimator, reference, config, case, len(log), c_states,
                                        c_out, inputs, tolerance, step_scales, real)
     r_out, r_states = run_reference(reference, config, inputs)
@@ -122,7 +123,7 @@ def _prepared(config: VehicleConfig, name: str, real: str, params: str):
     if key not in _PREPARED:
         estimator, compiled = compile_estimator(config, name, real, params)
         reference = REFERENCES[name]
-        if estimator.particles is not None and real == "float":
+        if isinstance(estimator.structure, Particles) and real == "float":
             reference = reference.drawing(24)    # the float C draws 24-bit uniforms (D5)
         tolerance = for_estimator(real, estimator.rounding_gain, name in LONG_DOUBLE)
         _PREPARED[key] = (estimator, reference, compiled, tolerance)

@@ -1,23 +1,28 @@
-"""The one shape every estimator has, and the registry of estimators.
+"""The one shape every estimator has, and the kernel structures its step comes in.
 
     state_0 = init(input_0);   state_k+1, output_k = step(state_k, input_k)   for k = 0, 1, ...
 
 ``init`` and ``step`` are CasADi SX Functions of flat vectors with named layouts, so codegen, the
 harness, equivalence checks and benchmarks are written once for all estimators.
 
-An estimator that switches between schemes (seed 000) also has :class:`Schemes`: a ``select``
-Function that updates the shared part of the state and picks a scheme, and one Function per
-scheme. The generated C then evaluates only the chosen scheme (CasADi's SX ``if_else`` would
-evaluate every branch); ``step`` is their composition, for Python.
+How the generated C computes a step is the estimator's *structure*, exactly one of:
 
-An estimator whose step applies one computation to several items (the unscented transform's
-sigma-point pairs, seed 002) has :class:`Repeated` instead: the generated C loops over the items
-with one copy of that code rather than unrolling it, and ``step`` is again the composition.
+* :class:`SingleStep`: one ``step`` Function, called once per sample;
+* :class:`Schemes`: an estimator that switches between schemes (seed 000) has a ``select``
+  Function that updates the shared part of the state and picks a scheme, and one Function per
+  scheme; the generated C evaluates only the chosen scheme (CasADi's SX ``if_else`` would evaluate
+  every branch);
+* :class:`Repeated`: a step that applies one computation to several items (the unscented
+  transform's sigma-point pairs, seed 002); the generated C loops over the items with one copy of
+  that code rather than unrolling it;
+* :class:`Particles`: a particle filter (seed 003), whose random draws, weights, estimate and
+  resampling are generic template C; its model is a few Functions applied per particle. It has no
+  composed ``step`` (random numbers and resampling are no SX expressions); the NumPy reference and
+  the C are compared instead.
 
-A particle filter (seed 003) has :class:`Particles`: its random draws, weights, estimate and
-resampling are generic template C (``codegen/templates/particles.c.j2``); its model is a few
-Functions applied per particle. It has no composed ``step`` (random numbers and resampling are no
-SX expressions); the NumPy reference and the C are compared instead.
+Each structure names its kernel Functions (``kernel_functions``, generated after ``init``), its
+operation count per step and the template fragments (``codegen/templates/``) that call them, so
+the code generator and the API template never branch on the kind of estimator.
 """
 
 from __future__ import annotations
@@ -31,34 +36,75 @@ from model.calibration import Parameters
 from model.layout import Layout
 
 
+class _ComposedStep:
+    """Operation counts of a structure with a composed ``step`` Function."""
+
+    step: ca.Function | None
+    header_template = "state_index.h.j2"
+    system_headers: tuple[str, ...] = ()
+
+    def step_operations(self) -> int:
+        return self.step.n_instructions()
+
+    def init_operations(self, init: ca.Function) -> int:
+        return init.n_instructions()
+
+
 @dataclass(frozen=True)
-class Schemes:
+class SingleStep(_ComposedStep):
+    """A step that is one Function: ``step(state, input[, params]) -> (state_next, output)``."""
+
+    step: ca.Function
+    templates = ("init.c.j2", "step_single.c.j2")
+
+    @property
+    def kernel_functions(self) -> tuple[ca.Function, ...]:
+        return (self.step,)
+
+
+@dataclass(frozen=True)
+class Schemes(_ComposedStep):
     """Only-one-scheme-per-step structure.
 
     ``select(state, input[, params]) -> (state_mid, scratch)``; ``scratch[0]`` is the index of the
     scheme to run. ``branches[i] = (label, fn)`` with
-    ``fn(state_mid, input, scratch[, params]) -> (state_next, output)``.
+    ``fn(state_mid, input, scratch[, params]) -> (state_next, output)``. ``step`` is their
+    composition (every scheme evaluated, the chosen one selected), for Python (set by the
+    builder once it has made it).
     """
 
     select: ca.Function
     branches: tuple[tuple[str, ca.Function], ...]
     scratch: Layout
+    step: ca.Function | None = None
+    templates = ("init.c.j2", "step_schemes.c.j2")
+
+    @property
+    def kernel_functions(self) -> tuple[ca.Function, ...]:
+        return (self.select, *(fn for _, fn in self.branches))
 
 
 @dataclass(frozen=True)
-class Repeated:
+class Repeated(_ComposedStep):
     """A step whose bulk is one Function applied to ``count`` items.
 
     ``prepare(state, input[, params]) -> (items, shared)``: ``items`` holds the ``count`` item
     inputs back to back; ``each(shared, item[, params]) -> (result)``;
     ``finish(state, input, results[, params]) -> (state_next, output)``, ``results`` the
-    ``count`` results back to back.
+    ``count`` results back to back. ``step`` is the composition, for Python (set by the
+    builder once it has made it: ``dataclasses.replace(repeated, step=step)``).
     """
 
     prepare: ca.Function
     each: ca.Function
     finish: ca.Function
     count: int
+    step: ca.Function | None = None
+    templates = ("init.c.j2", "step_repeated.c.j2")
+
+    @property
+    def kernel_functions(self) -> tuple[ca.Function, ...]:
+        return self.prepare, self.each, self.finish
 
 
 RNG_WORDS = 4
@@ -103,9 +149,27 @@ class Particles:
         """Standard normal draws per particle and sample."""
         return self.propagate.numel_in(2)
 
+    step = None
+    """No composed step: random numbers and resampling are no SX expressions."""
+    templates = ("particles.c.j2",)
+    header_template = "particle_index.h.j2"
+    system_headers = ("math.h",)
+
     @property
-    def functions(self) -> tuple[ca.Function, ...]:
-        return self.init, self.prepare, self.spawn, self.propagate, self.finish
+    def kernel_functions(self) -> tuple[ca.Function, ...]:
+        return self.prepare, self.spawn, self.propagate, self.finish
+
+    def step_operations(self) -> int:
+        """The kernels' count for the particle count (the template's draws, weights and
+        resampling come on top)."""
+        return (self.prepare.n_instructions() + self.count * self.propagate.n_instructions()
+                + self.finish.n_instructions())
+
+    def init_operations(self, init: ca.Function) -> int:
+        return init.n_instructions() + self.count * self.spawn.n_instructions()
+
+
+Structure = SingleStep | Schemes | Repeated | Particles
 
 
 @dataclass(frozen=True)
@@ -118,8 +182,7 @@ class Estimator:
         inputs, states, outputs: layouts of the flat vectors.
         init: Function ``init(input[, params]) -> (state)``; for a particle filter its
             ``Particles.init`` (the head of the state; the template draws the particles).
-        step: Function ``step(state, input[, params]) -> (state_next, output)``; None for a
-            particle filter (see ``particles``).
+        structure: how the generated C computes a step (module docstring).
         parameters: where the parameter values come from (``params`` is an input when they are
             calibratable).
         notes: facts worth printing in generated files (e.g. discretisation error bound).
@@ -134,13 +197,23 @@ class Estimator:
     states: Layout
     outputs: Layout
     init: ca.Function
-    step: ca.Function | None
+    structure: Structure
     parameters: Parameters
     notes: Mapping[str, str] = field(default_factory=dict)
-    schemes: Schemes | None = None
     rounding_gain: float = 1.0
-    repeated: Repeated | None = None
-    particles: Particles | None = None
+
+    @property
+    def step(self) -> ca.Function | None:
+        """``step(state, input[, params]) -> (state_next, output)`` for Python; None for a
+        particle filter."""
+        return self.structure.step
+
+    @property
+    def operation_counts(self) -> dict[str, int]:
+        """CasADi instructions of one step and of init (a particle filter's for its particle
+        count, without the template's draws and resampling)."""
+        return {"step": self.structure.step_operations(),
+                "init": self.structure.init_operations(self.init)}
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

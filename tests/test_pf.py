@@ -94,7 +94,7 @@ def shared(config, name, ax, ay, r, vx=20.0, sigmas=(0.2, 0.2, 0.01)):
 def test_propagation_signs_and_correction(config, name, gain):
     """(14)-(15) with zero noise: a, r move by G (z - own value); the speeds follow (5)-(6), ISO
     signs (a left turn, r > 0, turns v_x into negative v_y)."""
-    propagate = build(name, config).particles.propagate
+    propagate = build(name, config).structure.propagate
     T = config.sample_time
     particle = [20.0, 0.0, 0.0, 0.0, 0.5, 1.0 / 200]
     new = np.array(propagate(shared(config, name, 1.0, 2.0, 0.5), particle, [0.0] * 5)).ravel()
@@ -115,8 +115,8 @@ def test_exact_importance_weight_is_the_density_ratio(variant):
     sigmas = (0.5, 0.8, 0.03)
     s = shared(config, pf.IMPROVED, 1.0, 2.0, 0.3, sigmas=sigmas)
     particle = [20.0, 0.1, 0.2, -0.5, 0.1, 1.0 / 200]
-    exact = float(build(pf.IMPROVED, config).particles.propagate(s, particle, normals)[5])
-    likelihood = float(build(pf.IMPROVED, plain).particles.propagate(s, particle, normals)[5])
+    exact = float(build(pf.IMPROVED, config).structure.propagate(s, particle, normals)[5])
+    likelihood = float(build(pf.IMPROVED, plain).structure.propagate(s, particle, normals)[5])
     ratio = 0.0
     for old, z, sigma, n in zip(particle[2:5], (1.0, 2.0, 0.3), sigmas, normals[2:]):
         correction = 0.5 * (z - old)
@@ -128,7 +128,7 @@ def test_exact_importance_weight_is_the_density_ratio(variant):
 def test_adaptive_noise_follows_16(config):
     """sigma = clamp(sigma_0 + kappa |z - previous estimate|, sigma_0, sigma_max); the speeds'
     sigma_v = sigma_v0 + T sigma_a."""
-    prepare = build(pf.IMPROVED, config).particles.prepare
+    prepare = build(pf.IMPROVED, config).structure.prepare
     s = config.settings(pf.IMPROVED)
     head = [20.0, 0.0, 0.0, 0.0, 0.0, 0.0]
     small = np.array(prepare(head, [20.0, 1.0, 0.0, 0.02])).ravel()
@@ -140,7 +140,7 @@ def test_adaptive_noise_follows_16(config):
 
 
 def test_roll_correction_of_the_lateral_acceleration(config):
-    prepare = build(pf.IMPROVED, config).particles.prepare
+    prepare = build(pf.IMPROVED, config).structure.prepare
     z = np.array(prepare([20.0, 0, 0, 0, 0, 0], [20.0, 0.0, 5.0, 0.0])).ravel()
     assert z[3] == pytest.approx(5.0 / (1 + 9.81 * config.settings(pf.IMPROVED)["roll_gradient"]))
 

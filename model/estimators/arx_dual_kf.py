@@ -32,7 +32,7 @@ import casadi as ca
 from model import discretize, kalman, status
 from model.bicycle import bicycle_matrices
 from model.calibration import Parameters
-from model.estimator import Estimator, make_functions
+from model.estimator import Estimator, SingleStep, make_functions
 from model.estimators.kf2dof import zoh_plan
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
@@ -205,7 +205,7 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, states, outputs, inputs, state, init_state,
                                 next_state, output, params)
     return Estimator(NAME, "yaw rate from an ARX model with a dual Kalman filter (seed 004)",
-                     INPUTS, states, outputs, init, step, params,
+                     INPUTS, states, outputs, init, SingleStep(step), params,
                      notes(params))
 
 

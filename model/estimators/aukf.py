@@ -29,6 +29,8 @@ X(t_0) = [26.6667, 0, ...] is its test speed), P_0, q_0 = 0, Q_0 from the vehicl
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 
 from model import kalman, status, unscented
@@ -286,9 +288,10 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     numeric = params.numeric.settings(name)
     ut = unscented.Weights(N, numeric["ut_alpha"], numeric["ut_beta"], numeric["ut_kappa"])
     return Estimator(name, f"speeds, yaw rate and sideslip: {variant} on the 3-DOF HSRI model "
-                           "(seed 002)", inputs_layout, states, outputs, init, step, params,
+                           "(seed 002)", inputs_layout, states, outputs, init, replace(repeated, step=step),
+                     params,
                      {"longitudinal_force": numeric["longitudinal_force"],
                       "sigma_points": f"{2 * N + 1}, weights W_m0 = {ut.mean0:.7g}, "
                                       f"W_i = {ut.other:.7g}; the C propagates the {N} pairs "
                                       "in a loop"},
-                     rounding_gain=rounding_gain(ut, params.numeric, name), repeated=repeated)
+                     rounding_gain=rounding_gain(ut, params.numeric, name))

@@ -41,7 +41,7 @@ import casadi as ca
 from model import filters, kalman
 from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
-from model.estimator import Estimator, make_functions
+from model.estimator import Estimator, SingleStep, make_functions
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
 from model.sensors import roll_corrected
@@ -349,7 +349,7 @@ def build(params: Parameters) -> Estimator:
     per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",
-                     INPUTS, layout, OUTPUTS, init, step, params,
+                     INPUTS, layout, OUTPUTS, init, SingleStep(step), params,
                      notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
                             "stiffness_regressor": regressor,
                             "forgetting_factor_per_sample": f"{per_sample:.6g}"},

@@ -12,7 +12,7 @@ from __future__ import annotations
 import casadi as ca
 
 from model.calibration import Parameters
-from model.estimator import Estimator, make_functions
+from model.estimator import Estimator, SingleStep, make_functions
 from model.estimators import kf2dof
 from model.estimators.seed000 import COVARIANCE, INPUTS, Seed000
 from model.guard import hold
@@ -66,5 +66,5 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, output, params)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
-                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, step, params,
+                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, SingleStep(step), params,
                      seed.notes())

@@ -21,7 +21,7 @@ import casadi as ca
 from model import discretize, kalman
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
-from model.estimator import Estimator, make_functions
+from model.estimator import Estimator, SingleStep, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
 from model.layout import Layout, Signal
 
@@ -172,4 +172,4 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
-                     INPUTS, STATES, OUTPUTS, init, step, params, zoh_note(params))
+                     INPUTS, STATES, OUTPUTS, init, SingleStep(step), params, zoh_note(params))

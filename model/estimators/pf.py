@@ -137,13 +137,12 @@ def _build(params: Parameters, name: str) -> Estimator:
                else "adaptive PF (the baseline of seed 003)")
     return Estimator(
         name, f"longitudinal and lateral speed and sideslip: {variant} on the kinematic model, "
-              f"{count} particles", inputs_layout, states, outputs, particles.init, None, params,
+              f"{count} particles", inputs_layout, states, outputs, particles.init, particles, params,
         {"particles": f"{count}, systematic resampling "
                       f"{'at every sample' if numeric['resampling'] == 'every_sample' else 'when N_eff < N/2'}",
          "random_stream": f"PCG32 (XSH RR), seed {numeric['seed']}; uniforms of "
                           "53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)",
-         "observation": numeric["observation"]},
-        particles=particles)
+         "observation": numeric["observation"]})
 
 
 def _measured(params: Parameters, name: str, u) -> dict[str, ca.SX]:

@@ -18,6 +18,8 @@ Only the active scheme is evaluated in the generated C (model.estimator.Schemes)
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 
 from model.calibration import Parameters
@@ -134,4 +136,4 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
-                     INPUTS, layout, OUTPUTS, init, step, params, seed.notes(), schemes)
+                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
