@@ -45,6 +45,22 @@ def _environment() -> jinja2.Environment:
     return env
 
 
+REVIEWED_FORMS: dict[str, tuple[tuple[str, str], ...]] = {
+    "kf2dof": (("float", "baked"), ("double", "calibratable"), ("float", "calibratable")),
+    "pf_improved": (("float", "baked"), ("double", "calibratable"), ("float", "calibratable")),
+}
+"""Forms other than a vehicle's [codegen] default whose output is committed to the repository's
+``generated/`` too (as ``<vehicle>/<estimator>-<real>-<params>/``), so a change to the float or
+calibratable output shows up in a reviewed diff: a plain filter and a particle filter."""
+
+
+def forms_to_write(name: str, default: tuple[str, str]) -> list[tuple[str, str, str]]:
+    """(real, params, folder name) of every form of ``name`` written to the repository's
+    ``generated/<vehicle>/``: the default first, then its REVIEWED_FORMS."""
+    others = [form for form in REVIEWED_FORMS.get(name, ()) if form != default]
+    return [(*default, name), *((real, params, f"{name}-{real}-{params}") for real, params in others)]
+
+
 def render(config: VehicleConfig, name: str, real: str | None = None,
            params: str | None = None) -> dict[str, str]:
     """All files of ``generated/<vehicle>/<name>/`` as {file name: text}; ``real`` ("double" or

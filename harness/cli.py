@@ -69,6 +69,26 @@ def _estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str]:
     return list(names) or [n for n in BUILDERS if n in config.estimators]
 
 
+def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
+           params: str | None) -> list[tuple[str, str, str]]:
+    """(real, params, folder name) to generate: the one asked for, or the vehicle file's default
+    and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS)."""
+    chosen = (real or config.codegen["real"], params or config.codegen["params"])
+    if real or params or out.resolve() != GENERATED.resolve():
+        return [(*chosen, name)]
+    return codegen.forms_to_write(name, chosen)
+
+
+def _up_to_date(files: dict[str, str], folder: Path) -> bool:
+    """Whether ``folder`` holds exactly ``files``; prints the diffs if not."""
+    diffs = codegen.check(files, folder, _display(folder))
+    for diff in diffs:
+        click.echo(diff, nl=False)
+    if not diffs:
+        console.print(f"up to date  {_display(folder)}")
+    return not diffs
+
+
 def _display(path: Path) -> str:
     try:
         return str(path.resolve().relative_to(Path.cwd()))
@@ -101,19 +121,14 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
     for path in vehicles or tuple(shipped_vehicles()):
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
-            folder = out / config.name / name
-            files = codegen.render(config, name, real, params)
-            if check_only:
-                diffs = codegen.check(files, folder, _display(folder))
-                if diffs:
+            for form_real, form_params, folder_name in _forms(config, name, out, real, params):
+                folder = out / config.name / folder_name
+                files = codegen.render(config, name, form_real, form_params)
+                if check_only and not _up_to_date(files, folder):
                     stale.append(_display(folder))
-                    for diff in diffs:
-                        click.echo(diff, nl=False)
-                else:
-                    console.print(f"up to date  {_display(folder)}")
-            else:
-                codegen.write(files, folder)
-                console.print(f"generated   {_display(folder)}  ({', '.join(sorted(files))})")
+                elif not check_only:
+                    codegen.write(files, folder)
+                    console.print(f"generated   {_display(folder)}  ({', '.join(sorted(files))})")
     if stale:
         click.echo(f"vsegen: generated code is stale in {', '.join(stale)}: run `vsegen generate`",
                    err=True)

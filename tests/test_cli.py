@@ -35,7 +35,9 @@ def test_verify_default_vehicle_prints_table():
 def test_generate_check_is_clean_on_the_repository():
     result = vsegen("generate", "--check")
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "up to date" in result.stdout
+    for folder in ("c_class/kf2dof", "c_class/kf2dof-float-calibratable",
+                   "c_class/pf_improved-float-baked", "ev_seed002/aukf"):
+        assert f"up to date  generated/{folder}\n" in result.stdout
 
 
 def test_generate_then_check_detects_an_edit(tmp_path):

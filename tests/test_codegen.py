@@ -198,3 +198,14 @@ def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, fil
                         "-DCMAKE_C_FLAGS=-Wall -Wextra -pedantic -Werror"], check=True, capture_output=True)
         result = subprocess.run(["cmake", "--build", str(build_dir)], capture_output=True, text=True)
         assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_reviewed_forms_follow_the_default_without_repeating_it():
+    from codegen.generate import forms_to_write
+    assert forms_to_write("kf2dof", ("double", "baked")) == [
+        ("double", "baked", "kf2dof"), ("float", "baked", "kf2dof-float-baked"),
+        ("double", "calibratable", "kf2dof-double-calibratable"),
+        ("float", "calibratable", "kf2dof-float-calibratable")]
+    assert forms_to_write("kf2dof", ("float", "baked"))[:2] == [
+        ("float", "baked", "kf2dof"), ("double", "calibratable", "kf2dof-double-calibratable")]
+    assert forms_to_write("switching", ("double", "baked")) == [("double", "baked", "switching")]
