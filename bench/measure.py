@@ -12,10 +12,9 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
-from codegen.generate import library_sources
+from codegen.generate import library_sources, template_environment
 from harness.targets import link_to_api
 from model.bicycle import state_matrix_norm_bound
 from model.discretize import plan_zoh
@@ -110,8 +109,7 @@ def hand_driver(config: VehicleConfig, inputs_layout) -> Driver:
 
 def _compile(code: dict[str, str], inputs_layout, files: dict[str, str], step: str,
              api: tuple[str, ...]) -> Driver:
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE), undefined=jinja2.StrictUndefined)
-    driver = env.get_template("driver.c.j2").render(n_inputs=len(inputs_layout),
+    driver = template_environment(HERE).get_template("driver.c.j2").render(n_inputs=len(inputs_layout),
                                                     fn_step=step, **code)
     folder = tempfile.TemporaryDirectory(prefix="vsegen-bench-")
     root = Path(folder.name)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import difflib
 import os
 import tempfile
+from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 
@@ -34,15 +35,18 @@ def generator_version() -> str:
     return metadata.version("vsegen")
 
 
-def _environment() -> jinja2.Environment:
-    env = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(TEMPLATES),
+@lru_cache(maxsize=8)
+def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
+    """The one jinja2 set-up of every C template in vsegen (generated code here, the harness's
+    runner and fuzz drivers, the benchmark drivers): undefined names fail, block tags leave no
+    blank lines, a template's final newline is kept."""
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(folder),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
     )
-    return env
 
 
 REVIEWED_FORMS: dict[str, tuple[tuple[str, str], ...]] = {
@@ -94,7 +98,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "rng_words": RNG_WORDS,
         "f": "f" if real == "float" else "",
     }
-    env = _environment()
+    env = template_environment()
     files = {}
     templates = TEMPLATE_FILES + (CALIBRATION_FILE if estimator.parameters.calibratable else ())
     context["library_sources"] = sorted(

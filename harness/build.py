@@ -15,10 +15,9 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
-from codegen.generate import library_sources, render
+from codegen.generate import library_sources, render, template_environment
 from harness.paths import cache_dir
 from model.estimator import Estimator
 from model.estimators import build
@@ -40,10 +39,9 @@ def compiler() -> str:
 
 def runner_source(estimator: Estimator) -> str:
     """The harness driver C for ``estimator``."""
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).parent),
-                             undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
     prefix = f"vse_{estimator.name}"
-    return env.get_template("runner.c.j2").render(est=estimator, p=prefix, P=prefix.upper())
+    template = template_environment(Path(__file__).parent).get_template("runner.c.j2")
+    return template.render(est=estimator, p=prefix, P=prefix.upper())
 
 
 def build_library(files: dict[str, str], extra_sources: dict[str, str], cc: str | None = None,

@@ -13,9 +13,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import jinja2
-
-from codegen.generate import library_sources, render
+from codegen.generate import library_sources, render, template_environment
 from model.estimators import build
 from model.guard import LIMIT_KEYS, WHEEL_SPEEDS
 from model.params import VehicleConfig
@@ -45,10 +43,8 @@ def fuzz_source(config: VehicleConfig, name: str, real: str) -> str:
     n = 0
     while n * (n + 1) // 2 < len(cov):
         n += 1
-    env = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).parent),
-                             undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
     p = f"vse_{name}"
-    return env.get_template("fuzz.c.j2").render(
+    return template_environment(Path(__file__).parent).get_template("fuzz.c.j2").render(
         est=estimator, p=p, P=p.upper(), real=real, cov_n=n, cov_indices=cov,
         limits=[repr(config.limits[LIMIT_KEYS[s]]) for s in estimator.inputs.names],
         typical=[repr(TYPICAL[s]) for s in estimator.inputs.names],
