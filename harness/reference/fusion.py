@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from harness.reference import seed000
-from harness.reference.seed000 import DYN, INPUTS, REFERENCE_SUSPECT
+from harness.reference.seed000 import DYN, INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
@@ -22,13 +22,12 @@ def init(config, u0):
 
 
 def step(config, state, u):
+    return seed000.step(config, TABLE, state, u, lambda *args: _fuse(config, *args))
+
+
+def _fuse(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
-    names_, x, status, held = seed000.begin(config, TABLE, state, u)
-    if held is not None:
-        return held
-    updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
-    status += REFERENCE_SUSPECT if suspect else 0
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
     xk, P = seed000.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
@@ -38,5 +37,4 @@ def step(config, state, u):
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
            "holding": 0.0, "mode": DYN}
-    return (np.array([new[k] for k in names_]),
-            np.array([beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]))
+    return new, [beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]

@@ -146,17 +146,22 @@ def beta(config, table, vy, vx):
     return math.atan2(vy, clamp(config, table, vx))
 
 
-def begin(config, table, state, u):
-    """Start of a step: (state names, state by name, active, status, held outcome or None).
-    When not active the held outcome is (state vector, output [0, 0, r_last, 0, status])."""
+def step(config, table, state, u, scheme):
+    """One step of a seed-000 estimator: the hold rule; when active, the shared pre-processing
+    (§2.2-2.4) and then ``scheme(x, updates, r_k, ay_f, status, u) -> (next state by name,
+    output)``, with ``x`` the state by name, ``updates`` the pre-processing's new entries and
+    ``status`` including REFERENCE_SUSPECT. When not active: the held state and the output
+    [0, 0, r_last, DYN, status]."""
     s = config.settings(table)
     names = state_names(config, table)
     x = dict(zip(names, state))
     inputs = dict(zip(INPUTS, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5)
-    if active:
-        return names, x, status, None
-    new = held(config, table, x, inputs, ok)
-    return names, x, status, (np.array([new[k] for k in names]),
-                              np.array([0.0, 0.0, x["r_last"], DYN, status]))
+    if not active:
+        new = held(config, table, x, inputs, ok)
+        return (np.array([new[k] for k in names]),
+                np.array([0.0, 0.0, x["r_last"], DYN, status]))
+    updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
+    new, output = scheme(x, updates, r_k, ay_f, status + (REFERENCE_SUSPECT if suspect else 0), u)
+    return np.array([new[k] for k in names]), np.array(output)

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from harness.reference import seed000
-from harness.reference.seed000 import DYN, INPUTS, KIN, REFERENCE_SUSPECT
+from harness.reference.seed000 import DYN, INPUTS, KIN
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
@@ -24,12 +24,11 @@ def init(config, u0):
 
 
 def step(config, state, u):
+    return seed000.step(config, TABLE, state, u, lambda *args: _switch(config, *args))
+
+
+def _switch(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
-    names_, x, status, held = seed000.begin(config, TABLE, state, u)
-    if held is not None:
-        return held
-    updates, r_k, ay_f, suspect = seed000.preprocess(config, TABLE, x, u)
-    status += REFERENCE_SUSPECT if suspect else 0
     threshold = s["threshold"]
     new = {**x, **updates}
     if seed000.adaptive(config, TABLE):                                                # A10 option
@@ -53,5 +52,4 @@ def step(config, state, u):
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
     new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)
-    return (np.array([new[k] for k in names_]),
-            np.array([seed000.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]))
+    return new, [seed000.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]
