@@ -23,7 +23,7 @@ from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
 from harness.progress import RunProgress
 from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
-from model.estimators import BUILDERS
+from model.estimators import DEFINITIONS
 from model.params import ParameterError, VehicleConfig
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
@@ -62,11 +62,11 @@ VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), defa
 
 def _estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str]:
     for name in names:
-        if name not in BUILDERS:
-            raise UserError(f"unknown estimator '{name}': expected one of {', '.join(BUILDERS)}")
+        if name not in DEFINITIONS:
+            raise UserError(f"unknown estimator '{name}': expected one of {', '.join(DEFINITIONS)}")
         if name not in config.estimators:
             raise UserError(f"{config.source}: no [estimator.{name}] table: expected one to use '{name}'")
-    return list(names) or [n for n in BUILDERS if n in config.estimators]
+    return list(names) or [n for n in DEFINITIONS if n in config.estimators]
 
 
 def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
@@ -364,7 +364,7 @@ def misra(update_baseline: bool, out: Path) -> None:
 @main.command(name="list")
 def list_() -> None:
     """List the estimators, scenarios and vehicles vsegen knows."""
-    console.print("estimators: " + ", ".join(BUILDERS))
+    console.print("estimators: " + ", ".join(DEFINITIONS))
     console.print("scenarios:")
     for s in SCENARIOS.values():
         options = " ".join(f"{k}={v}" for k, v in s.defaults.items())

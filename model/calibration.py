@@ -13,11 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 
-from model.params import VehicleConfig
+if TYPE_CHECKING:    # annotations only: model.params imports the estimators, which import this
+    from model.params import VehicleConfig
+
 
 CALIBRATION_MARGIN = 2.0
 MODES = ("baked", "calibratable")

@@ -27,13 +27,14 @@ the code generator and the API template never branch on the kind of estimator.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import casadi as ca
 
 from model.calibration import Parameters
 from model.layout import Layout
+from model.schema import EstimatorSchema
 
 
 class _ComposedStep:
@@ -214,6 +215,31 @@ class Estimator:
         count, without the template's draws and resampling)."""
         return {"step": self.structure.step_operations(),
                 "init": self.structure.init_operations(self.init)}
+
+
+@dataclass(frozen=True)
+class Tunable:
+    """A numeric setting ``vsegen tune`` may search: the scalar, or each entry of a list or
+    matrix diagonal, between ``low`` and ``high`` (units of the setting), on a log scale when
+    ``log``. Only settings read at run time by the calibratable C (no structural ones)."""
+
+    low: float
+    high: float
+    log: bool = True
+
+
+@dataclass(frozen=True)
+class Definition:
+    """Everything the rest of vsegen needs to know about one estimator, declared in its module
+    (``model/estimators/<module>.py``) and collected by ``model.estimators``: its name (the
+    ``[estimator.<name>]`` table and the C prefix ``vse_<name>_``), how to build it, the schema of
+    its settings and the settings ``tune`` may search. The NumPy reference is bound by name in
+    ``harness.reference`` (the model never imports the harness)."""
+
+    name: str
+    build: Callable[[Parameters], Estimator]
+    schema: EstimatorSchema
+    tunable: Mapping[str, Tunable] = field(default_factory=dict)
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

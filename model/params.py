@@ -20,9 +20,9 @@ from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any
 
+from model.estimators import SCHEMAS
 from model.schema import (
     CODEGEN,
-    ESTIMATOR_SCHEMAS,
     INPUT_LIMITS,
     PLANT,
     SAMPLING,
@@ -141,10 +141,10 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
     if not isinstance(estimator_data, dict):
         raise ParameterError(f"{where.at(('estimator',))}: missing table [estimator]: expected "
                              f"sample_time and one [estimator.<name>] table per estimator")
-    _reject_unknown(estimator_data, {"sample_time", *ESTIMATOR_SCHEMAS}, ("estimator",), where)
+    _reject_unknown(estimator_data, {"sample_time", *SCHEMAS}, ("estimator",), where)
     sampling = _fields(estimator_data, ("estimator",), SAMPLING, where)
     estimators = {}
-    for est_name, schema in ESTIMATOR_SCHEMAS.items():
+    for est_name, schema in SCHEMAS.items():
         if est_name in estimator_data:
             settings = _table(data, ("estimator", est_name), schema.fields, where)
             for rule in schema.rules:
@@ -155,7 +155,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
             estimators[est_name] = MappingProxyType(settings)
     if not estimators:
         raise ParameterError(f"{where.at(('estimator',))}: no estimator settings: expected at least "
-                             f"one of {', '.join(f'[estimator.{n}]' for n in ESTIMATOR_SCHEMAS)}")
+                             f"one of {', '.join(f'[estimator.{n}]' for n in SCHEMAS)}")
     optional = {key: MappingProxyType(_table(data, (key,), fields, where)) if key in data else None
                 for key, fields in (("plant", PLANT), ("sensors", SENSORS))}
     codegen_table = data.get("codegen", {})

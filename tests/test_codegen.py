@@ -16,7 +16,7 @@ from codegen.generate import check, render, write
 from harness.build import WARNING_FLAGS
 from harness.paths import GENERATED
 from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
-from model.estimators import BUILDERS
+from model.estimators import DEFINITIONS
 
 COMPILERS = ["gcc", "clang"]
 STRICT_TEMPLATE_FLAGS = ("-Wconversion", "-Wshadow", "-Wcast-qual", "-Wstrict-prototypes",
@@ -92,7 +92,7 @@ def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
 @pytest.mark.parametrize("cc", COMPILERS)
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
 @pytest.mark.parametrize("real", ["double", "float"])
-@pytest.mark.parametrize("name", list(BUILDERS))
+@pytest.mark.parametrize("name", list(DEFINITIONS))
 def test_template_code_passes_strict_warnings(tmp_path, config, cc, params, real, name):
     compiler = _require(cc)
     files = render(config, name, real, params)
@@ -114,7 +114,7 @@ BUDGETS = {"ukf": (36864, 3072), "aukf": (36864, 3072)}
 filters propagate 13 sigma points through a four-wheel tyre model (the heaviest estimators)."""
 
 
-@pytest.mark.parametrize("name", list(BUILDERS))
+@pytest.mark.parametrize("name", list(DEFINITIONS))
 @pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
 def test_cross_builds_within_budget(config, target, name):
     if not available(target):

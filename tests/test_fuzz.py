@@ -14,12 +14,12 @@ from codegen.generate import render
 from harness.fuzz import fuzz_estimator
 from harness.reference import blocks
 from harness.reference import kf2dof as reference
-from model.estimators import BUILDERS
+from model.estimators import DEFINITIONS
 
 STEPS = 1_000_000
 
 
-@pytest.mark.parametrize("name", list(BUILDERS))
+@pytest.mark.parametrize("name", list(DEFINITIONS))
 @pytest.mark.parametrize("real", ["double", "float"])
 def test_a_million_adversarial_steps(config, name, real):
     report = fuzz_estimator(config, name, real, STEPS, seed=7)

@@ -18,5 +18,5 @@ REFERENCES: dict[str, ModuleType | unscented.Variant | particle.ParticleFilter] 
     "aukf": unscented.Variant("aukf", adaptive=True),
     "pf_adaptive": particle.ParticleFilter("pf_adaptive", improved=False),
     "pf_improved": particle.ParticleFilter("pf_improved", improved=True)}
-LONG_DOUBLE = frozenset({"ukf", "aukf"})
-"""References that compute in long double (``harness.compare.for_estimator``)."""
+LONG_DOUBLE = frozenset(name for name, ref in REFERENCES.items() if isinstance(ref, unscented.Variant))
+"""References that compute in long double, the unscented filters' (``harness.compare.for_estimator``)."""

@@ -1,28 +1,26 @@
-"""Registry of estimators: name -> builder(Parameters) -> Estimator."""
+"""The estimators: one registry derived from the list of estimator modules. Each module declares
+``DEFINITIONS`` (``model.estimator.Definition``: name, builder, settings schema, tunable
+settings); adding an estimator adds its module here (CONTRIBUTING.md)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from model.calibration import Parameters, parameters
-from model.estimator import Estimator
+from model.calibration import parameters
+from model.estimator import Definition, Estimator
 from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
-from model.params import VehicleConfig
+from model.schema import EstimatorSchema
 
-BUILDERS: dict[str, Callable[[Parameters], Estimator]] = {
-    kf2dof.NAME: kf2dof.build,
-    switching.NAME: switching.build,
-    fusion.NAME: fusion.build,
-    arx_dual_kf.NAME: arx_dual_kf.build,
-    ekf_rls.NAME: ekf_rls.build,
-    aukf.PLAIN_NAME: aukf.build_plain,
-    aukf.NAME: aukf.build_adaptive,
-    pf.ADAPTIVE: pf.build_adaptive,
-    pf.IMPROVED: pf.build_improved,
-}
+if TYPE_CHECKING:
+    from model.params import VehicleConfig
+
+MODULES = (kf2dof, switching, fusion, arx_dual_kf, ekf_rls, aukf, pf)
+DEFINITIONS: dict[str, Definition] = {d.name: d for module in MODULES for d in module.DEFINITIONS}
+"""Every estimator by name, in the order of MODULES (the order of tables and reports)."""
+SCHEMAS: dict[str, EstimatorSchema] = {name: d.schema for name, d in DEFINITIONS.items()}
 
 
 def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
     """Build estimator ``name`` for ``config`` with parameters ``params`` ("baked" or
     "calibratable"); KeyError if no such estimator exists."""
-    return BUILDERS[name](parameters(config, name, params))
+    return DEFINITIONS[name].build(parameters(config, name, params))

@@ -32,12 +32,30 @@ import casadi as ca
 from model import discretize, kalman, status
 from model.bicycle import bicycle_matrices
 from model.calibration import Parameters
-from model.estimator import Estimator, SingleStep, make_functions
+from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators.kf2dof import zoh_plan
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
+from model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
 
 NAME = "arx_dual_kf"
+
+SCHEMA = EstimatorSchema(
+    fields=(
+        choice("exogenous", ("mz", "mz_delta"), "ARX inputs: the patent's direct yaw moment, or "
+               "also the steer angle (E2)"),
+        positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
+        positive("model_noise", "(rad/s)^2", "Q: variance of the ARX model error e_n per step"),
+        positive("ar_drift", "-", "Q_theta of a1 and a2 per step"),
+        positive("input_drift", "-", "Q_theta of an input parameter = (input_drift b)^2 per step"),
+        positive("ar_initial_variance", "-", "P_theta,0 of a1 and a2"),
+        positive("input_initial_factor", "-", "P_theta,0 of an input parameter = (factor b)^2"),
+        fraction("stability_radius", "largest root radius of z^2 - a1 z - a2 (E5)"),
+        positive("excitation_floor", "-", "skip the parameter update when phi' P phi is below"),
+        *LOW_SPEED_FIELDS,
+    ),
+    rules=LOW_SPEED_RULES)
+"""Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
 
 INPUTS = Layout((
     Signal("delta", "rad", "front road-wheel steer angle, positive left (exogenous = mz_delta)"),
@@ -215,3 +233,8 @@ def notes(params: Parameters) -> dict[str, str]:
     return {"exogenous": params.numeric.settings(NAME)["exogenous"],
             "prior_zoh_series": f"{plan.terms} Taylor terms, {plan.squarings} squarings, "
                                 f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e}"}
+
+
+DEFINITIONS = (Definition(NAME, build, SCHEMA, {
+    "measurement_noise": Tunable(1e-6, 1e-2), "model_noise": Tunable(1e-7, 1e-3),
+    "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)}),)

@@ -36,14 +36,64 @@ import casadi as ca
 from model import kalman, status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import Parameters
-from model.estimator import Estimator, make_functions, make_repeated
+from model.estimator import Definition, Estimator, Tunable, make_functions, make_repeated
 from model.guard import WHEEL_SPEEDS, first_sample, hold, input_guard
 from model.increments import Pair, lift
 from model.layout import Layout, Signal
+from model.schema import (
+    CAPS_ABOVE_FLOORS,
+    LOW_SPEED_FIELDS,
+    LOW_SPEED_RULES,
+    EstimatorSchema,
+    Field,
+    between,
+    choice,
+    diagonal,
+    nonnegative,
+    number_field,
+    positive,
+)
 from model.three_dof import ThreeDof
 
 NAME = "aukf"
 PLAIN_NAME = "ukf"
+
+UKF_FIELDS: tuple[Field, ...] = (
+    choice("longitudinal_force", ("wheel_speeds", "free_rolling"), "tyre slip ratios from the "
+           "measured wheel speeds (C4.1) or free rolling with a_x a random walk (C4.2)"),
+    positive("friction", "-", "road friction mu of the HSRI model (known, C9)"),
+    positive("longitudinal_stiffness", "N", "C_x per tyre, N per unit slip (the cornering "
+             "stiffness per tyre is half the [vehicle] axle value)"),
+    nonnegative("drag_area", "m^2", "C_d A of the drag F_w = 1.2 C_dA u^2 / 2 (0 = none, the "
+                "paper)"),
+    positive("slip_speed_floor", "m/s", "eps_v: slip ratios divide by max(r omega, eps_v)"),
+    number_field("ut_alpha", "a number in (0, 1]", lambda x: 0.0 < x <= 1.0,
+                  "UT spread alpha"),
+    nonnegative("ut_beta", "-", "UT prior-distribution factor beta (2 for Gaussian)"),
+    nonnegative("ut_kappa", "-", "UT secondary scaling kappa"),
+    diagonal("initial_covariance", 6, "[u, v, gamma, Gamma, a_x, a_y]: SI units squared", "P_0",
+             zero_allowed=True),
+    diagonal("process_noise", 6, "SI units squared per step", "Q (Q_0 of the adaptive filter)"),
+    diagonal("measurement_noise", 3, "[a_x, a_y, gamma]: (m/s^2)^2, (m/s^2)^2, (rad/s)^2", "R"),
+    nonnegative("restart_speed_error", "m/s", "beyond the spec: restart the filter from the "
+                "current sample when |u - v_x| exceeds this (status FILTER_RESTARTED); 0 = never"),
+    nonnegative("restart_sideslip", "rad", "beyond the spec: restart when |atan2(v, u)| exceeds "
+                "this; 0 = never"),
+    *LOW_SPEED_FIELDS,
+)
+"""Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""
+
+UKF_SCHEMA = EstimatorSchema(fields=UKF_FIELDS, rules=LOW_SPEED_RULES)
+AUKF_SCHEMA = EstimatorSchema(
+    fields=(*UKF_FIELDS, between("forgetting_factor", 0.95, 0.99, "Sage-Husa fading factor f "
+                                 "(the paper: 0.95 < f < 0.99)"),
+            choice("noise_safeguard", ("floor", "none"), "Sage-Husa safeguard: Q_ii >= 1e-3 "
+                   "Q_0,ii (the spec's §2.10) or none (the literal (15b): Q may turn negative and "
+                   "the covariance lose positive definiteness, which the repair then catches)"),
+            diagonal("process_noise_max", 6, "SI units squared per step", "ceiling of the adapted "
+                     "Q (beyond the spec: without it abusive inputs, e.g. a_y alternating "
+                     "+-25 m/s^2, grow Q and P until they overflow)")),
+    rules=(*LOW_SPEED_RULES, CAPS_ABOVE_FLOORS))
 STATE = (("u", "m/s", "longitudinal speed"), ("v", "m/s", "lateral speed"),
          ("gamma", "rad/s", "yaw rate"), ("moment", "N*m", "yaw moment Gamma"),
          ("ax", "m/s^2", "longitudinal acceleration"), ("ay", "m/s^2", "lateral acceleration"))
@@ -295,3 +345,11 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
                                       f"W_i = {ut.other:.7g}; the C propagates the {N} pairs "
                                       "in a loop"},
                      rounding_gain=rounding_gain(ut, params.numeric, name))
+
+
+_UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
+DEFINITIONS = (
+    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE),
+    Definition(NAME, build_adaptive, AUKF_SCHEMA,
+               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}),
+)

@@ -41,12 +41,57 @@ import casadi as ca
 from model import filters, kalman
 from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
-from model.estimator import Estimator, SingleStep, make_functions
+from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
+from model.schema import (
+    LOW_SPEED_FIELDS,
+    LOW_SPEED_RULES,
+    ROLL_CORRECTION,
+    EstimatorSchema,
+    above,
+    choice,
+    fraction,
+    nonnegative,
+    positive,
+    spd_matrix,
+)
 from model.sensors import roll_corrected
 
 NAME = "ekf_rls"
+
+SCHEMA = EstimatorSchema(
+    fields=(
+        choice("stiffness", ("rls", "constant"), "cornering stiffness: estimated online (the "
+               "method) or the vehicle file's C_f, C_r (the plain EKF)"),
+        choice("weighting", ("stiffness_rate", "integral_only"), "fusion weight lambda: from the "
+               "stiffness rate (the method) or 1 (the integral method alone)"),
+        choice("stiffness_regressor", ("literal", "ekf_slip", "kinematic_slip"), "RLS regression: "
+               "side-wise over alpha_eq = |delta - L r / vx| (the paper), or per axle over the slip "
+               "angles of the EKF prior (B2) or of the integral method (forces and slip angles "
+               "low-passed alike)"),
+        spd_matrix("process_noise", 2, "[beta, r]: rad^2*s, (rad/s)^2*s", "Q_c; Q_d = Q_c*T"),
+        positive("measurement_noise", "(rad/s)^2", "R: gyro noise variance"),
+        spd_matrix("initial_covariance", 2, "[beta, r]: rad^2, (rad/s)^2", "P_0 of the EKF"),
+        fraction("forgetting_factor", "RLS forgetting factor per 1 ms (rescaled to T)"),
+        positive("rls_initial_covariance", "1/rad^2", "P_RLS,0 = this times I"),
+        positive("rls_covariance_max", "1/rad^2", "bound on trace(P_RLS) (wind-up guard)"),
+        positive("slip_min", "rad", "update the RLS only while alpha_eq (per-axle regressors: both "
+                 "|slip angles|) is at least this"),
+        positive("stiffness_min", "-", "lower clamp of C0 as a factor of C0_nom"),
+        positive("stiffness_max", "-", "upper clamp of C0 as a factor of C0_nom"),
+        positive("derivative_time_constant", "s", "tau_d of the filtered yaw acceleration, and of "
+                 "the low-pass of kinematic_slip"),
+        positive("indicator_time_constant", "s", "tau_D of the low-passed stiffness rate"),
+        nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
+        positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
+        ROLL_CORRECTION,
+        *LOW_SPEED_FIELDS,
+    ),
+    rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
+           above("stiffness_max", "stiffness_min", "a factor")))
+"""Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
+§5)."""
 REFERENCE_PERIOD = 0.001
 """Sample time (s) at which the paper's forgetting factor applies (B6)."""
 LOAD_FLOOR = 0.05
@@ -355,3 +400,9 @@ def build(params: Parameters) -> Estimator:
                             "forgetting_factor_per_sample": f"{per_sample:.6g}"},
                      rounding_gain=rounding_gain(params.numeric.vehicle, choices,
                                                  params.numeric.sample_time))
+
+
+DEFINITIONS = (Definition(NAME, build, SCHEMA, {
+    "process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
+    "forgetting_factor": Tunable(0.95, 0.9999, log=False),
+    "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)}),)

@@ -12,13 +12,20 @@ from __future__ import annotations
 import casadi as ca
 
 from model.calibration import Parameters
-from model.estimator import Estimator, SingleStep, make_functions
+from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators import kf2dof
-from model.estimators.seed000 import COVARIANCE, INPUTS, Seed000
+from model.estimators.seed000 import COVARIANCE, INPUTS, SEED000_FIELDS, Seed000
 from model.guard import hold
 from model.layout import Layout, Signal
+from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
 
 NAME = "fusion"
+
+SCHEMA = EstimatorSchema(
+    fields=(*KF_FIELDS, *SEED000_FIELDS,
+            positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
+                     "integrator towards the KF")),
+    rules=LOW_SPEED_RULES)
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, weighted fusion of both schemes"),
@@ -68,3 +75,10 @@ def build(params: Parameters) -> Estimator:
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
                      "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, SingleStep(step), params,
                      seed.notes())
+
+
+DEFINITIONS = (Definition(NAME, build, SCHEMA, {
+    "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+    "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
+    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
+    "reference_timeout": Tunable(0.05, 1.0)}),)

@@ -21,11 +21,14 @@ import casadi as ca
 from model import discretize, kalman
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
-from model.estimator import Estimator, SingleStep, make_functions
+from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
 from model.layout import Layout, Signal
+from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
 
 NAME = "kf2dof"
+
+SCHEMA = EstimatorSchema(fields=KF_FIELDS, rules=LOW_SPEED_RULES)
 
 INPUTS = Layout((
     Signal("delta", "rad", "front road-wheel steer angle, positive left"),
@@ -173,3 +176,7 @@ def build(params: Parameters) -> Estimator:
                                 next_state, output, params)
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
                      INPUTS, STATES, OUTPUTS, init, SingleStep(step), params, zoh_note(params))
+
+
+DEFINITIONS = (Definition(NAME, build, SCHEMA, {"process_noise": Tunable(1e-4, 1e2),
+                                                "measurement_noise": Tunable(1e-6, 1e1)}),)

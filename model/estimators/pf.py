@@ -33,13 +33,68 @@ import casadi as ca
 
 from model import status
 from model.calibration import Parameters
-from model.estimator import RNG_WORDS, Estimator, Particles
+from model.estimator import RNG_WORDS, Definition, Estimator, Particles, Tunable
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, Signal
+from model.schema import (
+    CAPS_ABOVE_FLOORS,
+    LOW_SPEED_FIELDS,
+    LOW_SPEED_RULES,
+    ROLL_CORRECTION,
+    EstimatorSchema,
+    Field,
+    Rule,
+    choice,
+    diagonal,
+    integer,
+    nonnegative,
+    positive,
+)
 from model.sensors import roll_corrected
 
 IMPROVED = "pf_improved"
 ADAPTIVE = "pf_adaptive"
+
+PF_FIELDS: tuple[Field, ...] = (
+    integer("particles", 2, 10000, "N, the particle count (fixed at generation time; the state "
+            "holds 6 N reals)"),
+    integer("seed", 0, 2 ** 32 - 1, "seed of the filter's PCG32 random stream"),
+    choice("observation", ("inertial", "wheel_speed"), "z = [a_x, a_y, r] (the paper's (13)) or "
+           "also the logged v_x (D2)"),
+    choice("resampling", ("every_sample", "effective_size"), "systematic resampling at every "
+           "sample (D4 default) or only when N_eff < N / 2"),
+    diagonal("measurement_noise", 3, "[a_x, a_y, r]: m/s^2, m/s^2, rad/s", "R as standard "
+             "deviations sigma_ax,m, sigma_ay,m, sigma_r,m (1 sigma)"),
+    positive("wheel_speed_noise", "m/s", "sigma_vx,w of the logged v_x (observation = "
+             "\"wheel_speed\" only)"),
+    diagonal("initial_spread", 2, "[v_x, v_y]: m/s", "1-sigma spread of the initial particles' "
+             "speeds (2.9)"),
+    diagonal("process_noise", 3, "[a_x, a_y, r] per sample: m/s^2, m/s^2, rad/s", "sigma_ax,0, "
+             "sigma_ay,0, sigma_r,0: random-walk step at rest (16)"),
+    diagonal("process_noise_max", 3, "[a_x, a_y, r] per sample: m/s^2, m/s^2, rad/s", "caps "
+             "sigma_ax,max, sigma_ay,max, sigma_r,max of the adapted random walk (16)"),
+    diagonal("speed_noise", 2, "[v_x, v_y] per sample: m/s", "sigma_vx,0, sigma_vy,0 (16)"),
+    nonnegative("adaptation_gain_acceleration", "-", "kappa_a of (16); 0 = no adaptation"),
+    nonnegative("adaptation_gain_yaw_rate", "-", "kappa_r of (16); 0 = no adaptation"),
+    ROLL_CORRECTION,
+    *LOW_SPEED_FIELDS,
+)
+"""Seed 003's particle filter: the adaptive PF of its ref. [17] (003-improved-pf-velocity.md §2,
+§3, §5)."""
+
+
+PF_RULES = (*LOW_SPEED_RULES, CAPS_ABOVE_FLOORS)
+ADAPTIVE_SCHEMA = EstimatorSchema(fields=PF_FIELDS, rules=PF_RULES)
+IMPROVED_SCHEMA = EstimatorSchema(
+    fields=(*PF_FIELDS,
+            diagonal("correction_gain", 3, "-, each at most 1", "G of the proposal correction "
+                     "(14): the share of z - [a_x, a_y, r] of each particle it moves towards the "
+                     "measurement per sample", zero_allowed=True),
+            choice("weights", ("likelihood", "exact_importance"), "the paper's likelihood-only "
+                   "weights (D3) or the exact importance ratio of the corrected proposal")),
+    rules=(*PF_RULES, Rule("correction_gain", lambda t: "" if max(t["correction_gain"]) <= 1.0
+                           else f"correction_gain = {list(t['correction_gain'])!r}: expected "
+                                "every entry from 0 to 1")))
 KINEMATIC = (("vx", "m/s", "longitudinal speed"), ("vy", "m/s", "lateral speed"),
              ("ax", "m/s^2", "longitudinal acceleration"), ("ay", "m/s^2", "lateral acceleration"),
              ("r", "rad/s", "yaw rate"))
@@ -242,3 +297,13 @@ def _finish(params: Parameters, name: str, h, shared, summary, head: Layout,
         "status": shared["status"] + ca.if_else(slow, status.LOW_SPEED, 0),
     })
     return head.pack({**estimate, "holding": shared["holding"]}), output
+
+
+_PF_TUNABLE = {"measurement_noise": Tunable(0.005, 2.0), "process_noise": Tunable(0.001, 1.0),
+               "adaptation_gain_acceleration": Tunable(0.0, 5.0, log=False),
+               "adaptation_gain_yaw_rate": Tunable(0.0, 5.0, log=False)}
+DEFINITIONS = (
+    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE),
+    Definition(IMPROVED, build_improved, IMPROVED_SCHEMA,
+               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}),
+)

@@ -17,11 +17,25 @@ from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
 from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
 from model.layout import Layout, Signal
+from model.schema import ROLL_CORRECTION, Field, choice, positive
 from model.sensors import roll_corrected
 
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 DYN, KIN = 0, 1
+
+SEED000_FIELDS: tuple[Field, ...] = (
+    choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "
+           "10000/(s^2+200s+10000) or a phase-normalised 2nd-order Bessel at prefilter_omega"),
+    positive("prefilter_omega", "rad/s", "Bessel cut-off (prefilter = \"bessel\" only)"),
+    positive("median_span", "s", "median window span (odd length 2 round(span/2T) + 1)"),
+    positive("yaw_rate_band", "rad/s", "half-width of the credible band around r_ref"),
+    positive("lateral_acceleration_band", "m/s^2", "half-width of the band around vx r"),
+    positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
+    positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
+    ROLL_CORRECTION,
+)
+"""Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
 
 
 def window(params: Parameters, table: str) -> int:

@@ -23,12 +23,28 @@ from dataclasses import replace
 import casadi as ca
 
 from model.calibration import Parameters
-from model.estimator import Estimator, make_functions, make_schemes
+from model.estimator import Definition, Estimator, Tunable, make_functions, make_schemes
 from model.estimators import kf2dof
-from model.estimators.seed000 import COVARIANCE, DYN, INPUTS, KIN, Seed000
+from model.estimators.seed000 import COVARIANCE, DYN, INPUTS, KIN, SEED000_FIELDS, Seed000
 from model.layout import Layout, Signal
+from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 
 NAME = "switching"
+
+SCHEMA = EstimatorSchema(
+    fields=(*KF_FIELDS, *SEED000_FIELDS,
+            nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
+                        "scheme above threshold + hysteresis, leave it below threshold - "
+                        "hysteresis; 0 = the paper's single threshold", default=0.0),
+            nonnegative("adaptive_memory", "s", "beyond the paper (A10): time constant of the "
+                        "memory of the peak |a_y,f| the road has carried; the threshold rises to "
+                        "adaptive_fraction times that peak, at most adaptive_max; 0 = off "
+                        "(the paper's fixed threshold)", default=0.0),
+            fraction("adaptive_fraction", "share of the remembered peak |a_y,f| used as the "
+                     "threshold (adaptive_memory > 0 only)", default=0.8),
+            positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
+                     "(adaptive_memory > 0 only)", default=2.5)),
+    rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 HOLD = 2
 
 OUTPUTS = Layout((
@@ -137,3 +153,10 @@ def build(params: Parameters) -> Estimator:
                                 seed.initial_state(u), next_state, out, params)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
                      INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
+
+
+DEFINITIONS = (Definition(NAME, build, SCHEMA, {
+    "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+    "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
+    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
+    "reference_timeout": Tunable(0.05, 1.0)}),)

@@ -1,0 +1,43 @@
+"""The estimator registry: one list of estimator modules, each declaring its name, builder,
+settings schema and tunable settings; the references bound to the same names."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.reference import LONG_DOUBLE, REFERENCES
+from harness.vehicles import load_vehicle, shipped_vehicles
+from model.estimators import DEFINITIONS, MODULES, SCHEMAS, build
+
+
+def test_every_estimator_has_a_reference_and_nothing_else_has():
+    assert list(REFERENCES) == list(DEFINITIONS)
+    assert LONG_DOUBLE == {"ukf", "aukf"}
+
+
+def test_the_registry_is_derived_from_the_modules():
+    declared = [d.name for module in MODULES for d in module.DEFINITIONS]
+    assert declared == list(DEFINITIONS) == list(SCHEMAS)
+    assert len(set(declared)) == len(declared)
+
+
+@pytest.mark.parametrize("name", list(DEFINITIONS))
+def test_tunable_settings_are_read_at_run_time_and_hold_the_shipped_values(config, name):
+    definition = DEFINITIONS[name]
+    keys = {f.key for f in definition.schema.fields}
+    calibration = build(name, config, "calibratable").parameters.names
+    for key, tunable in definition.tunable.items():
+        assert key in keys, f"{name}: tunable {key} is not a setting"
+        assert tunable.low < tunable.high and (not tunable.log or tunable.low > 0)
+        assert any(n == key or n.startswith(key + "_") for n in calibration), \
+            f"{name}: {key} is not in the calibration struct, so tuning it would need recompiling"
+    for path in shipped_vehicles():
+        vehicle = load_vehicle(path)
+        if name not in vehicle.estimators:
+            continue
+        for key, tunable in definition.tunable.items():
+            values = np.atleast_1d(np.asarray(vehicle.settings(name)[key], dtype=float))
+            if values.ndim == 2:
+                values = np.diag(values)
+            assert np.all((tunable.low <= values) & (values <= tunable.high)), (path.name, key, values)
