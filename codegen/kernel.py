@@ -6,7 +6,7 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 ``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
 :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
 :func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
-pointers).
+pointers), and :func:`_drop_metadata` keeps of CasADi's exports only each Function's entry point.
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
 loudly instead of emitting unreviewed code.
 """
@@ -60,6 +60,8 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     if _work_size(h_text) != 0:
         raise RuntimeError(f"{estimator.name}: the kernel needs a work vector; the API template "
                            "supports straight-line SX kernels only")
+    entries = [function.name() for function in (estimator.init, *estimator.structure.kernel_functions)]
+    c_text, h_text = _drop_metadata(c_text, h_text, entries)
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
     if real == "float":
         c_text = to_single(c_text)
@@ -78,7 +80,14 @@ _STATIC_BODY = re.compile(
     r"(static int casadi_f\d+\(const casadi_real\*\* arg, casadi_real\*\* res, "
     r"casadi_int\* iw, casadi_real\* w, int mem\) \{\n)"
 )
-_RELEASE = re.compile(r"(CASADI_SYMBOL_EXPORT void \w+_release\(int mem\) \{\n)")
+METADATA = ("checkout", "release", "incref", "decref", "n_in", "n_out", "default_in", "name_in",
+            "name_out", "sparsity_in", "sparsity_out", "work", "work_bytes")
+"""The functions CasADi exports beside each Function for its own runtime (memory objects,
+introspection, work sizes); the API template calls none of them."""
+_LIBRARY_INFO = ("_casadi_version", "_casadi_int_size", "_casadi_real_size")
+_EXPORT = re.compile(r"^CASADI_SYMBOL_EXPORT [^\n]*?\b(\w+)\([^\n]*\{(?:[^\n]*\}\n|\n(?:.*\n)*?\}\n)\n?",
+                     flags=re.M)
+_SPARSITY = re.compile(r"^static const casadi_int (casadi_s\d+)\[\d+\] = \{[^}]*\};\n", flags=re.M)
 
 
 _ARG_CHECK = re.compile(r"arg\[(\d+)\]\? arg\[\1\]\[(\d+)\] : 0")
@@ -107,10 +116,33 @@ def _include_own_header(c_text: str, header: str) -> str:
     return c_text.replace(anchor, f'{anchor}\n#include "{header}"\n')
 
 
+def _drop_metadata(c_text: str, h_text: str, entries: list[str]) -> tuple[str, str]:
+    """Keep of CasADi's exports only the entry point of each Function (``entries``): the
+    METADATA functions, the library information and the sparsity patterns only they read are
+    dead code in a production image and most of the kernel's MISRA findings. Fails loudly unless
+    exactly the expected functions were found."""
+    expected = {f"{entry}_{suffix}" for entry in entries for suffix in METADATA}
+    expected |= {f"{entries[0].rsplit('_kernel_', 1)[0]}_kernel_{info}" for info in _LIBRARY_INFO}
+    found = {match.group(1) for match in _EXPORT.finditer(c_text)}
+    if found != expected | set(entries):
+        raise RuntimeError(f"CasADi's exports changed (unexpected: {sorted(found - expected - set(entries))}, "
+                           f"missing: {sorted(expected | set(entries) - found)}); review codegen/kernel.py")
+    c_text = _EXPORT.sub(lambda m: "" if m.group(1) in expected else m.group(0), c_text)
+    for match in _SPARSITY.finditer(c_text):
+        name = match.group(1)
+        if len(re.findall(rf"\b{name}\b", c_text)) != 2:      # its #define and its definition
+            raise RuntimeError(f"{name} is still read after the metadata was dropped; review "
+                               "codegen/kernel.py")
+        c_text = c_text.replace(match.group(0), "").replace(f"#define {name} CASADI_PREFIX(s{name[8:]})\n", "")
+    declared = re.compile(r"^[^\n#]*\b(\w+)\([^\n]*\);\n|^#define (\w+)_SZ_\w+ \d+\n", flags=re.M)
+    h_text = declared.sub(lambda m: "" if (m.group(1) or "") in expected or m.group(2) else m.group(0),
+                          h_text)
+    return c_text, h_text
+
+
 def _mark_unused(c_text: str) -> str:
     c_text, bodies = _STATIC_BODY.subn(r"\1  (void)iw; (void)w; (void)mem;\n", c_text)
-    c_text, releases = _RELEASE.subn(r"\1  (void)mem;\n", c_text)
-    if bodies == 0 or releases == 0:
+    if bodies == 0:
         raise RuntimeError(
             "CasADi's generated code no longer has the expected function signatures; "
             f"review codegen/kernel.py for CasADi {ca.__version__}"

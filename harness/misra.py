@@ -22,31 +22,15 @@ from codegen.generate import EXAMPLE
 BASELINE = Path(__file__).resolve().parents[1] / "codegen" / "misra_baseline.json"
 
 JUSTIFICATIONS = {
-    "misra-c2012-2.2": "The (void) casts that mark CasADi's fixed calling-convention parameters (iw, w, "
-                       "mem) as intentionally unused are reported as dead code; they are the standard "
-                       "idiom for Rule 2.7 and generate no instructions.",
     "misra-c2012-2.4": "The anonymous enum of state indices in the public header is for the "
                        "application; the library itself does not use it.",
-    "misra-c2012-2.5": "Public macros (status bits, sample time, CasADi's _SZ_* work sizes) are "
+    "misra-c2012-2.5": "Public macros (status bits, sample time, vector sizes) are "
                        "declared for the application and are not used inside the library.",
-    "misra-c2012-8.9": "CasADi defines its sparsity patterns (casadi_s0, ...) at file scope; one that "
-                       "only a single metadata function uses is reported (advisory); not on the "
-                       "init/step path.",
     "misra-c2012-10.3": "CasADi's straight-line code assigns comparison results (exact 0/1) and the "
                         "constant 0 to casadi_real temporaries; every such value is exact in the "
                         "real type.",
-    "misra-c2012-10.4": "CasADi's work-size query functions multiply an integer constant by sizeof; "
-                        "not on the init/step path, removed by --gc-sections.",
-    "misra-c2012-11.9": "CasADi tests argument/result pointers against the literal 0; the API always "
-                        "passes valid pointers, so these tests never take the null branch.",
     "misra-c2012-12.3": "CasADi declares its temporaries in one declaration (casadi_real a0, a1, ...), "
                         "which the checker reports as a comma operator; none is evaluated.",
-    "misra-c2012-14.4": "CasADi's work-size query functions test pointers as conditions; not on the "
-                        "init/step path, removed by --gc-sections.",
-    "misra-c2012-15.5": "CasADi's metadata functions (n_in, name_in, sparsity_in, ...) return from each "
-                        "switch case; not on the init/step path, removed by --gc-sections.",
-    "misra-c2012-16.6": "CasADi's default_in() switch has only a default clause; not on the init/step "
-                        "path, removed by --gc-sections.",
     "misra-c2012-20.10": "CasADi's symbol-prefix macro (CASADI_PREFIX) pastes tokens with ##; its "
                          "expansion is fixed and reviewed (the prefixed names in the kernel).",
 }

@@ -209,3 +209,23 @@ def test_reviewed_forms_follow_the_default_without_repeating_it():
     assert forms_to_write("kf2dof", ("float", "baked"))[:2] == [
         ("float", "baked", "kf2dof"), ("double", "calibratable", "kf2dof-double-calibratable")]
     assert forms_to_write("switching", ("double", "baked")) == [("double", "baked", "switching")]
+
+
+def test_only_the_entry_points_of_casadis_exports_are_kept_and_a_new_export_fails(tmp_path):
+    import casadi as ca
+
+    from codegen.kernel import _drop_metadata, kernel_options
+    x = ca.SX.sym("x", 2)
+    generator = ca.CodeGenerator("vse_t_kernel.c", kernel_options("double", "vse_t_kernel_"))
+    generator.add(ca.Function("vse_t_kernel_init", [x], [2 * x]))
+    generator.generate(str(tmp_path) + "/")
+    c_text, h_text = ((tmp_path / f"vse_t_kernel.{ext}").read_text() for ext in ("c", "h"))
+    kept_c, kept_h = _drop_metadata(c_text, h_text, ["vse_t_kernel_init"])
+    assert "vse_t_kernel_init_sparsity_in" in c_text and "casadi_s0" in c_text
+    assert "sparsity" not in kept_c and "casadi_s0" not in kept_c and "_SZ_" not in kept_h
+    assert "int vse_t_kernel_init(const casadi_real** arg" in kept_c + kept_h
+    extra = c_text.replace("CASADI_SYMBOL_EXPORT int vse_t_kernel_init_checkout(void) {",
+                           "CASADI_SYMBOL_EXPORT int vse_t_kernel_init_new(void) {\n  return 0;\n}\n\n"
+                           "CASADI_SYMBOL_EXPORT int vse_t_kernel_init_checkout(void) {")
+    with pytest.raises(RuntimeError, match="unexpected: \\['vse_t_kernel_init_new'\\]"):
+        _drop_metadata(extra, h_text, ["vse_t_kernel_init"])

@@ -48,9 +48,6 @@ extern "C" {
 #define casadi_fabs CASADI_PREFIX(fabs)
 #define casadi_fmax CASADI_PREFIX(fmax)
 #define casadi_fmin CASADI_PREFIX(fmin)
-#define casadi_s0 CASADI_PREFIX(s0)
-#define casadi_s1 CASADI_PREFIX(s1)
-#define casadi_s2 CASADI_PREFIX(s2)
 #define casadi_sq CASADI_PREFIX(sq)
 
 /* Symbol visibility in DLLs */
@@ -98,17 +95,6 @@ static casadi_real casadi_fmin(casadi_real x, casadi_real y) {
 static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel__casadi_version(int* major, int* minor, int* patch) {
-  *major = 3;
-  *minor = 8;
-  *patch = 2;
-}
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel__casadi_int_size(void) { return (int) sizeof(casadi_int); }
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel__casadi_real_size(void) { return (int) sizeof(casadi_real); }
-
-static const casadi_int casadi_s0[3] = {4, 1, 1};
-static const casadi_int casadi_s1[3] = {16, 1, 1};
-static const casadi_int casadi_s2[3] = {6, 1, 1};
 
 /* vse_arx_dual_kf_kernel_init:(input[4])->(state[16]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -505,74 +491,6 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_init_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_init_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_init_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_init_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_arx_dual_kf_kernel_init_n_in(void) { return 1;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_arx_dual_kf_kernel_init_n_out(void) { return 1;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_arx_dual_kf_kernel_init_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_arx_dual_kf_kernel_init_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "input";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_arx_dual_kf_kernel_init_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "state";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_arx_dual_kf_kernel_init_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s0;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_arx_dual_kf_kernel_init_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 1;
-  if (sz_res) *sz_res = 1;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
 }
 
 /* vse_arx_dual_kf_kernel_step:(state[16],input[4])->(state_next[16],output[6]) */
@@ -986,78 +904,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_step_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_step_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_step_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_arx_dual_kf_kernel_step_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_arx_dual_kf_kernel_step_n_in(void) { return 2;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_arx_dual_kf_kernel_step_n_out(void) { return 2;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_arx_dual_kf_kernel_step_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_arx_dual_kf_kernel_step_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "state";
-    case 1: return "input";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_arx_dual_kf_kernel_step_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "state_next";
-    case 1: return "output";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_arx_dual_kf_kernel_step_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s1;
-    case 1: return casadi_s0;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_arx_dual_kf_kernel_step_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s1;
-    case 1: return casadi_s2;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_step_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 2;
-  if (sz_res) *sz_res = 2;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_step_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
 }
 
 

@@ -30,44 +30,7 @@ extern "C" {
 #endif
 
 int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_kf2dof_kernel_init_checkout(void);
-void vse_kf2dof_kernel_init_release(int mem);
-void vse_kf2dof_kernel_init_incref(void);
-void vse_kf2dof_kernel_init_decref(void);
-casadi_int vse_kf2dof_kernel_init_n_in(void);
-casadi_int vse_kf2dof_kernel_init_n_out(void);
-casadi_real vse_kf2dof_kernel_init_default_in(casadi_int i);
-const char* vse_kf2dof_kernel_init_name_in(casadi_int i);
-const char* vse_kf2dof_kernel_init_name_out(casadi_int i);
-const casadi_int* vse_kf2dof_kernel_init_sparsity_in(casadi_int i);
-const casadi_int* vse_kf2dof_kernel_init_sparsity_out(casadi_int i);
-int vse_kf2dof_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_kf2dof_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_kf2dof_kernel_init_SZ_ARG 1
-#define vse_kf2dof_kernel_init_SZ_RES 1
-#define vse_kf2dof_kernel_init_SZ_IW 0
-#define vse_kf2dof_kernel_init_SZ_W 0
 int vse_kf2dof_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_kf2dof_kernel_step_checkout(void);
-void vse_kf2dof_kernel_step_release(int mem);
-void vse_kf2dof_kernel_step_incref(void);
-void vse_kf2dof_kernel_step_decref(void);
-casadi_int vse_kf2dof_kernel_step_n_in(void);
-casadi_int vse_kf2dof_kernel_step_n_out(void);
-casadi_real vse_kf2dof_kernel_step_default_in(casadi_int i);
-const char* vse_kf2dof_kernel_step_name_in(casadi_int i);
-const char* vse_kf2dof_kernel_step_name_out(casadi_int i);
-const casadi_int* vse_kf2dof_kernel_step_sparsity_in(casadi_int i);
-const casadi_int* vse_kf2dof_kernel_step_sparsity_out(casadi_int i);
-int vse_kf2dof_kernel_step_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_kf2dof_kernel_step_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_kf2dof_kernel_step_SZ_ARG 2
-#define vse_kf2dof_kernel_step_SZ_RES 2
-#define vse_kf2dof_kernel_step_SZ_IW 0
-#define vse_kf2dof_kernel_step_SZ_W 0
-void vse_kf2dof_kernel__casadi_version(int* major, int* minor, int* patch);
-int vse_kf2dof_kernel__casadi_int_size(void);
-int vse_kf2dof_kernel__casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -31,98 +31,10 @@ extern "C" {
 #endif
 
 int vse_pf_adaptive_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_pf_adaptive_kernel_init_checkout(void);
-void vse_pf_adaptive_kernel_init_release(int mem);
-void vse_pf_adaptive_kernel_init_incref(void);
-void vse_pf_adaptive_kernel_init_decref(void);
-casadi_int vse_pf_adaptive_kernel_init_n_in(void);
-casadi_int vse_pf_adaptive_kernel_init_n_out(void);
-casadi_real vse_pf_adaptive_kernel_init_default_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_init_name_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_init_name_out(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_init_sparsity_in(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_init_sparsity_out(casadi_int i);
-int vse_pf_adaptive_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_pf_adaptive_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_init_SZ_ARG 1
-#define vse_pf_adaptive_kernel_init_SZ_RES 2
-#define vse_pf_adaptive_kernel_init_SZ_IW 0
-#define vse_pf_adaptive_kernel_init_SZ_W 0
 int vse_pf_adaptive_kernel_prepare(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_pf_adaptive_kernel_prepare_checkout(void);
-void vse_pf_adaptive_kernel_prepare_release(int mem);
-void vse_pf_adaptive_kernel_prepare_incref(void);
-void vse_pf_adaptive_kernel_prepare_decref(void);
-casadi_int vse_pf_adaptive_kernel_prepare_n_in(void);
-casadi_int vse_pf_adaptive_kernel_prepare_n_out(void);
-casadi_real vse_pf_adaptive_kernel_prepare_default_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_prepare_name_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_prepare_name_out(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_prepare_sparsity_in(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_prepare_sparsity_out(casadi_int i);
-int vse_pf_adaptive_kernel_prepare_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_pf_adaptive_kernel_prepare_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_prepare_SZ_ARG 2
-#define vse_pf_adaptive_kernel_prepare_SZ_RES 1
-#define vse_pf_adaptive_kernel_prepare_SZ_IW 0
-#define vse_pf_adaptive_kernel_prepare_SZ_W 0
 int vse_pf_adaptive_kernel_spawn(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_pf_adaptive_kernel_spawn_checkout(void);
-void vse_pf_adaptive_kernel_spawn_release(int mem);
-void vse_pf_adaptive_kernel_spawn_incref(void);
-void vse_pf_adaptive_kernel_spawn_decref(void);
-casadi_int vse_pf_adaptive_kernel_spawn_n_in(void);
-casadi_int vse_pf_adaptive_kernel_spawn_n_out(void);
-casadi_real vse_pf_adaptive_kernel_spawn_default_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_spawn_name_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_spawn_name_out(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_spawn_sparsity_in(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_spawn_sparsity_out(casadi_int i);
-int vse_pf_adaptive_kernel_spawn_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_pf_adaptive_kernel_spawn_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_spawn_SZ_ARG 2
-#define vse_pf_adaptive_kernel_spawn_SZ_RES 1
-#define vse_pf_adaptive_kernel_spawn_SZ_IW 0
-#define vse_pf_adaptive_kernel_spawn_SZ_W 0
 int vse_pf_adaptive_kernel_propagate(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_pf_adaptive_kernel_propagate_checkout(void);
-void vse_pf_adaptive_kernel_propagate_release(int mem);
-void vse_pf_adaptive_kernel_propagate_incref(void);
-void vse_pf_adaptive_kernel_propagate_decref(void);
-casadi_int vse_pf_adaptive_kernel_propagate_n_in(void);
-casadi_int vse_pf_adaptive_kernel_propagate_n_out(void);
-casadi_real vse_pf_adaptive_kernel_propagate_default_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_propagate_name_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_propagate_name_out(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_propagate_sparsity_in(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_propagate_sparsity_out(casadi_int i);
-int vse_pf_adaptive_kernel_propagate_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_pf_adaptive_kernel_propagate_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_propagate_SZ_ARG 3
-#define vse_pf_adaptive_kernel_propagate_SZ_RES 1
-#define vse_pf_adaptive_kernel_propagate_SZ_IW 0
-#define vse_pf_adaptive_kernel_propagate_SZ_W 0
 int vse_pf_adaptive_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_pf_adaptive_kernel_finish_checkout(void);
-void vse_pf_adaptive_kernel_finish_release(int mem);
-void vse_pf_adaptive_kernel_finish_incref(void);
-void vse_pf_adaptive_kernel_finish_decref(void);
-casadi_int vse_pf_adaptive_kernel_finish_n_in(void);
-casadi_int vse_pf_adaptive_kernel_finish_n_out(void);
-casadi_real vse_pf_adaptive_kernel_finish_default_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_finish_name_in(casadi_int i);
-const char* vse_pf_adaptive_kernel_finish_name_out(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_in(casadi_int i);
-const casadi_int* vse_pf_adaptive_kernel_finish_sparsity_out(casadi_int i);
-int vse_pf_adaptive_kernel_finish_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_pf_adaptive_kernel_finish_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_pf_adaptive_kernel_finish_SZ_ARG 3
-#define vse_pf_adaptive_kernel_finish_SZ_RES 2
-#define vse_pf_adaptive_kernel_finish_SZ_IW 0
-#define vse_pf_adaptive_kernel_finish_SZ_W 0
-void vse_pf_adaptive_kernel__casadi_version(int* major, int* minor, int* patch);
-int vse_pf_adaptive_kernel__casadi_int_size(void);
-int vse_pf_adaptive_kernel__casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

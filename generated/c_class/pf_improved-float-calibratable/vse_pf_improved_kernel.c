@@ -52,12 +52,6 @@ extern "C" {
 #define casadi_fabs CASADI_PREFIX(fabs)
 #define casadi_fmax CASADI_PREFIX(fmax)
 #define casadi_fmin CASADI_PREFIX(fmin)
-#define casadi_s0 CASADI_PREFIX(s0)
-#define casadi_s1 CASADI_PREFIX(s1)
-#define casadi_s2 CASADI_PREFIX(s2)
-#define casadi_s3 CASADI_PREFIX(s3)
-#define casadi_s4 CASADI_PREFIX(s4)
-#define casadi_s5 CASADI_PREFIX(s5)
 #define casadi_sq CASADI_PREFIX(sq)
 
 /* Symbol visibility in DLLs */
@@ -105,20 +99,6 @@ static casadi_real casadi_fmin(casadi_real x, casadi_real y) {
 static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel__casadi_version(int* major, int* minor, int* patch) {
-  *major = 3;
-  *minor = 8;
-  *patch = 2;
-}
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel__casadi_int_size(void) { return (int) sizeof(casadi_int); }
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel__casadi_real_size(void) { return (int) sizeof(casadi_real); }
-
-static const casadi_int casadi_s0[3] = {4, 1, 1};
-static const casadi_int casadi_s1[3] = {39, 1, 1};
-static const casadi_int casadi_s2[3] = {6, 1, 1};
-static const casadi_int casadi_s3[3] = {12, 1, 1};
-static const casadi_int casadi_s4[3] = {5, 1, 1};
-static const casadi_int casadi_s5[3] = {8, 1, 1};
 
 /* vse_pf_improved_kernel_init:(input[4],params[39])->(head[6],shared[12]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -210,78 +190,6 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_init_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_init_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_init_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_init_n_in(void) { return 2;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_init_n_out(void) { return 2;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_pf_improved_kernel_init_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_init_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "input";
-    case 1: return "params";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_init_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "head";
-    case 1: return "shared";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_init_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s0;
-    case 1: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_init_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    case 1: return casadi_s3;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 2;
-  if (sz_res) *sz_res = 2;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
 }
 
 /* vse_pf_improved_kernel_prepare:(head[6],input[4],params[39])->(shared[12]) */
@@ -412,78 +320,6 @@ CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare(const casadi_real** arg,
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_prepare_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_prepare_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_prepare_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_prepare_n_in(void) { return 3;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_prepare_n_out(void) { return 1;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_pf_improved_kernel_prepare_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_prepare_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "head";
-    case 1: return "input";
-    case 2: return "params";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_prepare_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "shared";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_prepare_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    case 1: return casadi_s0;
-    case 2: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_prepare_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s3;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 3;
-  if (sz_res) *sz_res = 1;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
-}
-
 /* vse_pf_improved_kernel_spawn:(shared[12],normals[5],params[39])->(particle[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
@@ -523,78 +359,6 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f2(arg, res, iw, w, mem);
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_spawn_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_spawn_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_spawn_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_spawn_n_in(void) { return 3;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_spawn_n_out(void) { return 1;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_pf_improved_kernel_spawn_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_spawn_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "shared";
-    case 1: return "normals";
-    case 2: return "params";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_spawn_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "particle";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_spawn_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s3;
-    case 1: return casadi_s4;
-    case 2: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_spawn_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 3;
-  if (sz_res) *sz_res = 1;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
 }
 
 /* vse_pf_improved_kernel_propagate:(shared[12],particle[6],normals[5],params[39])->(particle_next[6]) */
@@ -687,80 +451,6 @@ CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate(const casadi_real** ar
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_propagate_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_propagate_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_propagate_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_propagate_n_in(void) { return 4;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_propagate_n_out(void) { return 1;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_pf_improved_kernel_propagate_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_propagate_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "shared";
-    case 1: return "particle";
-    case 2: return "normals";
-    case 3: return "params";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_propagate_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "particle_next";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_propagate_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s3;
-    case 1: return casadi_s2;
-    case 2: return casadi_s4;
-    case 3: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_propagate_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4;
-  if (sz_res) *sz_res = 1;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
-}
-
 /* vse_pf_improved_kernel_finish:(head[6],shared[12],summary[6],params[39])->(head_next[6],output[8]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
@@ -831,82 +521,6 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f4(arg, res, iw, w, mem);
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish_checkout(void) {
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_finish_release(int mem) {
-  (void)mem;
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_finish_incref(void) {
-}
-
-CASADI_SYMBOL_EXPORT void vse_pf_improved_kernel_finish_decref(void) {
-}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_finish_n_in(void) { return 4;}
-
-CASADI_SYMBOL_EXPORT casadi_int vse_pf_improved_kernel_finish_n_out(void) { return 2;}
-
-CASADI_SYMBOL_EXPORT casadi_real vse_pf_improved_kernel_finish_default_in(casadi_int i) {
-  switch (i) {
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_finish_name_in(casadi_int i) {
-  switch (i) {
-    case 0: return "head";
-    case 1: return "shared";
-    case 2: return "summary";
-    case 3: return "params";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const char* vse_pf_improved_kernel_finish_name_out(casadi_int i) {
-  switch (i) {
-    case 0: return "head_next";
-    case 1: return "output";
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_finish_sparsity_in(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    case 1: return casadi_s3;
-    case 2: return casadi_s2;
-    case 3: return casadi_s1;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT const casadi_int* vse_pf_improved_kernel_finish_sparsity_out(casadi_int i) {
-  switch (i) {
-    case 0: return casadi_s2;
-    case 1: return casadi_s5;
-    default: return 0;
-  }
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4;
-  if (sz_res) *sz_res = 2;
-  if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 0;
-  return 0;
-}
-
-CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
-  if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
-  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
-  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 0*sizeof(casadi_real);
-  return 0;
 }
 
 

@@ -32,98 +32,10 @@ extern "C" {
 #endif
 
 int vse_switching_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_switching_kernel_init_checkout(void);
-void vse_switching_kernel_init_release(int mem);
-void vse_switching_kernel_init_incref(void);
-void vse_switching_kernel_init_decref(void);
-casadi_int vse_switching_kernel_init_n_in(void);
-casadi_int vse_switching_kernel_init_n_out(void);
-casadi_real vse_switching_kernel_init_default_in(casadi_int i);
-const char* vse_switching_kernel_init_name_in(casadi_int i);
-const char* vse_switching_kernel_init_name_out(casadi_int i);
-const casadi_int* vse_switching_kernel_init_sparsity_in(casadi_int i);
-const casadi_int* vse_switching_kernel_init_sparsity_out(casadi_int i);
-int vse_switching_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_switching_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_switching_kernel_init_SZ_ARG 1
-#define vse_switching_kernel_init_SZ_RES 1
-#define vse_switching_kernel_init_SZ_IW 0
-#define vse_switching_kernel_init_SZ_W 0
 int vse_switching_kernel_select(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_switching_kernel_select_checkout(void);
-void vse_switching_kernel_select_release(int mem);
-void vse_switching_kernel_select_incref(void);
-void vse_switching_kernel_select_decref(void);
-casadi_int vse_switching_kernel_select_n_in(void);
-casadi_int vse_switching_kernel_select_n_out(void);
-casadi_real vse_switching_kernel_select_default_in(casadi_int i);
-const char* vse_switching_kernel_select_name_in(casadi_int i);
-const char* vse_switching_kernel_select_name_out(casadi_int i);
-const casadi_int* vse_switching_kernel_select_sparsity_in(casadi_int i);
-const casadi_int* vse_switching_kernel_select_sparsity_out(casadi_int i);
-int vse_switching_kernel_select_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_switching_kernel_select_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_switching_kernel_select_SZ_ARG 2
-#define vse_switching_kernel_select_SZ_RES 2
-#define vse_switching_kernel_select_SZ_IW 0
-#define vse_switching_kernel_select_SZ_W 0
 int vse_switching_kernel_dynamic(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_switching_kernel_dynamic_checkout(void);
-void vse_switching_kernel_dynamic_release(int mem);
-void vse_switching_kernel_dynamic_incref(void);
-void vse_switching_kernel_dynamic_decref(void);
-casadi_int vse_switching_kernel_dynamic_n_in(void);
-casadi_int vse_switching_kernel_dynamic_n_out(void);
-casadi_real vse_switching_kernel_dynamic_default_in(casadi_int i);
-const char* vse_switching_kernel_dynamic_name_in(casadi_int i);
-const char* vse_switching_kernel_dynamic_name_out(casadi_int i);
-const casadi_int* vse_switching_kernel_dynamic_sparsity_in(casadi_int i);
-const casadi_int* vse_switching_kernel_dynamic_sparsity_out(casadi_int i);
-int vse_switching_kernel_dynamic_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_switching_kernel_dynamic_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_switching_kernel_dynamic_SZ_ARG 3
-#define vse_switching_kernel_dynamic_SZ_RES 2
-#define vse_switching_kernel_dynamic_SZ_IW 0
-#define vse_switching_kernel_dynamic_SZ_W 0
 int vse_switching_kernel_kinematic(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_switching_kernel_kinematic_checkout(void);
-void vse_switching_kernel_kinematic_release(int mem);
-void vse_switching_kernel_kinematic_incref(void);
-void vse_switching_kernel_kinematic_decref(void);
-casadi_int vse_switching_kernel_kinematic_n_in(void);
-casadi_int vse_switching_kernel_kinematic_n_out(void);
-casadi_real vse_switching_kernel_kinematic_default_in(casadi_int i);
-const char* vse_switching_kernel_kinematic_name_in(casadi_int i);
-const char* vse_switching_kernel_kinematic_name_out(casadi_int i);
-const casadi_int* vse_switching_kernel_kinematic_sparsity_in(casadi_int i);
-const casadi_int* vse_switching_kernel_kinematic_sparsity_out(casadi_int i);
-int vse_switching_kernel_kinematic_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_switching_kernel_kinematic_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_switching_kernel_kinematic_SZ_ARG 3
-#define vse_switching_kernel_kinematic_SZ_RES 2
-#define vse_switching_kernel_kinematic_SZ_IW 0
-#define vse_switching_kernel_kinematic_SZ_W 0
 int vse_switching_kernel_hold(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_switching_kernel_hold_checkout(void);
-void vse_switching_kernel_hold_release(int mem);
-void vse_switching_kernel_hold_incref(void);
-void vse_switching_kernel_hold_decref(void);
-casadi_int vse_switching_kernel_hold_n_in(void);
-casadi_int vse_switching_kernel_hold_n_out(void);
-casadi_real vse_switching_kernel_hold_default_in(casadi_int i);
-const char* vse_switching_kernel_hold_name_in(casadi_int i);
-const char* vse_switching_kernel_hold_name_out(casadi_int i);
-const casadi_int* vse_switching_kernel_hold_sparsity_in(casadi_int i);
-const casadi_int* vse_switching_kernel_hold_sparsity_out(casadi_int i);
-int vse_switching_kernel_hold_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_switching_kernel_hold_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_switching_kernel_hold_SZ_ARG 3
-#define vse_switching_kernel_hold_SZ_RES 2
-#define vse_switching_kernel_hold_SZ_IW 0
-#define vse_switching_kernel_hold_SZ_W 0
-void vse_switching_kernel__casadi_version(int* major, int* minor, int* patch);
-int vse_switching_kernel__casadi_int_size(void);
-int vse_switching_kernel__casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

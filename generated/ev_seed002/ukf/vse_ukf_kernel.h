@@ -30,80 +30,9 @@ extern "C" {
 #endif
 
 int vse_ukf_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_ukf_kernel_init_checkout(void);
-void vse_ukf_kernel_init_release(int mem);
-void vse_ukf_kernel_init_incref(void);
-void vse_ukf_kernel_init_decref(void);
-casadi_int vse_ukf_kernel_init_n_in(void);
-casadi_int vse_ukf_kernel_init_n_out(void);
-casadi_real vse_ukf_kernel_init_default_in(casadi_int i);
-const char* vse_ukf_kernel_init_name_in(casadi_int i);
-const char* vse_ukf_kernel_init_name_out(casadi_int i);
-const casadi_int* vse_ukf_kernel_init_sparsity_in(casadi_int i);
-const casadi_int* vse_ukf_kernel_init_sparsity_out(casadi_int i);
-int vse_ukf_kernel_init_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_ukf_kernel_init_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_ukf_kernel_init_SZ_ARG 1
-#define vse_ukf_kernel_init_SZ_RES 1
-#define vse_ukf_kernel_init_SZ_IW 0
-#define vse_ukf_kernel_init_SZ_W 0
 int vse_ukf_kernel_prepare(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_ukf_kernel_prepare_checkout(void);
-void vse_ukf_kernel_prepare_release(int mem);
-void vse_ukf_kernel_prepare_incref(void);
-void vse_ukf_kernel_prepare_decref(void);
-casadi_int vse_ukf_kernel_prepare_n_in(void);
-casadi_int vse_ukf_kernel_prepare_n_out(void);
-casadi_real vse_ukf_kernel_prepare_default_in(casadi_int i);
-const char* vse_ukf_kernel_prepare_name_in(casadi_int i);
-const char* vse_ukf_kernel_prepare_name_out(casadi_int i);
-const casadi_int* vse_ukf_kernel_prepare_sparsity_in(casadi_int i);
-const casadi_int* vse_ukf_kernel_prepare_sparsity_out(casadi_int i);
-int vse_ukf_kernel_prepare_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_ukf_kernel_prepare_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_ukf_kernel_prepare_SZ_ARG 2
-#define vse_ukf_kernel_prepare_SZ_RES 2
-#define vse_ukf_kernel_prepare_SZ_IW 0
-#define vse_ukf_kernel_prepare_SZ_W 0
 int vse_ukf_kernel_each(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_ukf_kernel_each_checkout(void);
-void vse_ukf_kernel_each_release(int mem);
-void vse_ukf_kernel_each_incref(void);
-void vse_ukf_kernel_each_decref(void);
-casadi_int vse_ukf_kernel_each_n_in(void);
-casadi_int vse_ukf_kernel_each_n_out(void);
-casadi_real vse_ukf_kernel_each_default_in(casadi_int i);
-const char* vse_ukf_kernel_each_name_in(casadi_int i);
-const char* vse_ukf_kernel_each_name_out(casadi_int i);
-const casadi_int* vse_ukf_kernel_each_sparsity_in(casadi_int i);
-const casadi_int* vse_ukf_kernel_each_sparsity_out(casadi_int i);
-int vse_ukf_kernel_each_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_ukf_kernel_each_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_ukf_kernel_each_SZ_ARG 2
-#define vse_ukf_kernel_each_SZ_RES 1
-#define vse_ukf_kernel_each_SZ_IW 0
-#define vse_ukf_kernel_each_SZ_W 0
 int vse_ukf_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_ukf_kernel_finish_checkout(void);
-void vse_ukf_kernel_finish_release(int mem);
-void vse_ukf_kernel_finish_incref(void);
-void vse_ukf_kernel_finish_decref(void);
-casadi_int vse_ukf_kernel_finish_n_in(void);
-casadi_int vse_ukf_kernel_finish_n_out(void);
-casadi_real vse_ukf_kernel_finish_default_in(casadi_int i);
-const char* vse_ukf_kernel_finish_name_in(casadi_int i);
-const char* vse_ukf_kernel_finish_name_out(casadi_int i);
-const casadi_int* vse_ukf_kernel_finish_sparsity_in(casadi_int i);
-const casadi_int* vse_ukf_kernel_finish_sparsity_out(casadi_int i);
-int vse_ukf_kernel_finish_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int vse_ukf_kernel_finish_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define vse_ukf_kernel_finish_SZ_ARG 3
-#define vse_ukf_kernel_finish_SZ_RES 2
-#define vse_ukf_kernel_finish_SZ_IW 0
-#define vse_ukf_kernel_finish_SZ_W 0
-void vse_ukf_kernel__casadi_version(int* major, int* minor, int* patch);
-int vse_ukf_kernel__casadi_int_size(void);
-int vse_ukf_kernel__casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif
