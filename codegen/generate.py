@@ -21,7 +21,7 @@ from codegen.kernel import generate_kernel
 from codegen.precision import literal
 from model import status
 from model.estimator import RNG_WORDS
-from model.estimators import build
+from model.estimators import DEFINITIONS, build
 from model.params import VehicleConfig
 from model.schema import REALS
 
@@ -93,7 +93,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
         "ops": estimator.operation_counts,
-        "status_bits": status.STATUS_BITS,
+        "status_bits": {bit: status.STATUS_BITS[bit] for bit in DEFINITIONS[name].status_bits},
         "kernel": kernel,
         "rng_words": RNG_WORDS,
         "f": "f" if real == "float" else "",

@@ -233,13 +233,16 @@ class Definition:
     """Everything the rest of vsegen needs to know about one estimator, declared in its module
     (``model/estimators/<module>.py``) and collected by ``model.estimators``: its name (the
     ``[estimator.<name>]`` table and the C prefix ``vse_<name>_``), how to build it, the schema of
-    its settings and the settings ``tune`` may search. The NumPy reference is bound by name in
-    ``harness.reference`` (the model never imports the harness)."""
+    its settings, the settings ``tune`` may search and the status bits it can raise. The NumPy
+    reference is bound by name in ``harness.reference`` (the model never imports the harness)."""
 
     name: str
     build: Callable[[Parameters], Estimator]
     schema: EstimatorSchema
     tunable: Mapping[str, Tunable] = field(default_factory=dict)
+    status_bits: tuple[str, ...] = ("LOW_SPEED", "INVALID_INPUT")
+    """The ``model.status`` bits it can raise (the hold rule's two, and its own); the generated
+    header defines only these."""
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

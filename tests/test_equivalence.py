@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import compile_estimator, load_estimator
 from harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
 from harness.paths import DEFAULT_VEHICLE
 from harness.reference import kf2dof as reference
@@ -17,8 +17,9 @@ from harness.reference.run import run_reference
 from harness.scenarios import VERIFICATION_SET, Case
 from harness.vehicles import load_vehicle
 from harness.verify import verify_estimator
-from model.estimators import build
+from model.estimators import DEFINITIONS, build
 from model.params import parse_vehicle
+from model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
 
 ESTIMATORS = tuple(load_vehicle(DEFAULT_VEHICLE).estimators)
 FORMS = [("float", "baked"), ("double", "calibratable"), ("float", "calibratable")]
@@ -36,6 +37,20 @@ def check_every_scenario(config, name, real, params):
 @pytest.mark.parametrize("name", ESTIMATORS)
 def test_generated_c_equals_the_reference_on_every_scenario(config, name):
     check_every_scenario(config, name, "double", "baked")
+
+
+@pytest.mark.parametrize("name", ESTIMATORS)
+def test_status_raises_only_the_declared_bits_and_the_header_defines_them(config, name):
+    declared = sum(STATUS_BITS[bit] for bit in DEFINITIONS[name].status_bits)
+    estimator, compiled = compile_estimator(config, name)
+    seen = 0
+    for case in VERIFICATION_SET:
+        outputs, _ = compiled.run(case.simulate(config, 100.0).matrix(estimator.inputs.names))
+        seen |= np.bitwise_or.reduce(outputs[:, estimator.outputs.index("status")].astype(int))
+    assert seen & ~declared == 0 and seen & INVALID_INPUT and seen & LOW_SPEED
+    header = render(config, name)[f"vse_{name}.h"]
+    defined = {bit for bit in STATUS_BITS if f"_STATUS_{bit} (" in header}
+    assert defined == set(DEFINITIONS[name].status_bits)
 
 
 @pytest.mark.parametrize("real,params", FORMS)

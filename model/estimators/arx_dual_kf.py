@@ -237,4 +237,5 @@ def notes(params: Parameters) -> dict[str, str]:
 
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "measurement_noise": Tunable(1e-6, 1e-2), "model_noise": Tunable(1e-7, 1e-3),
-    "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)}),)
+    "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)},
+    ("LOW_SPEED", "INVALID_INPUT", "PARAMETERS_PROJECTED")),)

@@ -348,8 +348,9 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
 
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
+_UKF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "COVARIANCE_REPAIRED", "FILTER_RESTARTED")
 DEFINITIONS = (
-    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE),
+    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE, _UKF_STATUS),
     Definition(NAME, build_adaptive, AUKF_SCHEMA,
-               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}),
+               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}, _UKF_STATUS),
 )

@@ -15,6 +15,7 @@ from model.calibration import Parameters
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators import kf2dof
 from model.estimators.seed000 import COVARIANCE, INPUTS, SEED000_FIELDS, Seed000
+from model.estimators.seed000 import STATUS_BITS as SEED000_STATUS
 from model.guard import hold
 from model.layout import Layout, Signal
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
@@ -81,4 +82,4 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}),)
+    "reference_timeout": Tunable(0.05, 1.0)}, SEED000_STATUS),)

@@ -23,6 +23,8 @@ from model.sensors import roll_corrected
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 DYN, KIN = 0, 1
+STATUS_BITS = ("LOW_SPEED", "INVALID_INPUT", "REFERENCE_SUSPECT")
+"""What seed 000's estimators can raise: the hold rule's bits and the reliability checks' time-out."""
 
 SEED000_FIELDS: tuple[Field, ...] = (
     choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "

@@ -26,6 +26,7 @@ from model.calibration import Parameters
 from model.estimator import Definition, Estimator, Tunable, make_functions, make_schemes
 from model.estimators import kf2dof
 from model.estimators.seed000 import COVARIANCE, DYN, INPUTS, KIN, SEED000_FIELDS, Seed000
+from model.estimators.seed000 import STATUS_BITS as SEED000_STATUS
 from model.layout import Layout, Signal
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 
@@ -159,4 +160,4 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}),)
+    "reference_timeout": Tunable(0.05, 1.0)}, SEED000_STATUS),)

@@ -30,9 +30,6 @@ typedef double vse_fusion_real;
 #define VSE_FUSION_STATUS_LOW_SPEED (1)
 #define VSE_FUSION_STATUS_INVALID_INPUT (2)
 #define VSE_FUSION_STATUS_REFERENCE_SUSPECT (4)
-#define VSE_FUSION_STATUS_PARAMETERS_PROJECTED (8)
-#define VSE_FUSION_STATUS_COVARIANCE_REPAIRED (16)
-#define VSE_FUSION_STATUS_FILTER_RESTARTED (32)
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {

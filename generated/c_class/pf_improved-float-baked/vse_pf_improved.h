@@ -28,10 +28,6 @@ typedef float vse_pf_improved_real;
 #define VSE_PF_IMPROVED_STATUS_OK (0)
 #define VSE_PF_IMPROVED_STATUS_LOW_SPEED (1)
 #define VSE_PF_IMPROVED_STATUS_INVALID_INPUT (2)
-#define VSE_PF_IMPROVED_STATUS_REFERENCE_SUSPECT (4)
-#define VSE_PF_IMPROVED_STATUS_PARAMETERS_PROJECTED (8)
-#define VSE_PF_IMPROVED_STATUS_COVARIANCE_REPAIRED (16)
-#define VSE_PF_IMPROVED_STATUS_FILTER_RESTARTED (32)
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
