@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import casadi as ca
@@ -19,6 +20,25 @@ class Signal:
     """Magnitude (in ``unit``) at which rounding of this entry is judged: the equivalence check's
     floor is multiplied by it. 1 for the O(1) SI signals; e.g. about 1e4 for a car's yaw moment in
     N*m, whose rounding comes from force moments of that size."""
+
+
+def unit_product(a: str, b: str) -> str:
+    """The unit of a product of quantities in units ``a`` and ``b``, e.g. ``(m/s)^2``,
+    ``rad^2``, ``(m/s)*(rad/s)``."""
+    def factor(unit: str) -> str:
+        return unit if re.fullmatch(r"[A-Za-z]+", unit) else f"({unit})"
+    return f"{factor(a)}^2" if a == b else f"{factor(a)}*{factor(b)}"
+
+
+def covariance_signals(prefix: str, states: tuple[Signal, ...], names: tuple[str, ...] | None = None,
+                       doc: str = "covariance entry (upper triangle, row by row)") -> tuple[Signal, ...]:
+    """The stored entries of the covariance of ``states``, upper triangle row by row, named
+    ``<prefix>_<a>_<b>`` (``names`` instead of the states' names if given), each in the product
+    of its two states' units and judged at the product of their scales."""
+    names = names or tuple(s.name for s in states)
+    return tuple(Signal(f"{prefix}_{names[i]}_{names[j]}", unit_product(states[i].unit, states[j].unit),
+                        doc, scale=states[i].scale * states[j].scale)
+                 for i in range(len(states)) for j in range(i, len(states)))
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ from model.calibration import Parameters
 from model.estimator import Definition, Estimator, Tunable, make_functions, make_repeated
 from model.guard import WHEEL_SPEEDS, first_sample, hold, input_guard
 from model.increments import Pair, lift
-from model.layout import Layout, Signal
+from model.layout import Layout, Signal, covariance_signals
 from model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
@@ -111,7 +111,6 @@ _BASE_INPUTS = (
     Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
 )
 COVARIANCE = kalman.packed_names("P", X_NAMES)
-COVARIANCE_PAIRS = tuple((X_NAMES[i], X_NAMES[j]) for i in range(N) for j in range(i, N))
 """The state names behind each entry of COVARIANCE."""
 
 
@@ -131,10 +130,10 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     inputs = Layout((*_BASE_INPUTS, *((Signal(n, "rad/s", f"wheel speed {n[6:]}")
                                       for n in WHEEL_SPEEDS) if wheels else ())))
     scale = force_scales(vehicle)
+    estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
     states = Layout((
-        *(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE),
-        *(Signal(f"P_{a}_{b}", "SI", "covariance entry (upper triangle)", scale=scale[a] * scale[b])
-          for a, b in COVARIANCE_PAIRS),
+        *estimates,
+        *covariance_signals("P", estimates, doc="covariance entry (upper triangle)"),
         *((*(Signal(f"qmean_{n}", unit, f"process-noise mean of {n}", scale=scale[n])
              for n, unit, _ in STATE),
            *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",

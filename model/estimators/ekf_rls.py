@@ -43,7 +43,7 @@ from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard
-from model.layout import Layout, Signal
+from model.layout import Layout, Signal, covariance_signals
 from model.schema import (
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
@@ -106,10 +106,11 @@ INPUTS = Layout((
 ))
 _EKF = kalman.packed_names("P", ("beta", "r"))
 _RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
+_EKF_ESTIMATES = (Signal("beta_ekf", "rad", "EKF sideslip angle"),
+                  Signal("r_ekf", "rad/s", "EKF yaw rate"))
 STATES = Layout((
-    Signal("beta_ekf", "rad", "EKF sideslip angle"),
-    Signal("r_ekf", "rad/s", "EKF yaw rate"),
-    *(Signal(n, "SI", "EKF covariance entry (upper triangle)") for n in _EKF),
+    *_EKF_ESTIMATES,
+    *covariance_signals("P", _EKF_ESTIMATES, ("beta", "r"), "EKF covariance entry (upper triangle)"),
     Signal("c0_1", "1/rad", "normalised cornering stiffness: left wheels (literal) or front axle"),
     Signal("c0_2", "1/rad", "normalised cornering stiffness: right wheels (literal) or rear axle"),
     *(Signal(n, "1/rad^2", "RLS covariance entry (upper triangle)") for n in _RLS),

@@ -23,7 +23,7 @@ from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
-from model.layout import Layout, Signal
+from model.layout import Layout, Signal, covariance_signals
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
 
 NAME = "kf2dof"
@@ -37,11 +37,11 @@ INPUTS = Layout((
     Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
 ))
 
+_ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 STATES = Layout((
-    Signal("vy", "m/s", "lateral velocity estimate"),
-    Signal("r", "rad/s", "yaw-rate estimate"),
-    *(Signal(name, "SI", "covariance entry (upper triangle, row by row)") for name in _COVARIANCE),
+    *_ESTIMATES,
+    *covariance_signals("P", _ESTIMATES),
     Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
     Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
     Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),

@@ -16,12 +16,13 @@ from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
 from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
-from model.layout import Layout, Signal
+from model.layout import Layout, Signal, covariance_signals
 from model.schema import ROLL_CORRECTION, Field, choice, positive
 from model.sensors import roll_corrected
 
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
+_KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
 DYN, KIN = 0, 1
 STATUS_BITS = ("LOW_SPEED", "INVALID_INPUT", "REFERENCE_SUSPECT")
 """What seed 000's estimators can raise: the hold rule's bits and the reliability checks' time-out."""
@@ -65,9 +66,8 @@ def states(n_median: int, adaptive_threshold: bool = False) -> Layout:
         Signal("ay_rejections", "-", "consecutive a_y rejections"),
         Signal("mode", "-", "0 dynamic, 1 kinematic"),
         Signal("vy_kin", "m/s", "kinematic integrator"),
-        Signal("vy", "m/s", "KF lateral velocity"),
-        Signal("r", "rad/s", "KF yaw rate"),
-        *(Signal(n, "SI", "KF covariance entry (upper triangle, row by row)") for n in COVARIANCE),
+        *_KF_ESTIMATES,
+        *covariance_signals("P", _KF_ESTIMATES, doc="KF covariance entry (upper triangle, row by row)"),
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
         Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),

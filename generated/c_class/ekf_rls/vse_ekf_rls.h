@@ -58,9 +58,9 @@ typedef struct {
 enum {
     VSE_EKF_RLS_STATE_BETA_EKF = 0, /* rad: EKF sideslip angle */
     VSE_EKF_RLS_STATE_R_EKF = 1, /* rad/s: EKF yaw rate */
-    VSE_EKF_RLS_STATE_P_BETA_BETA = 2, /* SI: EKF covariance entry (upper triangle) */
-    VSE_EKF_RLS_STATE_P_BETA_R = 3, /* SI: EKF covariance entry (upper triangle) */
-    VSE_EKF_RLS_STATE_P_R_R = 4, /* SI: EKF covariance entry (upper triangle) */
+    VSE_EKF_RLS_STATE_P_BETA_BETA = 2, /* rad^2: EKF covariance entry (upper triangle) */
+    VSE_EKF_RLS_STATE_P_BETA_R = 3, /* rad*(rad/s): EKF covariance entry (upper triangle) */
+    VSE_EKF_RLS_STATE_P_R_R = 4, /* (rad/s)^2: EKF covariance entry (upper triangle) */
     VSE_EKF_RLS_STATE_C0_1 = 5, /* 1/rad: normalised cornering stiffness: left wheels (literal) or front axle */
     VSE_EKF_RLS_STATE_C0_2 = 6, /* 1/rad: normalised cornering stiffness: right wheels (literal) or rear axle */
     VSE_EKF_RLS_STATE_PRLS_C0_1_C0_1 = 7, /* 1/rad^2: RLS covariance entry (upper triangle) */

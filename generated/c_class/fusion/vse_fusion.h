@@ -69,9 +69,9 @@ enum {
     VSE_FUSION_STATE_VY_KIN = 13, /* m/s: kinematic integrator */
     VSE_FUSION_STATE_VY = 14, /* m/s: KF lateral velocity */
     VSE_FUSION_STATE_R = 15, /* rad/s: KF yaw rate */
-    VSE_FUSION_STATE_P_VY_VY = 16, /* SI: KF covariance entry (upper triangle, row by row) */
-    VSE_FUSION_STATE_P_VY_R = 17, /* SI: KF covariance entry (upper triangle, row by row) */
-    VSE_FUSION_STATE_P_R_R = 18, /* SI: KF covariance entry (upper triangle, row by row) */
+    VSE_FUSION_STATE_P_VY_VY = 16, /* (m/s)^2: KF covariance entry (upper triangle, row by row) */
+    VSE_FUSION_STATE_P_VY_R = 17, /* (m/s)*(rad/s): KF covariance entry (upper triangle, row by row) */
+    VSE_FUSION_STATE_P_R_R = 18, /* (rad/s)^2: KF covariance entry (upper triangle, row by row) */
     VSE_FUSION_STATE_DELTA_PREV = 19, /* rad: last plausible steer angle */
     VSE_FUSION_STATE_VX_PREV = 20, /* m/s: last plausible speed */
     VSE_FUSION_STATE_HOLDING = 21 /* -: 1 while holding (low speed or invalid input), else 0 */

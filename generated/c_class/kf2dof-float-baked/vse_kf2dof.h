@@ -51,9 +51,9 @@ typedef struct {
 enum {
     VSE_KF2DOF_STATE_VY = 0, /* m/s: lateral velocity estimate */
     VSE_KF2DOF_STATE_R = 1, /* rad/s: yaw-rate estimate */
-    VSE_KF2DOF_STATE_P_VY_VY = 2, /* SI: covariance entry (upper triangle, row by row) */
-    VSE_KF2DOF_STATE_P_VY_R = 3, /* SI: covariance entry (upper triangle, row by row) */
-    VSE_KF2DOF_STATE_P_R_R = 4, /* SI: covariance entry (upper triangle, row by row) */
+    VSE_KF2DOF_STATE_P_VY_VY = 2, /* (m/s)^2: covariance entry (upper triangle, row by row) */
+    VSE_KF2DOF_STATE_P_VY_R = 3, /* (m/s)*(rad/s): covariance entry (upper triangle, row by row) */
+    VSE_KF2DOF_STATE_P_R_R = 4, /* (rad/s)^2: covariance entry (upper triangle, row by row) */
     VSE_KF2DOF_STATE_DELTA_PREV = 5, /* rad: last plausible steer angle (input of the next prediction) */
     VSE_KF2DOF_STATE_VX_PREV = 6, /* m/s: last plausible speed (input of the next prediction) */
     VSE_KF2DOF_STATE_HOLDING = 7 /* -: 1 while holding (low speed or invalid input), else 0 */
