@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,18 +56,13 @@ def verify(config: VehicleConfig, names: tuple[str, ...], cases: tuple[Case, ...
     params = params or config.codegen["params"]
     for name in names:
         _check_layouts(config, name, build(name, config, params))
-    own_pool = workers is None
-    workers = workers or Workers()
-    try:
+    with nullcontext(workers) if workers else Workers() as pool:
         rate_hz = 1.0 / config.sample_time
-        workers.map(_simulate, [(config, case, rate_hz, seed) for case in cases])
-        workers.map(_compile, [(config, name, real, params) for name in names])
+        pool.map(_simulate, [(config, case, rate_hz, seed) for case in cases])
+        pool.map(_compile, [(config, name, real, params) for name in names])
         jobs = [(config, name, case, seed, real, params) for name in names for case in cases]
-        return workers.map(verify_case, jobs,
-                           on_done=(lambda _, result: on_done(result)) if on_done else None)
-    finally:
-        if own_pool:
-            workers.__exit__(None, None, None)
+        return pool.map(verify_case, jobs,
+                        on_done=(lambda _, result: on_done(result)) if on_done else None)
 
 
 def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] = VERIFICATION_SET,
