@@ -6,7 +6,8 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 ``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
 :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
 :func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
-pointers), and :func:`_drop_metadata` keeps of CasADi's exports only each Function's entry point.
+pointers), :func:`_drop_metadata` keeps of CasADi's exports only each Function's entry point, and
+:func:`_document_entries` writes above each the names of its arguments' entries.
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
 loudly instead of emitting unreviewed code.
 """
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import re
 import tempfile
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,12 +62,50 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     if _work_size(h_text) != 0:
         raise RuntimeError(f"{estimator.name}: the kernel needs a work vector; the API template "
                            "supports straight-line SX kernels only")
-    entries = [function.name() for function in (estimator.init, *estimator.structure.kernel_functions)]
-    c_text, h_text = _drop_metadata(c_text, h_text, entries)
+    functions = (estimator.init, *estimator.structure.kernel_functions)
+    c_text, h_text = _drop_metadata(c_text, h_text, [function.name() for function in functions])
+    c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)
+
+
+def _argument_names(estimator: Estimator) -> dict[str, tuple[str, ...]]:
+    """Entry names of the kernel arguments and results that have a layout, by argument name."""
+    structure = estimator.structure
+    names = {"state": estimator.states.names, "state_next": estimator.states.names,
+             "state_mid": estimator.states.names, "input": estimator.inputs.names,
+             "output": estimator.outputs.names, "params": tuple(estimator.parameters.names)}
+    if hasattr(structure, "scratch"):
+        names["scratch"] = structure.scratch.names
+    if hasattr(structure, "particle"):
+        head = estimator.states.names[:structure.head_size]
+        names.update(head=head, head_next=head, particle=structure.particle.names,
+                     particle_next=structure.particle.names)
+    return names
+
+
+def _document_entries(c_text: str, functions, names: dict[str, tuple[str, ...]]) -> str:
+    """A comment above each entry point: its operation count and, for every argument and result,
+    its size and the names of its entries (``arg[i][j]`` is entry j of argument i)."""
+    for function in functions:
+        lines = [f"{function.name()}: {function.n_instructions()} operations (CasADi SX instructions)"]
+        for kind, count, name_of, size_of in (("arg", function.n_in(), function.name_in, function.numel_in),
+                                              ("res", function.n_out(), function.name_out,
+                                               function.numel_out)):
+            for i in range(count):
+                label, size = name_of(i), size_of(i)
+                entries = names.get(label, ())
+                described = ", ".join(entries) if len(entries) == size else f"{size} entries"
+                lines += textwrap.wrap(f"{kind}[{i}] {label}[{size}]: {described}", 96,
+                                       subsequent_indent="    ")
+        anchor = f"CASADI_SYMBOL_EXPORT int {function.name()}("
+        if c_text.count(anchor) != 1:
+            raise RuntimeError(f"{function.name()}: entry point not found once; review codegen/kernel.py")
+        comment = "/*\n" + "".join(f" * {line}\n" for line in lines) + " */\n"
+        c_text = c_text.replace(anchor, comment + anchor)
+    return c_text
 
 
 def _work_size(h_text: str) -> int:

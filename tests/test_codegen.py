@@ -16,7 +16,7 @@ from codegen.generate import check, render, write
 from harness.build import WARNING_FLAGS
 from harness.paths import GENERATED
 from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
-from model.estimators import DEFINITIONS
+from model.estimators import DEFINITIONS, build
 
 COMPILERS = ["gcc", "clang"]
 STRICT_TEMPLATE_FLAGS = ("-Wconversion", "-Wshadow", "-Wcast-qual", "-Wstrict-prototypes",
@@ -229,3 +229,14 @@ def test_only_the_entry_points_of_casadis_exports_are_kept_and_a_new_export_fail
                            "CASADI_SYMBOL_EXPORT int vse_t_kernel_init_checkout(void) {")
     with pytest.raises(RuntimeError, match="unexpected: \\['vse_t_kernel_init_new'\\]"):
         _drop_metadata(extra, h_text, ["vse_t_kernel_init"])
+
+
+def test_each_kernel_entry_point_maps_its_arguments_to_names(config):
+    estimator = build("kf2dof", config)
+    kernel = render(config, "kf2dof")["vse_kf2dof_kernel.c"]
+    start = kernel.index(" * vse_kf2dof_kernel_step:")
+    step = kernel[start:kernel.index("CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_step(")]
+    assert f"vse_kf2dof_kernel_step: {estimator.step.n_instructions()} operations" in step
+    flat = " ".join(line.strip(" *") for line in step.splitlines())
+    assert f"arg[0] state[{len(estimator.states)}]: {', '.join(estimator.states.names)}" in flat
+    assert f"res[1] output[{len(estimator.outputs)}]: {', '.join(estimator.outputs.names)}" in flat

@@ -202,6 +202,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_ekf_rls_kernel_init: 99 operations (CasADi SX instructions)
+ * arg[0] input[5]: delta, vx, ax, ay, r
+ * res[0] state[23]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
+ *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f
+ */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -763,6 +770,17 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_ekf_rls_kernel_step: 546 operations (CasADi SX instructions)
+ * arg[0] state[23]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
+ *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f
+ * arg[1] input[5]: delta, vx, ax, ay, r
+ * res[0] state_next[23]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2,
+ *     Prls_c0_1_c0_1, Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator,
+ *     beta, holding, beta_kin, ax_f, ay_f, r_f, delta_f, beta_f
+ * res[1] output[8]: beta, beta_ekf, beta_int, r, weight, c_front, c_rear, status
+ */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }

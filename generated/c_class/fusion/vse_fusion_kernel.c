@@ -191,6 +191,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_fusion_kernel_init: 85 operations (CasADi SX instructions)
+ * arg[0] input[4]: delta, vx, ay, r
+ * res[0] state[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -1020,6 +1027,17 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_fusion_kernel_step: 814 operations (CasADi SX instructions)
+ * arg[0] state[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * res[0] state_next[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[5]: beta, vy, r, weight, status
+ */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }

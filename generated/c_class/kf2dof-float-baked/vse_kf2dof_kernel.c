@@ -149,6 +149,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_kf2dof_kernel_init: 46 operations (CasADi SX instructions)
+ * arg[0] input[4]: delta, vx, ay, r
+ * res[0] state[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -728,6 +733,13 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_kf2dof_kernel_step: 565 operations (CasADi SX instructions)
+ * arg[0] state[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * res[0] state_next[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[4]: beta, vy, r, status
+ */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }

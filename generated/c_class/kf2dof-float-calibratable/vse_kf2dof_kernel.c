@@ -152,6 +152,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_kf2dof_kernel_init: 49 operations (CasADi SX instructions)
+ * arg[0] input[4]: delta, vx, ay, r
+ * arg[1] params[28]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, process_noise_11,
+ *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
+ *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
+ *     vx_min, vx_resume
+ * res[0] state[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -801,6 +812,19 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_kf2dof_kernel_step: 635 operations (CasADi SX instructions)
+ * arg[0] state[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * arg[2] params[28]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, process_noise_11,
+ *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
+ *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
+ *     vx_min, vx_resume
+ * res[0] state_next[8]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[4]: beta, vy, r, status
+ */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }

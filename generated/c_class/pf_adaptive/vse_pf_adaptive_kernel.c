@@ -176,6 +176,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_adaptive_kernel_init: 69 operations (CasADi SX instructions)
+ * arg[0] input[4]: vx, ax, ay, r
+ * res[0] head[6]: vx, vy, ax, ay, r, holding
+ * res[1] shared[12]: 12 entries
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -292,6 +298,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_adaptive_kernel_prepare: 104 operations (CasADi SX instructions)
+ * arg[0] head[6]: vx, vy, ax, ay, r, holding
+ * arg[1] input[4]: vx, ax, ay, r
+ * res[0] shared[12]: 12 entries
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_prepare(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
@@ -332,6 +344,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_adaptive_kernel_spawn: 29 operations (CasADi SX instructions)
+ * arg[0] shared[12]: 12 entries
+ * arg[1] normals[5]: 5 entries
+ * res[0] particle[6]: vx, vy, ax, ay, r, weight
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_spawn(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f2(arg, res, iw, w, mem);
 }
@@ -408,6 +426,13 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_adaptive_kernel_propagate: 65 operations (CasADi SX instructions)
+ * arg[0] shared[12]: 12 entries
+ * arg[1] particle[6]: vx, vy, ax, ay, r, weight
+ * arg[2] normals[5]: 5 entries
+ * res[0] particle_next[6]: vx, vy, ax, ay, r, weight
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_propagate(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f3(arg, res, iw, w, mem);
 }
@@ -480,6 +505,14 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_adaptive_kernel_finish: 61 operations (CasADi SX instructions)
+ * arg[0] head[6]: vx, vy, ax, ay, r, holding
+ * arg[1] shared[12]: 12 entries
+ * arg[2] summary[6]: 6 entries
+ * res[0] head_next[6]: vx, vy, ax, ay, r, holding
+ * res[1] output[8]: beta, vx, vy, n_eff, sigma_ax, sigma_ay, sigma_r, status
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f4(arg, res, iw, w, mem);
 }

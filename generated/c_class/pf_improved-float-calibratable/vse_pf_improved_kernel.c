@@ -188,6 +188,20 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_improved_kernel_init: 81 operations (CasADi SX instructions)
+ * arg[0] input[4]: vx, ax, ay, r
+ * arg[1] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
+ *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
+ *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
+ *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
+ *     correction_gain_1, correction_gain_2, correction_gain_3
+ * res[0] head[6]: vx, vy, ax, ay, r, holding
+ * res[1] shared[12]: 12 entries
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -316,6 +330,20 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_improved_kernel_prepare: 116 operations (CasADi SX instructions)
+ * arg[0] head[6]: vx, vy, ax, ay, r, holding
+ * arg[1] input[4]: vx, ax, ay, r
+ * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
+ *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
+ *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
+ *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
+ *     correction_gain_1, correction_gain_2, correction_gain_3
+ * res[0] shared[12]: 12 entries
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
@@ -357,6 +385,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_improved_kernel_spawn: 30 operations (CasADi SX instructions)
+ * arg[0] shared[12]: 12 entries
+ * arg[1] normals[5]: 5 entries
+ * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
+ *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
+ *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
+ *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
+ *     correction_gain_1, correction_gain_2, correction_gain_3
+ * res[0] particle[6]: vx, vy, ax, ay, r, weight
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f2(arg, res, iw, w, mem);
 }
@@ -447,6 +489,21 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_improved_kernel_propagate: 78 operations (CasADi SX instructions)
+ * arg[0] shared[12]: 12 entries
+ * arg[1] particle[6]: vx, vy, ax, ay, r, weight
+ * arg[2] normals[5]: 5 entries
+ * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
+ *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
+ *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
+ *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
+ *     correction_gain_1, correction_gain_2, correction_gain_3
+ * res[0] particle_next[6]: vx, vy, ax, ay, r, weight
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f3(arg, res, iw, w, mem);
 }
@@ -519,6 +576,22 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_pf_improved_kernel_finish: 61 operations (CasADi SX instructions)
+ * arg[0] head[6]: vx, vy, ax, ay, r, holding
+ * arg[1] shared[12]: 12 entries
+ * arg[2] summary[6]: 6 entries
+ * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
+ *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
+ *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
+ *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
+ *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
+ *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
+ *     correction_gain_1, correction_gain_2, correction_gain_3
+ * res[0] head_next[6]: vx, vy, ax, ay, r, holding
+ * res[1] output[8]: beta, vx, vy, n_eff, sigma_ax, sigma_ay, sigma_r, status
+ */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f4(arg, res, iw, w, mem);
 }

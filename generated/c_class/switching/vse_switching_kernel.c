@@ -194,6 +194,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_switching_kernel_init: 85 operations (CasADi SX instructions)
+ * arg[0] input[4]: delta, vx, ay, r
+ * res[0] state[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
@@ -438,6 +445,17 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_switching_kernel_select: 232 operations (CasADi SX instructions)
+ * arg[0] state[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * res[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] scratch[6]: scheme, r_checked, r_prev, ay_prev, mode_prev, status
+ */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_select(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
@@ -1014,6 +1032,18 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_switching_kernel_dynamic: 563 operations (CasADi SX instructions)
+ * arg[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * arg[2] scratch[6]: scheme, r_checked, r_prev, ay_prev, mode_prev, status
+ * res[0] state_next[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[5]: beta, vy, r, mode, status
+ */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_dynamic(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f2(arg, res, iw, w, mem);
 }
@@ -1096,6 +1126,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_switching_kernel_kinematic: 71 operations (CasADi SX instructions)
+ * arg[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * arg[2] scratch[6]: scheme, r_checked, r_prev, ay_prev, mode_prev, status
+ * res[0] state_next[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[5]: beta, vy, r, mode, status
+ */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_kinematic(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f3(arg, res, iw, w, mem);
 }
@@ -1169,6 +1211,18 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   return 0;
 }
 
+/*
+ * vse_switching_kernel_hold: 62 operations (CasADi SX instructions)
+ * arg[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * arg[1] input[4]: delta, vx, ay, r
+ * arg[2] scratch[6]: scheme, r_checked, r_prev, ay_prev, mode_prev, status
+ * res[0] state_next[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
+ * res[1] output[5]: beta, vy, r, mode, status
+ */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_hold(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f4(arg, res, iw, w, mem);
 }
