@@ -13,7 +13,7 @@ from model import status
 from model.calibration import baked
 from model.estimators import build
 from model.estimators.kf2dof import dynamic_update
-from model.estimators.seed000 import DYN, KIN
+from model.estimators.kinematic_dynamic import DYN, KIN
 
 T = 0.01
 

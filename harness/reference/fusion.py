@@ -6,34 +6,35 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.reference import seed000
-from harness.reference.seed000 import DYN, INPUTS
+from harness.reference import kinematic_dynamic
+from harness.reference.kinematic_dynamic import DYN, INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
 
 
 def names(config):
-    return INPUTS, seed000.state_names(config, TABLE), OUTPUTS
+    return INPUTS, kinematic_dynamic.state_names(config, TABLE), OUTPUTS
 
 
 def init(config, u0):
-    return seed000.init(config, TABLE, u0)
+    return kinematic_dynamic.init(config, TABLE, u0)
 
 
 def step(config, state, u):
-    return seed000.step(config, TABLE, state, u, lambda *args: _fuse(config, *args))
+    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _fuse(config, *args))
 
 
 def _fuse(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
-    xk, P = seed000.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
+    xk, P = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
-    beta = w * seed000.beta(config, TABLE, vy_kin, u[1]) + (1 - w) * seed000.beta(config, TABLE, xk[0], u[1])
+    beta = (w * kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
+            + (1 - w) * kinematic_dynamic.beta(config, TABLE, xk[0], u[1]))
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
            "holding": 0.0, "mode": DYN}

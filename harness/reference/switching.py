@@ -1,6 +1,6 @@
 """Reference switching estimator (shared/methods/000-switch-sideslip.md §2.2-2.10, §5 defaults),
 written from the spec: threshold switch on the median-filtered a_y, hand-off both ways ([E25],
-[E26]), kinematic integrator [E14], the KF, and the hold rule (harness.reference.seed000)."""
+[E26]), kinematic integrator [E14], the KF, and the hold rule (harness.reference.kinematic_dynamic)."""
 
 from __future__ import annotations
 
@@ -8,30 +8,30 @@ import math
 
 import numpy as np
 
-from harness.reference import seed000
-from harness.reference.seed000 import DYN, INPUTS, KIN
+from harness.reference import kinematic_dynamic
+from harness.reference.kinematic_dynamic import DYN, INPUTS, KIN
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
 
 
 def names(config):
-    return INPUTS, seed000.state_names(config, TABLE), OUTPUTS
+    return INPUTS, kinematic_dynamic.state_names(config, TABLE), OUTPUTS
 
 
 def init(config, u0):
-    return seed000.init(config, TABLE, u0)
+    return kinematic_dynamic.init(config, TABLE, u0)
 
 
 def step(config, state, u):
-    return seed000.step(config, TABLE, state, u, lambda *args: _switch(config, *args))
+    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _switch(config, *args))
 
 
 def _switch(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     threshold = s["threshold"]
     new = {**x, **updates}
-    if seed000.adaptive(config, TABLE):                                                # A10 option
+    if kinematic_dynamic.adaptive(config, TABLE):                                                # A10 option
         peak = max(abs(ay_f), x["ay_peak"] * math.exp(-config.sample_time / s["adaptive_memory"]))
         threshold = max(threshold, min(s["adaptive_fraction"] * peak, s["adaptive_max"]))
         new["ay_peak"] = peak
@@ -48,8 +48,8 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         else:
             vy0, r0 = x["vy"], x["r"]
             P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
-        xk, P = seed000.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
+        xk, P = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
     new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)
-    return new, [seed000.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]
+    return new, [kinematic_dynamic.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]

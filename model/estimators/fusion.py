@@ -14,8 +14,8 @@ import casadi as ca
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators import kf2dof
-from model.estimators.seed000 import COVARIANCE, INPUTS, SEED000_FIELDS, Seed000
-from model.estimators.seed000 import STATUS_BITS as SEED000_STATUS
+from model.estimators.kinematic_dynamic import COVARIANCE, INPUTS, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
+from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from model.guard import hold
 from model.layout import Layout, Signal
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
@@ -23,7 +23,7 @@ from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
 NAME = "fusion"
 
 SCHEMA = EstimatorSchema(
-    fields=(*KF_FIELDS, *SEED000_FIELDS,
+    fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
                      "integrator towards the KF")),
     rules=LOW_SPEED_RULES)
@@ -39,7 +39,7 @@ OUTPUTS = Layout((
 
 def build(params: Parameters) -> Estimator:
     """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
-    seed = Seed000(params, NAME)
+    seed = KinematicDynamic(params, NAME)
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
@@ -82,4 +82,4 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}, SEED000_STATUS),)
+    "reference_timeout": Tunable(0.05, 1.0)}, KINEMATIC_DYNAMIC_STATUS),)

@@ -2,7 +2,7 @@
 
 shared/methods/000-switch-sideslip.md, §2.2-2.10 with the §5 defaults:
 
-* shared pre-processing (model.estimators.seed000, the ``select`` kernel): prefilter [E6],
+* shared pre-processing (model.estimators.kinematic_dynamic, the ``select`` kernel): prefilter [E6],
   reliability checks of r against r_ref [E7-E10] and of a_y,b against vx r [E11] with
   hold-last-valid and a time-out (A6, status REFERENCE_SUSPECT), median a_y,f [E23];
   mode = KIN if |a_y,f| > threshold [E24] (options beyond the paper: hysteresis, A7, and a
@@ -11,7 +11,7 @@ shared/methods/000-switch-sideslip.md, §2.2-2.10 with the §5 defaults:
   with x = [vy_kin, r_k-1], P = P_0 [E26]; z = [a_y,m raw, r_k] (A3);
 * kinematic scheme: vy_kin += T (a_y,k-1 - r_k-1 vx_k-1) [E14], entered from DYN with
   vy_kin = the last KF vy [E25]; the KF is not propagated in KIN;
-* beta = atan2(vy, vx) in both (A14); hold rule (§2.10) in seed000.Seed000.held.
+* beta = atan2(vy, vx) in both (A14); hold rule (§2.10) in kinematic_dynamic.KinematicDynamic.held.
 
 Only the active scheme is evaluated in the generated C (model.estimator.Schemes).
 """
@@ -25,15 +25,15 @@ import casadi as ca
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, Tunable, make_functions, make_schemes
 from model.estimators import kf2dof
-from model.estimators.seed000 import COVARIANCE, DYN, INPUTS, KIN, SEED000_FIELDS, Seed000
-from model.estimators.seed000 import STATUS_BITS as SEED000_STATUS
+from model.estimators.kinematic_dynamic import COVARIANCE, DYN, INPUTS, KIN, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
+from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from model.layout import Layout, Signal
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 
 NAME = "switching"
 
 SCHEMA = EstimatorSchema(
-    fields=(*KF_FIELDS, *SEED000_FIELDS,
+    fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
                         "scheme above threshold + hysteresis, leave it below threshold - "
                         "hysteresis; 0 = the paper's single threshold", default=0.0),
@@ -65,14 +65,14 @@ SCRATCH = Layout((
 ))
 
 
-def remembered_peak(seed: Seed000, ay_filtered, previous_peak):
+def remembered_peak(seed: KinematicDynamic, ay_filtered, previous_peak):
     """M_k = max(|a_y,f|, M_k-1 exp(-T / adaptive_memory)): the largest lateral acceleration the
     road has recently carried (a lower bound of mu g)."""
     decay = ca.exp(-seed.T / seed.settings["adaptive_memory"])
     return ca.fmax(ca.fabs(ay_filtered), previous_peak * decay)
 
 
-def switching_threshold(seed: Seed000, mode_prev, peak=None):
+def switching_threshold(seed: KinematicDynamic, mode_prev, peak=None):
     """a_yT [E24]. Beyond the paper, both off by default: with ``hysteresis`` h > 0 (A7), a_yT + h
     to enter the kinematic scheme and a_yT - h to leave it; with the adaptive threshold (A10),
     a_yT is raised to min(adaptive_fraction M_k, adaptive_max) when that is larger."""
@@ -88,7 +88,7 @@ def switching_threshold(seed: Seed000, mode_prev, peak=None):
 
 def build(params: Parameters) -> Estimator:
     """The switching estimator ([vehicle], [inputs], [estimator.switching])."""
-    seed = Seed000(params, NAME)
+    seed = KinematicDynamic(params, NAME)
     layout, T = seed.layout, seed.T
 
     # ---- select: pre-processing and the choice of scheme ---------------------------------------
@@ -160,4 +160,4 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}, SEED000_STATUS),)
+    "reference_timeout": Tunable(0.05, 1.0)}, KINEMATIC_DYNAMIC_STATUS),)

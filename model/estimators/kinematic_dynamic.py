@@ -1,8 +1,8 @@
-"""Seed 000's shared machinery for the switching and fusion estimators: the state layout, the
-pre-processing (shared/methods/000-switch-sideslip.md §2.2, §2.3, §2.6: prefilter, reliability
-checks with hold-last-valid and time-out, median), the initial state (§2.9) and the hold rule
-(§2.10). Each estimator adds its schemes. Beyond the paper, a measured a_y can be corrected for
-body roll (``roll_gradient``; design.md: body-fixed sensors), for every use of a_y.
+"""The kinematic/dynamic sideslip machinery of seed 000 shared by the switching and fusion
+estimators: the state layout, the pre-processing (000-switch-sideslip.md §2.2, §2.3, §2.6:
+prefilter, reliability checks with hold-last-valid and time-out, median), the initial state
+(§2.9) and the hold rule (§2.10). Each estimator adds its schemes. Beyond the paper, a measured
+a_y can be corrected for body roll (``roll_gradient``: body-fixed sensors), for every use of a_y.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ DYN, KIN = 0, 1
 STATUS_BITS = ("LOW_SPEED", "INVALID_INPUT", "REFERENCE_SUSPECT")
 """What seed 000's estimators can raise: the hold rule's bits and the reliability checks' time-out."""
 
-SEED000_FIELDS: tuple[Field, ...] = (
+KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
     choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "
            "10000/(s^2+200s+10000) or a phase-normalised 2nd-order Bessel at prefilter_omega"),
     positive("prefilter_omega", "rad/s", "Bessel cut-off (prefilter = \"bessel\" only)"),
@@ -104,7 +104,7 @@ class Preprocessed:
     """New values of the pre-processing state entries (held while not active)."""
 
 
-class Seed000:
+class KinematicDynamic:
     """Layout, settings and helpers of one seed-000 estimator table."""
 
     def __init__(self, params: Parameters, table: str) -> None:
