@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from model.kalman import packed_names
+
 
 @dataclass(frozen=True)
 class Signal:
@@ -32,13 +34,13 @@ def unit_product(a: str, b: str) -> str:
 
 def covariance_signals(prefix: str, states: tuple[Signal, ...], names: tuple[str, ...] | None = None,
                        doc: str = "covariance entry (upper triangle, row by row)") -> tuple[Signal, ...]:
-    """The stored entries of the covariance of ``states``, upper triangle row by row, named
-    ``<prefix>_<a>_<b>`` (``names`` instead of the states' names if given), each in the product
-    of its two states' units and judged at the product of their scales."""
-    names = names or tuple(s.name for s in states)
-    return tuple(Signal(f"{prefix}_{names[i]}_{names[j]}", unit_product(states[i].unit, states[j].unit),
-                        doc, scale=states[i].scale * states[j].scale)
-                 for i in range(len(states)) for j in range(i, len(states)))
+    """The stored entries of the covariance of ``states``, named as ``model.kalman.packed_names``
+    gives them (``names`` instead of the states' names if given), each in the product of its two
+    states' units and judged at the product of their scales."""
+    entries = packed_names(prefix, names or tuple(s.name for s in states))
+    pairs = [(a, b) for i, a in enumerate(states) for b in states[i:]]
+    return tuple(Signal(name, unit_product(a.unit, b.unit), doc, scale=a.scale * b.scale)
+                 for name, (a, b) in zip(entries, pairs, strict=True))
 
 
 @dataclass(frozen=True)
