@@ -73,17 +73,11 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
 
 def _argument_names(estimator: Estimator) -> dict[str, tuple[str, ...]]:
     """Entry names of the kernel arguments and results that have a layout, by argument name."""
-    structure = estimator.structure
-    names = {"state": estimator.states.names, "state_next": estimator.states.names,
-             "state_mid": estimator.states.names, "input": estimator.inputs.names,
-             "output": estimator.outputs.names, "params": tuple(estimator.parameters.names)}
-    if hasattr(structure, "scratch"):
-        names["scratch"] = structure.scratch.names
-    if hasattr(structure, "particle"):
-        head = estimator.states.names[:structure.head_size]
-        names.update(head=head, head_next=head, particle=structure.particle.names,
-                     particle_next=structure.particle.names)
-    return names
+    states = estimator.states.names
+    return {"state": states, "state_next": states, "state_mid": states,
+            "input": estimator.inputs.names, "output": estimator.outputs.names,
+            "params": tuple(estimator.parameters.names),
+            **estimator.structure.argument_names(estimator.states)}
 
 
 def _document_entries(c_text: str, functions, names: dict[str, tuple[str, ...]]) -> str:

@@ -50,6 +50,11 @@ class _ComposedStep:
     def init_operations(self, init: ca.Function) -> int:
         return init.n_instructions()
 
+    def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        """Entry names of this structure's own kernel arguments (beyond state, input, output,
+        params), by argument name."""
+        return {}
+
 
 @dataclass(frozen=True)
 class SingleStep(_ComposedStep):
@@ -83,6 +88,9 @@ class Schemes(_ComposedStep):
     @property
     def kernel_functions(self) -> tuple[ca.Function, ...]:
         return (self.select, *(fn for _, fn in self.branches))
+
+    def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        return {"scratch": self.scratch.names}
 
 
 @dataclass(frozen=True)
@@ -168,6 +176,11 @@ class Particles:
 
     def init_operations(self, init: ca.Function) -> int:
         return init.n_instructions() + self.count * self.spawn.n_instructions()
+
+    def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        head = states.names[:self.head_size]
+        return {"head": head, "head_next": head, "particle": self.particle.names,
+                "particle_next": self.particle.names}
 
 
 Structure = SingleStep | Schemes | Repeated | Particles
