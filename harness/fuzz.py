@@ -14,14 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from codegen.generate import library_sources, render, template_environment
+from model import signals
 from model.estimators import build
-from model.guard import LIMIT_KEYS, WHEEL_SPEEDS
+from model.guard import LIMIT_KEYS
 from model.params import VehicleConfig
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
-TYPICAL = {"delta": 0.1, "vx": 40.0, "ax": 5.0, "ay": 8.0, "r": 0.5, "mz": 3000.0,
-           **{name: 120.0 for name in WHEEL_SPEEDS}}
-"""Scale of the 'ordinary' random values of each input."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +45,7 @@ def fuzz_source(config: VehicleConfig, name: str, real: str) -> str:
     return template_environment(Path(__file__).parent).get_template("fuzz.c.j2").render(
         est=estimator, p=p, P=p.upper(), real=real, cov_n=n, cov_indices=cov,
         limits=[repr(config.limits[LIMIT_KEYS[s]]) for s in estimator.inputs.names],
-        typical=[repr(TYPICAL[s]) for s in estimator.inputs.names],
+        typical=[repr(signals.INPUT[s].typical) for s in estimator.inputs.names],
         vx_index=estimator.inputs.index("vx"))
 
 

@@ -19,24 +19,17 @@ from pathlib import Path
 import numpy as np
 
 from harness.files import read_user_text, write_text_atomic
+from model import signals
 
-REQUIRED = ("t", "delta", "vx", "ax", "ay", "r")
-"""Required input columns (design.md)."""
-OPTIONAL_INPUTS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr", "mz")
-ABSENT_MEANS = {"mz": 0.0}
+REQUIRED = (signals.TIME.name, *signals.REQUIRED_INPUTS)
+"""Required columns: time and the required inputs (model.signals)."""
+OPTIONAL_INPUTS = signals.OPTIONAL_INPUTS
+ABSENT_MEANS = {e.name: e.absent_value for e in signals.INPUTS if e.absent_value is not None}
 """Optional inputs an estimator may read from a log without them, and the value they then have
 (no direct yaw moment applied: mz = 0)."""
-TRUTH = ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu", "off_course")
-"""Optional ground truth, used only for scoring. ``off_course`` is 1 where a simulated run touched
-a cone or had spun (latched), else 0."""
-
-UNIT_LIMITS = {
-    "delta": (1.0, "rad (a front road-wheel angle above 1 rad looks like degrees or steering-wheel angle)"),
-    "vx": (150.0, "m/s (a speed above 150 m/s looks like km/h)"),
-    "ax": (100.0, "m/s^2 (above 100 m/s^2 looks like the wrong unit)"),
-    "ay": (100.0, "m/s^2 (above 100 m/s^2 looks like the wrong unit)"),
-    "r": (10.0, "rad/s (a yaw rate above 10 rad/s looks like deg/s)"),
-}
+TRUTH = tuple(s.name for s in signals.TRUTH)
+"""Optional ground truth, used only for scoring (model.signals)."""
+UNIT_CHECKS = {e.name: (e.signal.unit, e.unit_check) for e in signals.INPUTS if e.unit_check}
 """Range checks that catch wrong units: a column with more than UNIT_FRACTION of its finite samples
 beyond the limit is rejected. Single glitches pass: the estimators reject them per sample."""
 UNIT_FRACTION = 0.05
@@ -150,19 +143,20 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
     log = Log({name: np.array(cells[i], dtype=float if name in known else str)
                for i, name in enumerate(header)}, source)
     _check_time(log["t"], source)
-    for name, (limit, unit) in UNIT_LIMITS.items():
+    for name, (unit, check) in UNIT_CHECKS.items():
         if name in log:
-            _check_unit(log[name], name, limit, unit, source)
+            _check_unit(log[name], name, unit, check, source)
     return log
 
 
-def _check_unit(column: np.ndarray, name: str, limit: float, unit: str, source: str) -> None:
+def _check_unit(column: np.ndarray, name: str, unit: str, check: signals.UnitCheck, source: str) -> None:
     finite = np.isfinite(column)
-    beyond = finite & (np.abs(column) > limit)
+    beyond = finite & (np.abs(column) > check.limit)
     if beyond.sum() > UNIT_FRACTION * max(finite.sum(), 1):
         i = int(np.flatnonzero(beyond)[0])
         raise LogError(f"{source}:{i + 2}: column '{name}' = {float(column[i])!r}: expected |{name}| <= "
-                       f"{limit} {unit}; {beyond.sum()} of {finite.sum()} samples are beyond it")
+                       f"{check.limit:g} {unit} (a larger value {check.hint}); {beyond.sum()} of {finite.sum()} "
+                       "samples are beyond it")
 
 
 def _parse(cell: str, source: str, line: int, column: str) -> float:

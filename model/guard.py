@@ -17,12 +17,10 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model import status
+from model import signals, status
 
-WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
-LIMIT_KEYS = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
-              "mz": "mz_max", **{name: "omega_max" for name in WHEEL_SPEEDS}}
-"""Which ``[inputs]`` limit bounds which log column."""
+LIMIT_KEYS = {entry.name: entry.limit_key for entry in signals.INPUTS}
+"""Which ``[inputs]`` limit bounds which log column (model.signals)."""
 
 
 @dataclass(frozen=True)
@@ -71,20 +69,21 @@ def _all(flags) -> ca.SX:
     return result
 
 
-NEUTRAL = {"delta": 0.0, "ax": 0.0, "ay": 0.0, "r": 0.0, "mz": 0.0,
-           **{name: 0.0 for name in WHEEL_SPEEDS}}
-"""What an implausible input of the first sample is replaced by (vx: the low-speed limit)."""
-
-
 def first_sample(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
                  vx_resume: float) -> tuple[dict[str, ca.SX], ca.SX]:
     """Sample 0 for an estimator's ``init``: every implausible input replaced by a neutral value
     (vx by vx_min), and the initial ``holding`` flag: 0 only if every input is plausible and
     vx >= vx_resume (an estimator starts only above the resume speed)."""
     guard = input_guard(inputs, limits, vx_resume, vx_resume, ca.SX(1))
-    values = {name: hold(value, guard.plausible[name], vx_min if name == "vx" else NEUTRAL[name])
+    values = {name: hold(value, guard.plausible[name], neutral(name, vx_min))
               for name, value in inputs.items()}
     return values, ca.if_else(guard.active, 0, 1)
+
+
+def neutral(name: str, vx_min: float) -> float:
+    """What an implausible input ``name`` of the first sample is replaced by (vx: ``vx_min``)."""
+    value = signals.INPUT[name].neutral
+    return vx_min if value is None else value
 
 
 def previous_inputs(inputs: Mapping[str, ca.SX], plausible: Mapping[str, ca.SX],

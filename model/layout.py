@@ -8,20 +8,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from model.kalman import packed_names
-
-
-@dataclass(frozen=True)
-class Signal:
-    """One entry of a flat vector: name (a log column for inputs), unit, meaning, C type kind."""
-
-    name: str
-    unit: str
-    doc: str
-    integer: bool = False
-    scale: float = 1.0
-    """Magnitude (in ``unit``) at which rounding of this entry is judged: the equivalence check's
-    floor is multiplied by it. 1 for the O(1) SI signals; e.g. about 1e4 for a car's yaw moment in
-    N*m, whose rounding comes from force moments of that size."""
+from model.signals import Signal
 
 
 def unit_product(a: str, b: str) -> str:

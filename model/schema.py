@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from model import signals
+
 
 class Invalid(ValueError):
     """A value failed its check; the message says what was expected."""
@@ -183,15 +185,11 @@ VEHICLE: tuple[Field, ...] = (
 
 # [inputs]: plausibility limits shared by all estimators. A finite input inside its limit is
 # plausible; anything else (NaN, +-Inf, beyond the limit) is rejected with status INVALID_INPUT.
-INPUT_LIMITS: tuple[Field, ...] = (
-    positive("vx_max", "m/s", "largest plausible |vx|"),
-    positive("delta_max", "rad", "largest plausible |delta| (front road-wheel angle)"),
-    positive("ax_max", "m/s^2", "largest plausible |ax|"),
-    positive("ay_max", "m/s^2", "largest plausible |ay|"),
-    positive("r_max", "rad/s", "largest plausible |r|"),
-    positive("mz_max", "N*m", "largest plausible |mz| (direct yaw moment)", default=2.0e4),
-    positive("omega_max", "rad/s", "largest plausible |omega| of a wheel speed", default=400.0),
-)
+INPUT_LIMITS: tuple[Field, ...] = tuple(
+    positive(key, entries[0].signal.unit, f"largest plausible |{'|, |'.join(e.name for e in entries)}|",
+             default=entries[0].limit_default)
+    for key, entries in signals.inputs_by_limit().items())
+"""[inputs]: one plausibility limit per input (wheel speeds share one), from model.signals."""
 
 # [plant]: the truth plant of harness/plant (simulation only; never in generated code). Optional.
 PLANT: tuple[Field, ...] = (

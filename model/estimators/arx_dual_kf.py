@@ -29,14 +29,15 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import discretize, kalman, status
+from model import discretize, kalman, signals, status
 from model.bicycle import bicycle_matrices
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators.kf2dof import zoh_plan
 from model.guard import first_sample, hold, input_guard
-from model.layout import Layout, Signal
+from model.layout import Layout
 from model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
+from model.signals import Signal
 
 NAME = "arx_dual_kf"
 
@@ -57,12 +58,7 @@ SCHEMA = EstimatorSchema(
     rules=LOW_SPEED_RULES)
 """Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
 
-INPUTS = Layout((
-    Signal("delta", "rad", "front road-wheel steer angle, positive left (exogenous = mz_delta)"),
-    Signal("vx", "m/s", "longitudinal speed (low-speed rule, priors)"),
-    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
-    Signal("mz", "N*m", "direct yaw moment, positive counter-clockwise (0 when not logged)"),
-))
+INPUTS = Layout(signals.inputs("delta", "vx", "r", "mz"))
 HISTORY = ("x_1", "x_2")
 """KF1 state: the yaw-rate outputs x_n-1 and x_n-2 before a step (x_n and x_n-1 after it)."""
 
@@ -92,7 +88,7 @@ def layouts(settings) -> tuple[Layout, Layout]:
         Signal("r", "rad/s", "filtered yaw rate x_n"),
         *(Signal(n, "-", f"ARX parameter {n}") for n in theta),
         Signal("gain", "-", "KF1 gain K1 of this sample"),
-        Signal("status", "-", "status bits (model.status)", integer=True),
+        signals.STATUS,
     ))
     return states, outputs
 

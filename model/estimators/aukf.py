@@ -33,13 +33,13 @@ from dataclasses import replace
 
 import casadi as ca
 
-from model import kalman, status, unscented
+from model import kalman, signals, status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, Tunable, make_functions, make_repeated
-from model.guard import WHEEL_SPEEDS, first_sample, hold, input_guard
+from model.guard import first_sample, hold, input_guard
 from model.increments import Pair, lift
-from model.layout import Layout, Signal, covariance_signals
+from model.layout import Layout, covariance_signals
 from model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
@@ -53,6 +53,7 @@ from model.schema import (
     number_field,
     positive,
 )
+from model.signals import Signal
 from model.three_dof import ThreeDof
 
 NAME = "aukf"
@@ -103,13 +104,7 @@ MEASURED = (4, 5, 2)
 """Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
 Q_FLOOR = 1e-3
 """Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
-_BASE_INPUTS = (
-    Signal("delta", "rad", "front road-wheel steer angle, positive left"),
-    Signal("vx", "m/s", "longitudinal speed (initial u and the low-speed rule)"),
-    Signal("ax", "m/s^2", "longitudinal acceleration, positive forward"),
-    Signal("ay", "m/s^2", "lateral acceleration, positive left"),
-    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
-)
+_BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
 COVARIANCE = kalman.packed_names("P", X_NAMES)
 """The state names behind each entry of COVARIANCE."""
 
@@ -127,8 +122,7 @@ def force_scales(vehicle) -> dict[str, float]:
 def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for the configured longitudinal force and variant."""
     wheels = settings["longitudinal_force"] == "wheel_speeds"
-    inputs = Layout((*_BASE_INPUTS, *((Signal(n, "rad/s", f"wheel speed {n[6:]}")
-                                      for n in WHEEL_SPEEDS) if wheels else ())))
+    inputs = Layout(signals.inputs(*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ())))
     scale = force_scales(vehicle)
     estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
     states = Layout((
@@ -139,7 +133,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
            *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
-        Signal("holding", "-", "2 while holding at low speed, 1 on an invalid input, else 0"),
+        signals.HOLDING_REASON,
     ))
     outputs = Layout((
         Signal("beta", "rad", "sideslip angle atan2(v, u)"),
@@ -149,7 +143,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
         Signal("yaw_moment", "N*m", "yaw moment Gamma", scale=scale["moment"]),
         Signal("ax", "m/s^2", "longitudinal acceleration a_x", scale=scale["ax"]),
         Signal("ay", "m/s^2", "lateral acceleration a_y", scale=scale["ay"]),
-        Signal("status", "-", "status bits (model.status)", integer=True),
+        signals.STATUS,
     ))
     return inputs, states, outputs
 
@@ -175,11 +169,11 @@ def pair_function(model: ThreeDof, name: str, params: Parameters) -> ca.Function
     one pair of sigma points, in pair arithmetic (``model.increments``); ``shared`` =
     [x, delta, cos delta, sin delta, r omega_fl..rr (wheel-speed mode)]. The C calls it once per
     pair (``model.estimator.Repeated``)."""
-    shared = ca.SX.sym("shared", N + 3 + (len(WHEEL_SPEEDS) if model.wheel_speeds else 0))
+    shared = ca.SX.sym("shared", N + 3 + (len(signals.WHEEL_SPEEDS) if model.wheel_speeds else 0))
     offset = ca.SX.sym("offset", N)
     x = [shared[i] for i in range(N)]
     delta, cos_delta, sin_delta = shared[N], shared[N + 1], shared[N + 2]
-    rolling = [shared[N + 3 + j] for j in range(len(WHEEL_SPEEDS))] if model.wheel_speeds else None
+    rolling = [shared[N + 3 + j] for j in range(len(signals.WHEEL_SPEEDS))] if model.wheel_speeds else None
     moved = [lift(v) for v in model.step([Pair(x[i], offset[i], ca.SX(0)) for i in range(N)],
                                          delta, cos_delta, sin_delta, rolling)]
     result = ca.vertcat(*[v.odd for v in moved], *[v.even for v in moved])
@@ -266,7 +260,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     delta = hold(u["delta"], active, 0)
     cos_delta, sin_delta = ca.cos(delta), ca.sin(delta)
     wheels = [hold(u[n], active, 0) * config.vehicle["wheel_radius"]
-              for n in WHEEL_SPEEDS] if model.wheel_speeds else None
+              for n in signals.WHEEL_SPEEDS] if model.wheel_speeds else None
     L, repaired = unscented.cholesky_repaired(P)
     offsets = unscented.sigma_offsets(L, weights)
     shared = ca.vertcat(x, delta, cos_delta, sin_delta, *(wheels or []))

@@ -38,12 +38,12 @@ import math
 
 import casadi as ca
 
-from model import filters, kalman
+from model import filters, kalman, signals
 from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard
-from model.layout import Layout, Signal, covariance_signals
+from model.layout import Layout, covariance_signals
 from model.schema import (
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
@@ -57,6 +57,7 @@ from model.schema import (
     spd_matrix,
 )
 from model.sensors import roll_corrected
+from model.signals import Signal
 
 NAME = "ekf_rls"
 
@@ -97,13 +98,7 @@ REFERENCE_PERIOD = 0.001
 LOAD_FLOOR = 0.05
 """Smallest wheel load, as a share of a static corner load m g / 4 [23]."""
 
-INPUTS = Layout((
-    Signal("delta", "rad", "front road-wheel steer angle, positive left"),
-    Signal("vx", "m/s", "longitudinal speed"),
-    Signal("ax", "m/s^2", "longitudinal acceleration, body frame, positive forward"),
-    Signal("ay", "m/s^2", "lateral acceleration, body frame, positive left"),
-    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
-))
+INPUTS = Layout(signals.inputs("delta", "vx", "ax", "ay", "r"))
 _EKF = kalman.packed_names("P", ("beta", "r"))
 _RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
 _EKF_ESTIMATES = (Signal("beta_ekf", "rad", "EKF sideslip angle"),
@@ -120,7 +115,7 @@ STATES = Layout((
     Signal("r_dot", "rad/s^2", "filtered yaw acceleration of the last sample"),
     Signal("indicator", "1/s", "low-passed nonlinearity indicator D"),
     Signal("beta", "rad", "fused sideslip angle of the last sample"),
-    Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+    signals.HOLDING,
 ))
 KINEMATIC_STATES = Layout((
     Signal("beta_kin", "rad", "integral method for slip angles, re-seeded only while lambda = 0"),
@@ -139,7 +134,7 @@ OUTPUTS = Layout((
     Signal("weight", "-", "lambda, the integral method's weight"),
     Signal("c_front", "N/rad", "front axle cornering stiffness"),
     Signal("c_rear", "N/rad", "rear axle cornering stiffness"),
-    Signal("status", "-", "status bits (model.status)", integer=True),
+    signals.STATUS,
 ))
 
 

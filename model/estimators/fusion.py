@@ -11,14 +11,16 @@ from __future__ import annotations
 
 import casadi as ca
 
+from model import signals
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators import kf2dof
 from model.estimators.kinematic_dynamic import COVARIANCE, INPUTS, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
 from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from model.guard import hold
-from model.layout import Layout, Signal
+from model.layout import Layout
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
+from model.signals import Signal
 
 NAME = "fusion"
 
@@ -33,7 +35,7 @@ OUTPUTS = Layout((
     Signal("vy", "m/s", "lateral velocity, weighted fusion"),
     Signal("r", "rad/s", "yaw rate after the reliability check"),
     Signal("weight", "-", "weight w of the kinematic scheme"),
-    Signal("status", "-", "status bits (model.status)", integer=True),
+    signals.STATUS,
 ))
 
 

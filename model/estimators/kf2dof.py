@@ -18,24 +18,20 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import discretize, kalman
+from model import discretize, kalman, signals
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
 from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
-from model.layout import Layout, Signal, covariance_signals
+from model.layout import Layout, covariance_signals
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
+from model.signals import Signal
 
 NAME = "kf2dof"
 
 SCHEMA = EstimatorSchema(fields=KF_FIELDS, rules=LOW_SPEED_RULES)
 
-INPUTS = Layout((
-    Signal("delta", "rad", "front road-wheel steer angle, positive left"),
-    Signal("vx", "m/s", "longitudinal speed (rear wheel speeds x R_eff)"),
-    Signal("ay", "m/s^2", "lateral acceleration at the CG, body frame, positive left"),
-    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
-))
+INPUTS = Layout(signals.inputs("delta", "vx", "ay", "r"))
 
 _ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -44,14 +40,14 @@ STATES = Layout((
     *covariance_signals("P", _ESTIMATES),
     Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
     Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
-    Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+    signals.HOLDING,
 ))
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, atan2(vy, vx)"),
     Signal("vy", "m/s", "lateral velocity"),
     Signal("r", "rad/s", "filtered yaw rate"),
-    Signal("status", "-", "status bits (model.status)", integer=True),
+    signals.STATUS,
 ))
 
 

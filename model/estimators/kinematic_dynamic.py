@@ -11,14 +11,15 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model import filters, kalman, status
+from model import filters, kalman, signals, status
 from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
 from model.estimators import kf2dof
 from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
-from model.layout import Layout, Signal, covariance_signals
+from model.layout import Layout, covariance_signals
 from model.schema import ROLL_CORRECTION, Field, choice, positive
 from model.sensors import roll_corrected
+from model.signals import Signal
 
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -70,7 +71,7 @@ def states(n_median: int, adaptive_threshold: bool = False) -> Layout:
         *covariance_signals("P", _KF_ESTIMATES, doc="KF covariance entry (upper triangle, row by row)"),
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
-        Signal("holding", "-", "1 while holding (low speed or invalid input), else 0"),
+        signals.HOLDING,
         *((Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)"),)
           if adaptive_threshold else ()),
     ))

@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import status
+from model import signals, status
 from model.calibration import Parameters
 from model.estimator import RNG_WORDS, Definition, Estimator, Particles, Tunable
 from model.guard import first_sample, hold, input_guard
-from model.layout import Layout, Signal
+from model.layout import Layout
 from model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
@@ -51,6 +51,7 @@ from model.schema import (
     positive,
 )
 from model.sensors import roll_corrected
+from model.signals import Signal
 
 IMPROVED = "pf_improved"
 ADAPTIVE = "pf_adaptive"
@@ -102,12 +103,7 @@ K_NAMES = tuple(name for name, _, _ in KINEMATIC)
 MEASURED = ("ax", "ay", "r")
 PARTICLE = Layout((*(Signal(n, u, d) for n, u, d in KINEMATIC),
                    Signal("weight", "-", "normalised weight (during a step: log-weight score)")))
-INPUTS = Layout((
-    Signal("vx", "m/s", "longitudinal speed from the wheels (initial v_x, low-speed rule, D2)"),
-    Signal("ax", "m/s^2", "longitudinal acceleration, positive forward"),
-    Signal("ay", "m/s^2", "lateral acceleration, positive left"),
-    Signal("r", "rad/s", "gyro yaw rate, positive counter-clockwise"),
-))
+INPUTS = Layout(signals.inputs("vx", "ax", "ay", "r"))
 SHARED = ("mode", "vx", "ax", "ay", "r", "sigma_vx", "sigma_vy", "sigma_ax", "sigma_ay", "sigma_r",
           "status", "holding")
 """The per-sample vector every particle sees: the mode (0 hold, 1 propagate, 2 spawn), the
@@ -123,7 +119,7 @@ def layouts(count: int) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for ``count`` particles."""
     states = Layout((
         *(Signal(n, u, f"estimate of the {d} (weighted mean)") for n, u, d in KINEMATIC),
-        Signal("holding", "-", "2 while holding at low speed, 1 on an invalid input, else 0"),
+        signals.HOLDING_REASON,
         *(Signal(f"rng_{i}", "-", f"PCG32 state bits {63 - 16 * i}..{48 - 16 * i}")
           for i in range(RNG_WORDS)),
         *(Signal(f"p{i}_{s.name}", s.unit, f"particle {i}: {s.doc}")
@@ -137,7 +133,7 @@ def layouts(count: int) -> tuple[Layout, Layout, Layout]:
         Signal("sigma_ax", "m/s^2", "adapted random-walk step of a_x (16)"),
         Signal("sigma_ay", "m/s^2", "adapted random-walk step of a_y (16)"),
         Signal("sigma_r", "rad/s", "adapted random-walk step of r (16)"),
-        Signal("status", "-", "status bits (model.status)", integer=True),
+        signals.STATUS,
     ))
     return INPUTS, states, outputs
 

@@ -22,13 +22,15 @@ from dataclasses import replace
 
 import casadi as ca
 
+from model import signals
 from model.calibration import Parameters
 from model.estimator import Definition, Estimator, Tunable, make_functions, make_schemes
 from model.estimators import kf2dof
 from model.estimators.kinematic_dynamic import COVARIANCE, DYN, INPUTS, KIN, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
 from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
-from model.layout import Layout, Signal
+from model.layout import Layout
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
+from model.signals import Signal
 
 NAME = "switching"
 
@@ -53,7 +55,7 @@ OUTPUTS = Layout((
     Signal("vy", "m/s", "lateral velocity of the active scheme"),
     Signal("r", "rad/s", "yaw rate after the reliability check"),
     Signal("mode", "-", "0 = dynamic (KF), 1 = kinematic", integer=True),
-    Signal("status", "-", "status bits (model.status)", integer=True),
+    signals.STATUS,
 ))
 SCRATCH = Layout((
     Signal("scheme", "-", "scheme to run: 0 dynamic, 1 kinematic, 2 hold"),

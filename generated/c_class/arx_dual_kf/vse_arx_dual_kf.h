@@ -25,16 +25,16 @@ typedef double vse_arx_dual_kf_real;
 
 /** Status bits of vse_arx_dual_kf_output.status (OR-ed). */
 #define VSE_ARX_DUAL_KF_STATUS_OK (0)
-#define VSE_ARX_DUAL_KF_STATUS_LOW_SPEED (1)
-#define VSE_ARX_DUAL_KF_STATUS_INVALID_INPUT (2)
-#define VSE_ARX_DUAL_KF_STATUS_PARAMETERS_PROJECTED (8)
+#define VSE_ARX_DUAL_KF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_ARX_DUAL_KF_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
+#define VSE_ARX_DUAL_KF_STATUS_PARAMETERS_PROJECTED (8) /**< identified model parameters left the stable set and were projected back onto it */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_arx_dual_kf_real delta; /**< rad: front road-wheel steer angle, positive left (exogenous = mz_delta) */
-    vse_arx_dual_kf_real vx; /**< m/s: longitudinal speed (low-speed rule, priors) */
-    vse_arx_dual_kf_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
-    vse_arx_dual_kf_real mz; /**< N*m: direct yaw moment, positive counter-clockwise (0 when not logged) */
+    vse_arx_dual_kf_real delta; /**< rad: front road-wheel steer angle (not the steering-wheel angle), positive left */
+    vse_arx_dual_kf_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_arx_dual_kf_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
+    vse_arx_dual_kf_real mz; /**< N*m: direct yaw moment applied by the chassis controls, positive counter-clockwise */
 } vse_arx_dual_kf_input;
 
 /** Estimates of one sample. */
@@ -44,7 +44,7 @@ typedef struct {
     vse_arx_dual_kf_real a2; /**< -: ARX parameter a2 */
     vse_arx_dual_kf_real b_mz; /**< -: ARX parameter b_mz */
     vse_arx_dual_kf_real gain; /**< -: KF1 gain K1 of this sample */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_arx_dual_kf_output;
 
 /** Number of state entries. */

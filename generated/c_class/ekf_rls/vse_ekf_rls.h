@@ -27,16 +27,16 @@ typedef double vse_ekf_rls_real;
 
 /** Status bits of vse_ekf_rls_output.status (OR-ed). */
 #define VSE_EKF_RLS_STATUS_OK (0)
-#define VSE_EKF_RLS_STATUS_LOW_SPEED (1)
-#define VSE_EKF_RLS_STATUS_INVALID_INPUT (2)
+#define VSE_EKF_RLS_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_EKF_RLS_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_ekf_rls_real delta; /**< rad: front road-wheel steer angle, positive left */
-    vse_ekf_rls_real vx; /**< m/s: longitudinal speed */
-    vse_ekf_rls_real ax; /**< m/s^2: longitudinal acceleration, body frame, positive forward */
-    vse_ekf_rls_real ay; /**< m/s^2: lateral acceleration, body frame, positive left */
-    vse_ekf_rls_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
+    vse_ekf_rls_real delta; /**< rad: front road-wheel steer angle (not the steering-wheel angle), positive left */
+    vse_ekf_rls_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_ekf_rls_real ax; /**< m/s^2: longitudinal acceleration, body-fixed sensor at the CG, positive forward */
+    vse_ekf_rls_real ay; /**< m/s^2: lateral acceleration, body-fixed sensor at the CG, positive left */
+    vse_ekf_rls_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
 } vse_ekf_rls_input;
 
 /** Estimates of one sample. */
@@ -48,7 +48,7 @@ typedef struct {
     vse_ekf_rls_real weight; /**< -: lambda, the integral method's weight */
     vse_ekf_rls_real c_front; /**< N/rad: front axle cornering stiffness */
     vse_ekf_rls_real c_rear; /**< N/rad: rear axle cornering stiffness */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_ekf_rls_output;
 
 /** Number of state entries. */

@@ -27,16 +27,16 @@ typedef double vse_fusion_real;
 
 /** Status bits of vse_fusion_output.status (OR-ed). */
 #define VSE_FUSION_STATUS_OK (0)
-#define VSE_FUSION_STATUS_LOW_SPEED (1)
-#define VSE_FUSION_STATUS_INVALID_INPUT (2)
-#define VSE_FUSION_STATUS_REFERENCE_SUSPECT (4)
+#define VSE_FUSION_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_FUSION_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
+#define VSE_FUSION_STATUS_REFERENCE_SUSPECT (4) /**< a reliability check rejected a measurement for longer than its time-out and accepted it again: the reference (e.g. the steady-state yaw rate) is suspect */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_fusion_real delta; /**< rad: front road-wheel steer angle, positive left */
-    vse_fusion_real vx; /**< m/s: longitudinal speed (rear wheel speeds x R_eff) */
-    vse_fusion_real ay; /**< m/s^2: lateral acceleration at the CG, body frame, positive left */
-    vse_fusion_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
+    vse_fusion_real delta; /**< rad: front road-wheel steer angle (not the steering-wheel angle), positive left */
+    vse_fusion_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_fusion_real ay; /**< m/s^2: lateral acceleration, body-fixed sensor at the CG, positive left */
+    vse_fusion_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
 } vse_fusion_input;
 
 /** Estimates of one sample. */
@@ -45,7 +45,7 @@ typedef struct {
     vse_fusion_real vy; /**< m/s: lateral velocity, weighted fusion */
     vse_fusion_real r; /**< rad/s: yaw rate after the reliability check */
     vse_fusion_real weight; /**< -: weight w of the kinematic scheme */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_fusion_output;
 
 /** Number of state entries. */

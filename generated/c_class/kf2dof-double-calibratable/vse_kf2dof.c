@@ -33,13 +33,13 @@ static void read_calibration(casadi_real p[28])
     p[7] = vse_kf2dof_calibration.wheel_radius;
     p[8] = vse_kf2dof_calibration.track_width;
     p[9] = vse_kf2dof_calibration.cg_height;
-    p[10] = vse_kf2dof_calibration.vx_max;
-    p[11] = vse_kf2dof_calibration.delta_max;
+    p[10] = vse_kf2dof_calibration.delta_max;
+    p[11] = vse_kf2dof_calibration.vx_max;
     p[12] = vse_kf2dof_calibration.ax_max;
     p[13] = vse_kf2dof_calibration.ay_max;
     p[14] = vse_kf2dof_calibration.r_max;
-    p[15] = vse_kf2dof_calibration.mz_max;
-    p[16] = vse_kf2dof_calibration.omega_max;
+    p[15] = vse_kf2dof_calibration.omega_max;
+    p[16] = vse_kf2dof_calibration.mz_max;
     p[17] = vse_kf2dof_calibration.process_noise_11;
     p[18] = vse_kf2dof_calibration.process_noise_12;
     p[19] = vse_kf2dof_calibration.process_noise_22;

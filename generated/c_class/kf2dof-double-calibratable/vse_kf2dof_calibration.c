@@ -25,13 +25,13 @@ const vse_kf2dof_calibration_t vse_kf2dof_calibration = {
     0.325, /* wheel_radius */
     1.55, /* track_width */
     0.54, /* cg_height */
-    90.0, /* vx_max */
     1.0, /* delta_max */
+    90.0, /* vx_max */
     30.0, /* ax_max */
     30.0, /* ay_max */
     3.0, /* r_max */
-    20000.0, /* mz_max */
     400.0, /* omega_max */
+    20000.0, /* mz_max */
     0.25, /* process_noise_11 */
     0.0, /* process_noise_12 */
     0.01, /* process_noise_22 */

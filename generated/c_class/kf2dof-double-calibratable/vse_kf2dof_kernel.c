@@ -116,13 +116,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][4]=a0;
   a0=arg[0][0];
   a2=casadi_fabs(a0);
-  a3=arg[1][11];
+  a3=arg[1][10];
   a2=(a2<=a3);
   a0=(a2?a0:0);
   res[0][5]=a0;
   a0=arg[0][1];
   a3=casadi_fabs(a0);
-  a4=arg[1][10];
+  a4=arg[1][11];
   a3=(a3<=a4);
   a4=(a3?a0:0);
   a5=(!a3);
@@ -157,7 +157,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] input[4]: delta, vx, ay, r
  * arg[1] params[28]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, process_noise_11,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, process_noise_11,
  *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
  *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
  *     vx_min, vx_resume
@@ -176,11 +176,11 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
-  a02=arg[2][11];
+  a02=arg[2][10];
   a01=(a01<=a02);
   a02=arg[1][1];
   a03=casadi_fabs(a02);
-  a04=arg[2][10];
+  a04=arg[2][11];
   a03=(a03<=a04);
   a05=(a01&&a03);
   a06=arg[1][2];
@@ -818,7 +818,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] params[28]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, process_noise_11,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, process_noise_11,
  *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
  *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
  *     vx_min, vx_resume

@@ -25,15 +25,15 @@ typedef double vse_kf2dof_real;
 
 /** Status bits of vse_kf2dof_output.status (OR-ed). */
 #define VSE_KF2DOF_STATUS_OK (0)
-#define VSE_KF2DOF_STATUS_LOW_SPEED (1)
-#define VSE_KF2DOF_STATUS_INVALID_INPUT (2)
+#define VSE_KF2DOF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_KF2DOF_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_kf2dof_real delta; /**< rad: front road-wheel steer angle, positive left */
-    vse_kf2dof_real vx; /**< m/s: longitudinal speed (rear wheel speeds x R_eff) */
-    vse_kf2dof_real ay; /**< m/s^2: lateral acceleration at the CG, body frame, positive left */
-    vse_kf2dof_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
+    vse_kf2dof_real delta; /**< rad: front road-wheel steer angle (not the steering-wheel angle), positive left */
+    vse_kf2dof_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_kf2dof_real ay; /**< m/s^2: lateral acceleration, body-fixed sensor at the CG, positive left */
+    vse_kf2dof_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
 } vse_kf2dof_input;
 
 /** Estimates of one sample. */
@@ -41,7 +41,7 @@ typedef struct {
     vse_kf2dof_real beta; /**< rad: sideslip angle at the CG, atan2(vy, vx) */
     vse_kf2dof_real vy; /**< m/s: lateral velocity */
     vse_kf2dof_real r; /**< rad/s: filtered yaw rate */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_kf2dof_output;
 
 /** Number of state entries. */

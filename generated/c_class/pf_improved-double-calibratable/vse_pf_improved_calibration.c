@@ -26,13 +26,13 @@ const vse_pf_improved_calibration_t vse_pf_improved_calibration = {
     0.325, /* wheel_radius */
     1.55, /* track_width */
     0.54, /* cg_height */
-    90.0, /* vx_max */
     1.0, /* delta_max */
+    90.0, /* vx_max */
     30.0, /* ax_max */
     30.0, /* ay_max */
     3.0, /* r_max */
-    20000.0, /* mz_max */
     400.0, /* omega_max */
+    20000.0, /* mz_max */
     0.3, /* measurement_noise_1 */
     0.3, /* measurement_noise_2 */
     0.01745, /* measurement_noise_3 */

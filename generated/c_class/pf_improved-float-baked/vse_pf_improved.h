@@ -26,15 +26,15 @@ typedef float vse_pf_improved_real;
 
 /** Status bits of vse_pf_improved_output.status (OR-ed). */
 #define VSE_PF_IMPROVED_STATUS_OK (0)
-#define VSE_PF_IMPROVED_STATUS_LOW_SPEED (1)
-#define VSE_PF_IMPROVED_STATUS_INVALID_INPUT (2)
+#define VSE_PF_IMPROVED_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_PF_IMPROVED_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_pf_improved_real vx; /**< m/s: longitudinal speed from the wheels (initial v_x, low-speed rule, D2) */
-    vse_pf_improved_real ax; /**< m/s^2: longitudinal acceleration, positive forward */
-    vse_pf_improved_real ay; /**< m/s^2: lateral acceleration, positive left */
-    vse_pf_improved_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
+    vse_pf_improved_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_pf_improved_real ax; /**< m/s^2: longitudinal acceleration, body-fixed sensor at the CG, positive forward */
+    vse_pf_improved_real ay; /**< m/s^2: lateral acceleration, body-fixed sensor at the CG, positive left */
+    vse_pf_improved_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
 } vse_pf_improved_input;
 
 /** Estimates of one sample. */
@@ -46,7 +46,7 @@ typedef struct {
     vse_pf_improved_real sigma_ax; /**< m/s^2: adapted random-walk step of a_x (16) */
     vse_pf_improved_real sigma_ay; /**< m/s^2: adapted random-walk step of a_y (16) */
     vse_pf_improved_real sigma_r; /**< rad/s: adapted random-walk step of r (16) */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_pf_improved_output;
 
 /** Number of state entries. */

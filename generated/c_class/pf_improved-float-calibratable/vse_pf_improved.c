@@ -36,13 +36,13 @@ static void read_calibration(casadi_real p[39])
     p[7] = vse_pf_improved_calibration.wheel_radius;
     p[8] = vse_pf_improved_calibration.track_width;
     p[9] = vse_pf_improved_calibration.cg_height;
-    p[10] = vse_pf_improved_calibration.vx_max;
-    p[11] = vse_pf_improved_calibration.delta_max;
+    p[10] = vse_pf_improved_calibration.delta_max;
+    p[11] = vse_pf_improved_calibration.vx_max;
     p[12] = vse_pf_improved_calibration.ax_max;
     p[13] = vse_pf_improved_calibration.ay_max;
     p[14] = vse_pf_improved_calibration.r_max;
-    p[15] = vse_pf_improved_calibration.mz_max;
-    p[16] = vse_pf_improved_calibration.omega_max;
+    p[15] = vse_pf_improved_calibration.omega_max;
+    p[16] = vse_pf_improved_calibration.mz_max;
     p[17] = vse_pf_improved_calibration.measurement_noise_1;
     p[18] = vse_pf_improved_calibration.measurement_noise_2;
     p[19] = vse_pf_improved_calibration.measurement_noise_3;

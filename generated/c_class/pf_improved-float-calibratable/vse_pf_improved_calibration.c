@@ -26,13 +26,13 @@ const vse_pf_improved_calibration_t vse_pf_improved_calibration = {
     0.325f, /* wheel_radius */
     1.55f, /* track_width */
     0.54f, /* cg_height */
-    90.0f, /* vx_max */
     1.0f, /* delta_max */
+    90.0f, /* vx_max */
     30.0f, /* ax_max */
     30.0f, /* ay_max */
     3.0f, /* r_max */
-    20000.0f, /* mz_max */
     400.0f, /* omega_max */
+    20000.0f, /* mz_max */
     0.3f, /* measurement_noise_1 */
     0.3f, /* measurement_noise_2 */
     0.01745f, /* measurement_noise_3 */

@@ -106,7 +106,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   a00=arg[0][0];
   a01=casadi_fabs(a00);
-  a02=arg[1][10];
+  a02=arg[1][11];
   a01=(a01<=a02);
   a03=(a01?a00:0);
   a04=(!a01);
@@ -193,7 +193,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] input[4]: vx, ax, ay, r
  * arg[1] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
  *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
  *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
  *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
@@ -213,7 +213,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a12, a13, a14, a15, a16;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
-  a02=arg[2][10];
+  a02=arg[2][11];
   a01=(a01<=a02);
   a02=arg[1][1];
   a03=casadi_fabs(a02);
@@ -336,7 +336,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[1] input[4]: vx, ax, ay, r
  * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
  *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
  *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
  *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
@@ -391,7 +391,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[1] normals[5]: 5 entries
  * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
  *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
  *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
  *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
@@ -496,7 +496,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[2] normals[5]: 5 entries
  * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
  *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
  *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
  *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
@@ -583,7 +583,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[2] summary[6]: 6 entries
  * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     vx_max, delta_max, ax_max, ay_max, r_max, mz_max, omega_max, measurement_noise_1,
+ *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
  *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
  *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
  *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,

@@ -25,22 +25,22 @@ typedef double vse_ukf_real;
 
 /** Status bits of vse_ukf_output.status (OR-ed). */
 #define VSE_UKF_STATUS_OK (0)
-#define VSE_UKF_STATUS_LOW_SPEED (1)
-#define VSE_UKF_STATUS_INVALID_INPUT (2)
-#define VSE_UKF_STATUS_COVARIANCE_REPAIRED (16)
-#define VSE_UKF_STATUS_FILTER_RESTARTED (32)
+#define VSE_UKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
+#define VSE_UKF_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
+#define VSE_UKF_STATUS_COVARIANCE_REPAIRED (16) /**< the state covariance was not positive definite; it was repaired (correlations dropped, variances kept) before use */
+#define VSE_UKF_STATUS_FILTER_RESTARTED (32) /**< the estimate left the plausible envelope (speed far from the measured one, or an implausible sideslip angle); the filter restarted from this sample */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
-    vse_ukf_real delta; /**< rad: front road-wheel steer angle, positive left */
-    vse_ukf_real vx; /**< m/s: longitudinal speed (initial u and the low-speed rule) */
-    vse_ukf_real ax; /**< m/s^2: longitudinal acceleration, positive forward */
-    vse_ukf_real ay; /**< m/s^2: lateral acceleration, positive left */
-    vse_ukf_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise */
-    vse_ukf_real omega_fl; /**< rad/s: wheel speed fl */
-    vse_ukf_real omega_fr; /**< rad/s: wheel speed fr */
-    vse_ukf_real omega_rl; /**< rad/s: wheel speed rl */
-    vse_ukf_real omega_rr; /**< rad/s: wheel speed rr */
+    vse_ukf_real delta; /**< rad: front road-wheel steer angle (not the steering-wheel angle), positive left */
+    vse_ukf_real vx; /**< m/s: longitudinal speed as the ECU computes it (wheel speeds x effective radius) */
+    vse_ukf_real ax; /**< m/s^2: longitudinal acceleration, body-fixed sensor at the CG, positive forward */
+    vse_ukf_real ay; /**< m/s^2: lateral acceleration, body-fixed sensor at the CG, positive left */
+    vse_ukf_real r; /**< rad/s: gyro yaw rate, positive counter-clockwise seen from above */
+    vse_ukf_real omega_fl; /**< rad/s: wheel speed front left, positive rolling forward */
+    vse_ukf_real omega_fr; /**< rad/s: wheel speed front right, positive rolling forward */
+    vse_ukf_real omega_rl; /**< rad/s: wheel speed rear left, positive rolling forward */
+    vse_ukf_real omega_rr; /**< rad/s: wheel speed rear right, positive rolling forward */
 } vse_ukf_input;
 
 /** Estimates of one sample. */
@@ -52,7 +52,7 @@ typedef struct {
     vse_ukf_real yaw_moment; /**< N*m: yaw moment Gamma */
     vse_ukf_real ax; /**< m/s^2: longitudinal acceleration a_x */
     vse_ukf_real ay; /**< m/s^2: lateral acceleration a_y */
-    int status; /**< -: status bits (model.status) */
+    int status; /**< -: status bits: an OR of the STATUS values defined in this header (0 = OK) */
 } vse_ukf_output;
 
 /** Number of state entries. */

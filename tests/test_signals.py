@@ -1,0 +1,52 @@
+"""The signal catalogue is the one description of every log column and shared entry: estimators,
+the guard, the log reader, the vehicle-file schema and the docs all take theirs from it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from harness.logs import LogError, read_log
+from model import signals
+from model.estimators import DEFINITIONS, build
+from model.guard import LIMIT_KEYS
+from model.schema import INPUT_LIMITS
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "conventions.md"
+
+
+def test_the_docs_show_the_catalogue():
+    text = DOCS.read_text()
+    assert signals.markdown_table() in text, "regenerate the log table of docs/conventions.md"
+    assert signals.status_table() in text, "regenerate the status table of docs/conventions.md"
+
+
+@pytest.mark.parametrize("name", list(DEFINITIONS))
+def test_estimators_read_catalogue_inputs_and_report_the_catalogue_status(config, name):
+    estimator = build(name, config)
+    for signal in estimator.inputs.signals:
+        assert signal == signals.INPUT[signal.name].signal, f"{name}: input {signal.name} redefined"
+    assert estimator.outputs.signals[-1] == signals.STATUS
+    holding = [s for s in estimator.states.signals if s.name == "holding"]
+    assert len(holding) == 1
+
+
+def test_every_input_has_a_limit_in_the_vehicle_schema():
+    keys = {f.key for f in INPUT_LIMITS}
+    assert set(LIMIT_KEYS.values()) == keys
+    assert set(LIMIT_KEYS) == set(signals.INPUT)
+
+
+@pytest.mark.parametrize("entry", [e for e in signals.INPUTS if e.unit_check], ids=lambda e: e.name)
+def test_the_reader_checks_each_catalogued_unit(tmp_path, entry):
+    columns = ["t", *signals.REQUIRED_INPUTS]
+    value = {name: 1.0 if name == "vx" else 0.0 for name in columns}
+    rows = []
+    for k in range(20):
+        row = {**value, "t": 0.01 * k, entry.name: 1.5 * entry.unit_check.limit}
+        rows.append(",".join(repr(row[c]) for c in columns))
+    path = tmp_path / "log.csv"
+    path.write_text(",".join(columns) + "\n" + "\n".join(rows) + "\n")
+    with pytest.raises(LogError, match=f"column '{entry.name}'.*{entry.unit_check.hint}"):
+        read_log(path)
