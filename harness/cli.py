@@ -18,12 +18,13 @@ from rich.progress import Progress
 from rich.table import Table
 
 from codegen import generate as codegen
-from harness.logs import LogError, read_estimates, read_log, write_log
+from harness.files import write_text_atomic
+from harness.logs import TRUTH, LogError, read_estimates, read_log, write_log
 from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
 from harness.progress import RunProgress
 from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
 from harness.vehicles import load_vehicle, shipped_vehicles
-from model.estimators import DEFINITIONS
+from model.estimators import DEFINITIONS, underived_warning
 from model.params import ParameterError, VehicleConfig
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
@@ -89,6 +90,13 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     return not diffs
 
 
+def _warn_underived(config: VehicleConfig, name: str) -> None:
+    """Say (stderr, one line) when ``name``'s car-specific settings were not derived for this car."""
+    warning = underived_warning(config, name)
+    if warning:
+        click.echo(f"vsegen: {warning}", err=True)
+
+
 def _display(path: Path) -> str:
     try:
         return str(path.resolve().relative_to(Path.cwd()))
@@ -121,6 +129,7 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
     for path in vehicles or tuple(shipped_vehicles()):
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
+            _warn_underived(config, name)
             for form_real, form_params, folder_name in _forms(config, name, out, real, params):
                 folder = out / config.name / folder_name
                 files = codegen.render(config, name, form_real, form_params)
@@ -201,9 +210,10 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
 @click.option("--seed", default=1, show_default=True, help="Seed of the sensor noise.")
 @click.option("--rate", default=100.0, show_default=True, help="Log rate in Hz.")
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="Log CSV to write.")
+@click.option("--no-truth", is_flag=True, help="Leave out the ground-truth columns (a logger's view).")
 @user_errors
 def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, rate: float,
-             out: Path) -> None:
+             out: Path, no_truth: bool) -> None:
     """Simulate SCENARIO on the truth plant and write its log (design.md format)."""
     if scenario not in SCENARIOS:
         raise UserError(f"unknown scenario '{scenario}': expected one of {', '.join(SCENARIOS)}")
@@ -215,9 +225,44 @@ def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, 
         task = progress.add_task(f"simulating {case.label} at {rate:g} Hz", total=1.0)
         log = case.simulate(config, rate, seed,
                             progress=lambda done: progress.update(task, completed=done))
+    if no_truth:
+        log.columns = {k: v for k, v in log.columns.items() if k not in TRUTH}
     write_log(log, out)
     report = ", ".join(f"{k}: {v}" for k, v in log.notes.items())
     console.print(f"wrote {out} ({len(log)} samples, {log['t'][-1]:.2f} s): {report}")
+
+
+@main.command()
+@click.option("--log", "log_paths", multiple=True, required=True, type=click.Path(path_type=Path),
+              help="Driving log CSV (repeatable); ground truth is not needed, beta_ref is used if present.")
+@click.option("--vehicle", type=click.Path(path_type=Path), required=True,
+              help="Base vehicle TOML: mass, geometry and I_z are taken from it, everything else is a start.")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Vehicle TOML to write.")
+@click.option("--report", "report_path", type=click.Path(path_type=Path), default=None,
+              help="Markdown report to write (estimates, intervals, refusals).")
+@user_errors
+def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path: Path | None) -> None:
+    """Identify the car's parameters and car-specific settings from driving logs."""
+    from harness.identify import identify as identify_logs
+    from harness.identify.vehicle_file import identified_vehicle_file, report
+
+    config = load_vehicle(vehicle)
+    logs = [read_log(path) for path in log_paths]
+    ident = identify_logs(logs, config)
+    if not ident.estimates:
+        for refusal in ident.refusals:
+            click.echo(f"vsegen: not identified: {refusal.name}: {refusal.why}", err=True)
+        sys.exit(2)
+    text = identified_vehicle_file(vehicle.read_text(), config, ident)
+    write_text_atomic(out, text)
+    names = [path.name for path in log_paths]
+    if report_path is not None:
+        write_text_atomic(report_path, report(ident, config, names, out.name))
+    for estimate in ident.estimates.values():
+        console.print(f"identified      {estimate.name} = {estimate.describe()}")
+    for refusal in ident.refusals:
+        console.print(f"not identified  {refusal.name}: {refusal.why}")
+    console.print(f"wrote {out}" + (f" and {report_path}" if report_path else ""))
 
 
 @main.command()
@@ -234,6 +279,7 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path) 
 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
+    _warn_underived(config, estimator)
     log = read_log(log_path)
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)

@@ -22,10 +22,12 @@ def shipped_vehicles() -> list[Path]:
     return sorted(VEHICLES.glob("*.toml"))
 
 
-def with_settings(text: str, section: str, **values: float | int | str | list[float]) -> str:
+def with_settings(text: str, section: str, comments: dict[str, str] | None = None,
+                  **values: float | int | str | list[float]) -> str:
     """``text`` of a vehicle file with ``key = value`` set in table ``[section]`` (e.g.
-    "estimator.switching", "vehicle"), for comparing variants of one vehicle. Each key must already
-    be in that table; its trailing comment is kept. Strings are written quoted, lists as arrays."""
+    "estimator.switching", "vehicle"). Each key must already be in that table; its trailing comment
+    is kept, or replaced by ``comments[key]`` where given. Strings are written quoted, lists as
+    arrays."""
     lines, current, found = text.split("\n"), None, set()
     for i, line in enumerate(lines):
         header = re.match(r"\s*\[([^\]]+)\]\s*(#.*)?$", line)
@@ -43,7 +45,9 @@ def with_settings(text: str, section: str, **values: float | int | str | list[fl
                 rendered = repr(value)  # a count or a seed stays a whole number
             else:
                 rendered = repr(float(value))
-            lines[i] = f"{match.group(1)}{match.group(2)}{match.group(3)}{rendered}{match.group(5) or ''}"
+            comment = f"  # {comments[match.group(2)]}" if comments and match.group(2) in comments \
+                else match.group(5) or ""
+            lines[i] = f"{match.group(1)}{match.group(2)}{match.group(3)}{rendered}{comment}"
             found.add(match.group(2))
     missing = set(values) - found
     if missing:

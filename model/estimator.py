@@ -29,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import casadi as ca
 
@@ -241,12 +242,39 @@ class Tunable:
     log: bool = True
 
 
+IDENTIFIED = {"roll_gradient": "rad/(m/s^2)", "gyro_noise": "rad/s", "ay_noise": "m/s^2",
+              "ax_noise": "m/s^2"}
+"""Car and sensor quantities ``vsegen identify`` estimates from logs, by name, with their units."""
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A car-specific setting: it follows from identified quantities (names of :data:`IDENTIFIED`),
+    ``value(*quantities)`` giving the setting in its own unit. ``vsegen identify`` fills it;
+    ``generate`` and ``run`` warn when it was not derived for the file's [vehicle]."""
+
+    quantities: tuple[str, ...]
+    value: Callable[..., Any]
+
+
+ROLL_GRADIENT = {"roll_gradient": Derived(("roll_gradient",), lambda k: k)}
+"""The roll correction's roll gradient is the car's."""
+KF_MEASUREMENT_NOISE = {"measurement_noise": Derived(("ay_noise", "gyro_noise"), lambda ay, r: [ay**2, r**2])}
+"""R = diag(sigma_ay^2, sigma_r^2) of a Kalman filter measuring [a_y, r]."""
+GYRO_VARIANCE = {"measurement_noise": Derived(("gyro_noise",), lambda r: r**2)}
+"""R = sigma_r^2 of a filter measuring the yaw rate."""
+INERTIAL_SIGMAS = {"measurement_noise": Derived(("ax_noise", "ay_noise", "gyro_noise"),
+                                                lambda ax, ay, r: [ax, ay, r])}
+"""Standard deviations of [a_x, a_y, r]."""
+
+
 @dataclass(frozen=True)
 class Definition:
     """Everything the rest of vsegen needs to know about one estimator, declared in its module
     (``model/estimators/<module>.py``) and collected by ``model.estimators``: its name (the
     ``[estimator.<name>]`` table and the C prefix ``vse_<name>_``), how to build it, the schema of
-    its settings, the settings ``tune`` may search and the status bits it can raise. The NumPy
+    its settings, the settings ``tune`` may search, the status bits it can raise and its
+    car-specific settings. The NumPy
     reference is bound by name in ``harness.reference`` (the model never imports the harness)."""
 
     name: str
@@ -256,6 +284,8 @@ class Definition:
     status_bits: tuple[str, ...] = ("LOW_SPEED", "INVALID_INPUT")
     """The ``model.status`` bits it can raise (the hold rule's two, and its own); the generated
     header defines only these."""
+    derived: Mapping[str, Derived] = field(default_factory=dict)
+    """Its car-specific settings and how each follows from identified quantities."""
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

@@ -66,6 +66,9 @@ class VehicleConfig:
     sensors: Mapping[str, float] | None = None
     codegen: Mapping[str, str] = field(
         default_factory=lambda: MappingProxyType({f.key: f.default for f in CODEGEN}))
+    derived_for: str = ""
+    """``[estimator] derived_for``: the :meth:`vehicle_fingerprint` the car-specific settings were
+    derived for ('' = never)."""
 
     def settings(self, estimator: str) -> Mapping[str, Any]:
         """Settings of one estimator; raises ParameterError if the file has none."""
@@ -100,6 +103,11 @@ class VehicleConfig:
                       "estimators": {k: _plain(v) for k, v in self.estimators.items()}}
         text = json.dumps(everything, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
+
+    def vehicle_fingerprint(self) -> str:
+        """The first 12 hex digits of the SHA-256 of the [vehicle] table: which car this is."""
+        text = json.dumps(_plain(self.vehicle), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()[:12]
 
     def truth_fingerprint(self) -> str:
         """SHA-256 of the tables a simulation of this car reads ([vehicle], [plant], [sensors]):
@@ -141,7 +149,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
     if not isinstance(estimator_data, dict):
         raise ParameterError(f"{where.at(('estimator',))}: missing table [estimator]: expected "
                              f"sample_time and one [estimator.<name>] table per estimator")
-    _reject_unknown(estimator_data, {"sample_time", *SCHEMAS}, ("estimator",), where)
+    _reject_unknown(estimator_data, {f.key for f in SAMPLING} | set(SCHEMAS), ("estimator",), where)
     sampling = _fields(estimator_data, ("estimator",), SAMPLING, where)
     estimators = {}
     for est_name, schema in SCHEMAS.items():
@@ -170,6 +178,7 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
         vehicle=MappingProxyType(vehicle),
         limits=MappingProxyType(limits),
         sample_time=sampling["sample_time"],
+        derived_for=sampling["derived_for"],
         estimators=MappingProxyType(estimators),
         **optional,
     )

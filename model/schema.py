@@ -9,6 +9,7 @@ pieces.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -229,8 +230,23 @@ CODEGEN: tuple[Field, ...] = (
 )
 
 # [estimator]: common to all estimators of the file
+def fingerprint_field(key: str, doc: str) -> Field:
+    """A short hexadecimal fingerprint (8 to 64 digits); optional, '' when absent."""
+    expected = "a string of 8 to 64 hexadecimal digits"
+
+    def check(value: Any) -> str:
+        if not isinstance(value, str) or not re.fullmatch(r"[0-9a-f]{8,64}", value):
+            raise Invalid(expected)
+        return value
+
+    return Field(key, expected, check, doc, "")
+
+
 SAMPLING: tuple[Field, ...] = (
     positive("sample_time", "s", "estimator sample time T (0.01 s = 100 Hz by default)"),
+    fingerprint_field("derived_for", "fingerprint of the [vehicle] table the car-specific estimator "
+                                     "settings were derived for (written by vsegen identify, or by hand "
+                                     "after review)"),
 )
 
 DISCRETISATIONS = ("euler", "tustin", "zoh")

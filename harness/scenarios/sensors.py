@@ -6,7 +6,8 @@
 * white Gaussian noise (seed 000 Table 2), biases only when asked (the paper assumes compensated
   biases; shared/methods/README.md);
 * wheel speeds from the plant's wheel spin states (a driven wheel spins up under traction), vx as
-  the ECU computes it: mean of the rear wheel speeds x R_eff;
+  an ECU computes it: mean of the non-driven axle's wheel speeds x R_eff (the rear wheels of a
+  front-wheel-drive car, the front wheels of a rear-wheel-drive car);
 * optional single-sample yaw-rate outliers (seed 000 Fig. 6b).
 All random draws come from one seeded generator: the same seed gives the same log.
 """
@@ -44,7 +45,8 @@ def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bo
         r = inject_gyro_outliers(run.t, r)
     omegas = {f"omega_{w}": run.state(f"omega_{w}") + rng.normal(0.0, sensors["wheel_speed_noise"], n)
               for w in WHEELS}
-    vx = 0.5 * (omegas["omega_rl"] + omegas["omega_rr"]) * config.vehicle["wheel_radius"]
+    axle = "f" if plant["driven_axle"] == "rear" else "r"
+    vx = 0.5 * (omegas[f"omega_{axle}l"] + omegas[f"omega_{axle}r"]) * config.vehicle["wheel_radius"]
     return {"delta": run.input("delta"), "vx": vx, "ax": ax, "ay": ay, "r": r, **omegas}
 
 

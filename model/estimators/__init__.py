@@ -24,3 +24,27 @@ def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
     """Build estimator ``name`` for ``config`` with parameters ``params`` ("baked" or
     "calibratable"); KeyError if no such estimator exists."""
     return DEFINITIONS[name].build(parameters(config, name, params))
+
+
+def underived_warning(config: VehicleConfig, name: str) -> str | None:
+    """A one-line warning when ``name``'s car-specific settings (``Definition.derived``) were not
+    derived for ``config``'s [vehicle] table (``[estimator] derived_for`` differs from its
+    fingerprint, e.g. a file copied from another car with only [vehicle] changed); else None."""
+    derived = DEFINITIONS[name].derived
+    fingerprint = config.vehicle_fingerprint()
+    if not derived or name not in config.estimators or config.derived_for == fingerprint:
+        return None
+    settings = config.settings(name)
+    shown = ", ".join(f"{key} = {_shown(settings[key])}" for key in derived)
+    verb = "was" if len(derived) == 1 else "were"
+    return (f"{config.source}: warning: [estimator.{name}] {shown} {verb} not derived for this vehicle "
+            f"(see vsegen identify; after a review set [estimator] derived_for = \"{fingerprint}\")")
+
+
+def _shown(value) -> str:
+    if isinstance(value, tuple):
+        flat = [v for row in value for v in (row if isinstance(row, tuple) else (row,))]
+        if all(isinstance(row, tuple) for row in value):
+            flat = [row[i] for i, row in enumerate(value)]  # a matrix setting: its diagonal
+        return "[" + ", ".join(f"{v:.4g}" for v in flat) + "]"
+    return f"{value:.4g}" if isinstance(value, float) else str(value)

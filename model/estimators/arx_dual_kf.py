@@ -32,7 +32,7 @@ import casadi as ca
 from model import discretize, kalman, signals, status
 from model.bicycle import bicycle_matrices
 from model.calibration import Parameters
-from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
+from model.estimator import GYRO_VARIANCE, Definition, Estimator, SingleStep, Tunable, make_functions
 from model.estimators.kf2dof import zoh_plan
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout
@@ -234,4 +234,4 @@ def notes(params: Parameters) -> dict[str, str]:
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "measurement_noise": Tunable(1e-6, 1e-2), "model_noise": Tunable(1e-7, 1e-3),
     "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)},
-    ("LOW_SPEED", "INVALID_INPUT", "PARAMETERS_PROJECTED")),)
+    ("LOW_SPEED", "INVALID_INPUT", "PARAMETERS_PROJECTED"), GYRO_VARIANCE),)

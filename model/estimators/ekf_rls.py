@@ -41,7 +41,7 @@ import casadi as ca
 from model import filters, kalman, signals
 from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
-from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
+from model.estimator import GYRO_VARIANCE, ROLL_GRADIENT, Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout, covariance_signals
 from model.schema import (
@@ -401,4 +401,5 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
     "forgetting_factor": Tunable(0.95, 0.9999, log=False),
-    "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)}),)
+    "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)},
+    derived={**ROLL_GRADIENT, **GYRO_VARIANCE}),)

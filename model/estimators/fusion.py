@@ -13,7 +13,15 @@ import casadi as ca
 
 from model import signals
 from model.calibration import Parameters
-from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
+from model.estimator import (
+    KF_MEASUREMENT_NOISE,
+    ROLL_GRADIENT,
+    Definition,
+    Estimator,
+    SingleStep,
+    Tunable,
+    make_functions,
+)
 from model.estimators import kf2dof
 from model.estimators.kinematic_dynamic import COVARIANCE, INPUTS, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
 from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
@@ -84,4 +92,5 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}, KINEMATIC_DYNAMIC_STATUS),)
+    "reference_timeout": Tunable(0.05, 1.0)}, KINEMATIC_DYNAMIC_STATUS,
+    {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)

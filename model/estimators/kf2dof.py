@@ -21,7 +21,7 @@ import casadi as ca
 from model import discretize, kalman, signals
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
-from model.estimator import Definition, Estimator, SingleStep, Tunable, make_functions
+from model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, SingleStep, Tunable, make_functions
 from model.guard import first_sample, hold, input_guard, previous_inputs
 from model.layout import Layout, covariance_signals
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
@@ -175,4 +175,5 @@ def build(params: Parameters) -> Estimator:
 
 
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {"process_noise": Tunable(1e-4, 1e2),
-                                                "measurement_noise": Tunable(1e-6, 1e1)}),)
+                                                "measurement_noise": Tunable(1e-6, 1e1)},
+                          derived=KF_MEASUREMENT_NOISE),)

@@ -33,7 +33,7 @@ import casadi as ca
 
 from model import signals, status
 from model.calibration import Parameters
-from model.estimator import RNG_WORDS, Definition, Estimator, Particles, Tunable
+from model.estimator import INERTIAL_SIGMAS, RNG_WORDS, ROLL_GRADIENT, Definition, Estimator, Particles, Tunable
 from model.guard import first_sample, hold, input_guard
 from model.layout import Layout
 from model.schema import (
@@ -298,8 +298,9 @@ def _finish(params: Parameters, name: str, h, shared, summary, head: Layout,
 _PF_TUNABLE = {"measurement_noise": Tunable(0.005, 2.0), "process_noise": Tunable(0.001, 1.0),
                "adaptation_gain_acceleration": Tunable(0.0, 5.0, log=False),
                "adaptation_gain_yaw_rate": Tunable(0.0, 5.0, log=False)}
+_PF_DERIVED = {**ROLL_GRADIENT, **INERTIAL_SIGMAS}
 DEFINITIONS = (
-    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE),
+    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE, derived=_PF_DERIVED),
     Definition(IMPROVED, build_improved, IMPROVED_SCHEMA,
-               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}),
+               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}, derived=_PF_DERIVED),
 )
