@@ -37,11 +37,11 @@ def compiler() -> str:
     return os.environ.get("CC") or shutil.which("gcc") or "cc"
 
 
-def runner_source(estimator: Estimator) -> str:
-    """The harness driver C for ``estimator``."""
+def runner_source(estimator: Estimator, writable_calibration: bool = False) -> str:
+    """The harness driver C for ``estimator`` (with a writable calibration for tuning builds)."""
     prefix = f"vse_{estimator.name}"
     template = template_environment(Path(__file__).parent).get_template("runner.c.j2")
-    return template.render(est=estimator, p=prefix, P=prefix.upper())
+    return template.render(est=estimator, p=prefix, P=prefix.upper(), writable_calibration=writable_calibration)
 
 
 def build_library(files: dict[str, str], extra_sources: dict[str, str], cc: str | None = None,
@@ -89,6 +89,13 @@ class CEstimator:
         self.library.vse_harness_run(ctypes.c_int(n), _ptr(inputs), _ptr(outputs), _ptr(states))
         return outputs, states
 
+    def set_calibration(self, values) -> None:
+        """Write the calibration (one value per ``estimator.parameters.names``; tuning builds only)."""
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        if values.shape != (len(self.estimator.parameters.names),):
+            raise ValueError(f"{len(values)} calibration values: expected {len(self.estimator.parameters.names)}")
+        self.library.vse_harness_set_calibration(_ptr(values))
+
     def step(self, state: np.ndarray, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(state_next, output) of one step from ``state``."""
         state = np.ascontiguousarray(state, dtype=np.float64)
@@ -116,4 +123,18 @@ def load_estimator(estimator: Estimator, files: dict[str, str]) -> CEstimator:
     library = ctypes.CDLL(str(library_path))
     library.vse_harness_run.restype = None
     library.vse_harness_step.restype = None
+    return CEstimator(estimator, library)
+
+
+def load_tuning_estimator(config: VehicleConfig, name: str) -> CEstimator:
+    """``name``'s calibratable double C for ``config``, compiled with a writable calibration
+    (:meth:`CEstimator.set_calibration`) instead of the generated const one: one build serves every
+    value of the numeric settings."""
+    estimator = build(name, config, "calibratable")
+    files = render(config, name, "double", "calibratable")
+    files = {file: text for file, text in files.items() if file != f"vse_{name}_calibration.c"}
+    library_path = build_library(files, {"vse_harness_runner.c": runner_source(estimator, True)})
+    library = ctypes.CDLL(str(library_path))
+    library.vse_harness_run.restype = None
+    library.vse_harness_set_calibration.restype = None
     return CEstimator(estimator, library)

@@ -1,0 +1,241 @@
+"""``vsegen tune``: an estimator's numeric settings searched against logs with ground truth.
+
+Each candidate is scored by running the **generated C** (the calibratable double build, compiled
+once per worker with a writable calibration, :func:`harness.build.load_tuning_estimator`) over every
+training log; the objective compares its sideslip angle with ``beta_ref`` (or its yaw rate with
+``r_ref`` for a yaw-rate estimator). The search is Optuna's TPE sampler with a fixed seed, asking
+a fixed batch of candidates at a time, so the candidates and their scores are the same whether the
+runs went serially, to a local cluster or to a remote scheduler (:mod:`harness.cluster`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from harness.build import CEstimator, load_tuning_estimator
+from harness.cluster import Cluster
+from harness.logs import Log, LogError
+from harness.vehicles import with_settings
+from model.calibration import parameters
+from model.estimator import Tunable
+from model.estimators import DEFINITIONS, build
+from model.params import ParameterError, VehicleConfig, parse_vehicle
+
+OBJECTIVES = ("rmse", "max", "mean")
+"""Per log: RMSE, largest |error| or mean |error|; averaged over the logs."""
+DEGREES = 180.0 / np.pi
+
+
+class TuneError(ValueError):
+    """The tuning request cannot be met (e.g. no ground truth); the message is one line."""
+
+
+@dataclass(frozen=True)
+class Scored:
+    """One log prepared for scoring: the estimator's inputs and the truth of the scored output."""
+
+    name: str
+    inputs: np.ndarray
+    truth: np.ndarray
+    output: int
+    sample_time: float
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """One searched number: entry ``index`` of setting ``key`` (None for a scalar)."""
+
+    key: str
+    index: int | None
+    range: Tunable
+
+    @property
+    def label(self) -> str:
+        return self.key if self.index is None else f"{self.key}[{self.index}]"
+
+
+def scored_output(config: VehicleConfig, name: str) -> tuple[str, str]:
+    """(output, truth column): beta against beta_ref, or r against r_ref for yaw-rate estimators."""
+    outputs = build(name, config).outputs.names
+    return ("beta", "beta_ref") if "beta" in outputs else ("r", "r_ref")
+
+
+def prepare(config: VehicleConfig, name: str, logs: Sequence[Log]) -> list[Scored]:
+    """The logs as the estimator reads them; one-line error when one lacks the truth column."""
+    output, truth = scored_output(config, name)
+    estimator = build(name, config)
+    prepared = []
+    for log in logs:
+        if truth not in log:
+            raise TuneError(f"{log.source}:1: missing column '{truth}': tune scores {name}'s {output} "
+                            f"against it (a log with ground truth, e.g. an optical or GNSS/INS reference)")
+        missing = log.missing(estimator.inputs.names)
+        if missing:
+            raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {name} needs "
+                           f"{', '.join(estimator.inputs.names)}")
+        prepared.append(Scored(str(log.source).rsplit("/", 1)[-1], log.matrix(estimator.inputs.names),
+                               np.asarray(log[truth], dtype=float), estimator.outputs.index(output),
+                               log.sample_time))
+    return prepared
+
+
+def dimensions(config: VehicleConfig, name: str) -> list[Dimension]:
+    """Every number ``tune`` searches for ``name``: its tunable settings, list entries and matrix
+    diagonals one by one."""
+    settings = config.settings(name)
+    dims = []
+    for key, tunable in DEFINITIONS[name].tunable.items():
+        value = settings[key]
+        if isinstance(value, tuple):
+            dims += [Dimension(key, i, tunable) for i in range(len(value))]
+        else:
+            dims.append(Dimension(key, None, tunable))
+    return dims
+
+
+def settings_text(text: str, name: str, config: VehicleConfig, point: dict[str, float],
+                  comment: str | None = None) -> str:
+    """The vehicle file ``text`` with the searched numbers of ``point`` (by label) written in, each
+    changed line's comment replaced by ``comment`` (plus the value it replaced) if given."""
+    values: dict[str, object] = {}
+    settings = config.settings(name)
+    for dim in dimensions(config, name):
+        if dim.label not in point:
+            continue
+        if dim.index is None:
+            values[dim.key] = point[dim.label]
+        else:
+            current = values.get(dim.key) or [row[i] if isinstance(row, tuple) else row
+                                               for i, row in enumerate(settings[dim.key])]
+            current[dim.index] = point[dim.label]
+            values[dim.key] = current
+    comments = None if comment is None else {key: f"{comment}; was {_shown(settings[key])}" for key in values}
+    return with_settings(text, f"estimator.{name}", comments=comments, **values)
+
+
+def _shown(value) -> str:
+    if isinstance(value, tuple):
+        return "[" + ", ".join(f"{row[i] if isinstance(row, tuple) else row:.4g}" for i, row in enumerate(value)) + "]"
+    return f"{value:.4g}"
+
+
+_BUILDS: dict[tuple[str, str, float], CEstimator] = {}
+"""Per worker process: the tuning build of (vehicle fingerprint, estimator, sample time)."""
+
+
+def evaluate(config: VehicleConfig, name: str, calibration: tuple[float, ...], log: Scored,
+             objective: str) -> float:
+    """The objective of one candidate calibration on one log (rad or rad/s; a job for the cluster)."""
+    config = config.with_sample_time(round(log.sample_time, 9)) \
+        if abs(log.sample_time - config.sample_time) > 1e-12 else config
+    key = (config.fingerprint(), name, config.sample_time)
+    if key not in _BUILDS:
+        _BUILDS[key] = load_tuning_estimator(config, name)
+    estimator = _BUILDS[key]
+    estimator.set_calibration(calibration)
+    outputs, _ = estimator.run(log.inputs)
+    error = outputs[:, log.output] - log.truth
+    error = error[np.isfinite(error)]
+    if objective == "rmse":
+        return float(np.sqrt(np.mean(error**2)))
+    if objective == "max":
+        return float(np.max(np.abs(error)))
+    return float(np.mean(np.abs(error)))
+
+
+@dataclass
+class Trial:
+    point: dict[str, float]
+    score: float
+
+
+@dataclass
+class TuneResult:
+    """The search's trials (in order), the best point and the scores before and after."""
+
+    dimensions: list[Dimension]
+    trials: list[Trial]
+    best: Trial
+    baseline_train: float
+    tuned_train: float
+    baseline_holdout: float | None
+    tuned_holdout: float | None
+    text: str
+    """The tuned vehicle file."""
+
+
+def _calibration(text: str, source: str, vehicle_name: str, name: str) -> tuple[float, ...] | None:
+    """The calibration vector of a candidate file, or None if its settings break a rule."""
+    try:
+        config = parse_vehicle(text, source, vehicle_name)
+    except ParameterError:
+        return None
+    return parameters(config, name, "calibratable").values
+
+
+def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], holdout: Sequence[Log],
+         trials: int, objective: str = "rmse", seed: int = 1, batch: int = 8, scheduler: str | None = None,
+         on_progress: Callable[[int, int], None] | None = None) -> TuneResult:
+    """Search ``name``'s tunable settings of the vehicle file ``text`` (validated as ``config``)."""
+    import optuna
+
+    if objective not in OBJECTIVES:
+        raise TuneError(f"--objective {objective}: expected one of {', '.join(OBJECTIVES)}")
+    if not DEFINITIONS[name].tunable:
+        raise TuneError(f"estimator {name} declares no tunable settings")
+    train_logs, holdout_logs = prepare(config, name, train), prepare(config, name, holdout)
+    dims = dimensions(config, name)
+    names = parameters(config, name, "calibratable").names
+    total_runs = trials * len(train_logs) + 2 * (len(train_logs) + len(holdout_logs))
+    done = 0
+
+    def progress(*_):
+        nonlocal done
+        done += 1
+        if on_progress:
+            on_progress(done, total_runs)
+
+    def scores(cluster: Cluster, calibrations: list[tuple[float, ...] | None], logs: list[Scored]) -> list[float]:
+        jobs = [(config, name, c, log, objective) for c in calibrations if c is not None for log in logs]
+        flat = iter(cluster.map(evaluate, jobs, progress))
+        return [float(np.mean([next(flat) for _ in logs])) if c is not None else float("inf") for c in calibrations]
+
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True, n_startup_trials=min(10, trials))
+    study = optuna.create_study(direction="minimize", sampler=sampler)
+    base = parameters(config, name, "calibratable").values
+    history: list[Trial] = []
+    with Cluster(scheduler) as cluster:
+        baseline_train, = scores(cluster, [base], train_logs)
+        while len(history) < trials:
+            asked = [study.ask() for _ in range(min(batch, trials - len(history)))]
+            points = [{d.label: t.suggest_float(d.label, d.range.low, d.range.high, log=d.range.log)
+                       for d in dims} for t in asked]
+            calibrations = [_calibration(settings_text(text, name, config, p), config.source, config.name, name)
+                            for p in points]
+            for c in calibrations:
+                if c is not None and len(c) != len(names):
+                    raise TuneError(f"estimator {name}: a candidate changed the calibration's structure")
+            for trial, point, value in zip(asked, points, scores(cluster, calibrations, train_logs)):
+                if np.isfinite(value):
+                    study.tell(trial, value)
+                else:
+                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
+                history.append(Trial(point, value))
+        best = min(history, key=lambda t: t.score)
+        if best.score >= baseline_train:  # nothing beat the settings we started from
+            best = Trial({}, baseline_train)
+        tuned_text = settings_text(text, name, config, {k: float(f"{v:.4g}") for k, v in best.point.items()},
+                                   f"tuned by vsegen tune ({objective} over {len(train_logs)} log(s), "
+                                   f"{trials} trials, seed {seed})")
+        tuned = _calibration(tuned_text, config.source, config.name, name)
+        tuned_train, = scores(cluster, [tuned], train_logs)
+        baseline_holdout = tuned_holdout = None
+        if holdout_logs:
+            baseline_holdout, tuned_holdout = scores(cluster, [base, tuned], holdout_logs)
+    return TuneResult(dims, history, best, baseline_train, tuned_train, baseline_holdout, tuned_holdout,
+                      tuned_text)
+
