@@ -1,0 +1,148 @@
+"""vsegen identify: parameters from ordinary driving logs, with intervals, refusals and the written
+vehicle file; on both truth cars and on a synthetic bicycle-model log with known parameters."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from scipy.signal import lsim
+
+from harness.cli import main
+from harness.identify import identify
+from harness.identify.vehicle_file import identified_vehicle_file
+from harness.logs import TRUTH, Log, write_log
+from harness.paths import VEHICLES
+from harness.scenarios import Case
+from harness.vehicles import load_vehicle, with_settings
+from model.bicycle import GRAVITY
+from model.estimators import underived_warning
+from model.params import parse_vehicle
+
+ORDINARY_DRIVING = (
+    Case.of("step_steer", delta=0.02, duration=8.0),
+    Case.of("step_steer", delta=0.04, speed_kmh=70.0, duration=8.0),
+    Case.of("sine_steer"),
+    Case.of("dlc", speed_kmh=60.0),
+    Case.of("hil_sine"),
+)
+"""A handful of ordinary manoeuvres, as a test drive would have them."""
+OTHER = {"c_class": "rwd_saloon", "rwd_saloon": "c_class"}
+
+
+def without_truth(log: Log) -> Log:
+    return Log({k: v for k, v in log.columns.items() if k not in TRUTH}, log.source)
+
+
+def plant_axle_stiffness(config) -> tuple[float, float]:
+    """The truth plant's axle cornering stiffnesses at static load (Magic Formula load law), computed
+    here from [plant] and the geometry, independently of the [vehicle] values."""
+    v, p = config.vehicle, config.plant
+    m, a, b = v["mass"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
+    fz0, k1, k2 = p["tyre_nominal_load"], p["tyre_cornering_factor"], p["tyre_cornering_load_factor"]
+
+    def tyre(fz: float) -> float:
+        return k1 * fz0 * math.sin(2 * math.atan(fz / (k2 * fz0)))
+
+    return 2 * tyre(m * GRAVITY * b / (a + b) / 2), 2 * tyre(m * GRAVITY * a / (a + b) / 2)
+
+
+def start_file(car: str) -> tuple[str, object]:
+    """What a user starts from: the car's file with the other car's stiffnesses and roll gradients
+    (only mass, geometry and I_z are the car's own)."""
+    text = (VEHICLES / f"{car}.toml").read_text()
+    other = load_vehicle(VEHICLES / f"{OTHER[car]}.toml")
+    text = with_settings(text, "vehicle", cornering_stiffness_front=other.vehicle["cornering_stiffness_front"],
+                         cornering_stiffness_rear=other.vehicle["cornering_stiffness_rear"])
+    for name in other.estimators:
+        if "roll_gradient" in other.settings(name) and f"[estimator.{name}]" in text:
+            text = with_settings(text, f"estimator.{name}", roll_gradient=other.settings(name)["roll_gradient"])
+    return text, parse_vehicle(text, f"{car}_start.toml", car)
+
+
+@pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
+def test_recovers_the_roll_gradient_and_the_axle_stiffnesses_without_ground_truth(car):
+    truth = load_vehicle(VEHICLES / f"{car}.toml")
+    text, start = start_file(car)
+    logs = [without_truth(case.simulate(truth, 100.0, 1)) for case in ORDINARY_DRIVING]
+    ident = identify(logs, start)
+    assert not ident.uses_reference
+    k = ident.estimates["roll_gradient"]
+    assert abs(k.value / truth.plant["roll_gradient"] - 1) < 0.10
+    assert k.low < truth.plant["roll_gradient"] < k.high
+    front, rear = plant_axle_stiffness(truth)
+    assert abs(ident.value("cornering_stiffness_front") / front - 1) < 0.15
+    assert abs(ident.value("cornering_stiffness_rear") / rear - 1) < 0.15
+    noise = ident.estimates["gyro_noise"]
+    assert noise.low < truth.sensors["gyro_noise"] < noise.high
+    written = parse_vehicle(identified_vehicle_file(text, start, ident), "car.toml", car)
+    assert written.derived_for == written.vehicle_fingerprint()
+    assert all(underived_warning(written, name) is None for name in written.estimators)
+    assert written.settings("switching")["roll_gradient"] == pytest.approx(k.value, rel=1e-3)
+
+
+def _bicycle_log(cf: float, cr: float, vehicle, seconds: float = 40.0, dt: float = 0.01) -> Log:
+    """A synthetic log of the linear bicycle model (scipy's lsim, independent of identify's own
+    integration) at 20 m/s with a chirp steer after 5 s of straight driving, seed-000 noise."""
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b, vx = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], 20.0
+    A = np.array([[-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx) - vx],
+                  [(b * cr - a * cf) / (iz * vx), -(a * a * cf + b * b * cr) / (iz * vx)]])
+    B = np.array([[cf / m], [a * cf / iz]])
+    C = np.array([[A[0, 0], A[0, 1] + vx], [0.0, 1.0]])
+    D = np.array([[cf / m], [0.0]])
+    t = np.arange(0.0, seconds, dt)
+    phase = 2 * np.pi * (0.1 * (t - 5) + 0.02 * (t - 5) ** 2)
+    delta = np.where(t > 5, 0.012 * np.sin(phase), 0.0)
+    _, y, _ = lsim((A, B, C, D), delta, t)
+    rng = np.random.default_rng(7)
+    return Log({"t": t, "delta": delta, "vx": np.full_like(t, vx), "ax": rng.normal(0, 0.3, len(t)),
+                "ay": y[:, 0] + rng.normal(0, 0.3, len(t)), "r": y[:, 1] + rng.normal(0, 0.017453, len(t))},
+               "bicycle.csv")
+
+
+def test_stiffness_intervals_hold_the_known_values_of_a_bicycle_model_log(config):
+    cf, cr = 120000.0, 110000.0
+    text = with_settings((VEHICLES / "c_class.toml").read_text(), "estimator.switching", roll_gradient=0.0)
+    start = parse_vehicle(text.replace("roll_gradient = 0.0082", "roll_gradient = 0.0"), "start.toml", "c")
+    ident = identify([_bicycle_log(cf, cr, config.vehicle)], start)
+    assert ident.estimates["cornering_stiffness_front"].low < cf < ident.estimates["cornering_stiffness_front"].high
+    assert ident.estimates["cornering_stiffness_rear"].low < cr < ident.estimates["cornering_stiffness_rear"].high
+    assert abs(ident.value("cornering_stiffness_front") / cf - 1) < 0.03
+    refused = {r.name: r.why for r in ident.refusals}
+    assert "no quasi-steady cornering above 2 m/s^2" in refused["roll_gradient"]
+
+
+def test_a_log_that_excites_nothing_is_refused_line_by_line_with_exit_2(tmp_path: Path):
+    t = np.arange(0.0, 20.0, 0.01)
+    rng = np.random.default_rng(3)
+    crawl = Log({"t": t, "delta": np.zeros_like(t), "vx": np.full_like(t, 2.0), "ax": rng.normal(0, 0.3, len(t)),
+                 "ay": rng.normal(0, 0.3, len(t)), "r": rng.normal(0, 0.0175, len(t))}, "crawl.csv")
+    write_log(crawl, tmp_path / "crawl.csv")
+    out = tmp_path / "car.toml"
+    result = CliRunner().invoke(main, ["identify", "--log", str(tmp_path / "crawl.csv"), "--vehicle",
+                                       str(VEHICLES / "c_class.toml"), "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 10 and all(line.startswith("vsegen: not identified: ") for line in lines)
+    assert any("no straight driving above 5 m/s" in line for line in lines)
+    assert any("roll_gradient: no quasi-steady cornering above 2 m/s^2" in line for line in lines)
+    assert not out.exists()
+
+
+def test_a_file_copied_to_another_car_warns_and_the_shipped_files_do_not(tmp_path: Path):
+    for path in sorted(VEHICLES.glob("*.toml")):
+        config = load_vehicle(path)
+        assert all(underived_warning(config, name) is None for name in config.estimators), path
+    text = with_settings((VEHICLES / "c_class.toml").read_text(), "vehicle", mass=1780.0)
+    (tmp_path / "new_car.toml").write_text(text)
+    result = CliRunner().invoke(main, ["generate", "--vehicle", str(tmp_path / "new_car.toml"),
+                                       "--estimator", "switching", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    warnings = [line for line in result.stderr.splitlines() if "warning" in line]
+    assert len(warnings) == 1
+    assert ("[estimator.switching] roll_gradient = 0.0082, measurement_noise = [0.09, 0.0003046] were not "
+            "derived for this vehicle (see vsegen identify") in warnings[0]

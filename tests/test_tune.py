@@ -1,0 +1,131 @@
+"""vsegen tune: a search over an estimator's declared tunable settings, every candidate run as the
+calibratable generated C; the same result serially, on a local Dask cluster and on a real
+scheduler started as local processes."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from harness.build import compile_estimator, load_tuning_estimator
+from harness.cli import main
+from harness.logs import Log, write_log
+from harness.paths import VEHICLES
+from harness.scenarios import Case
+from harness.tuning import dimensions, tune
+from harness.vehicles import load_vehicle
+from model.calibration import parameters
+from model.params import parse_vehicle
+
+TRAINING = (Case.of("sine_steer"), Case.of("dlc", speed_kmh=60.0))
+HOLDOUT = (Case.of("step_steer", delta=0.03),)
+
+
+@pytest.fixture(scope="module")
+def saloon():
+    path = VEHICLES / "rwd_saloon.toml"
+    return path.read_text(), load_vehicle(path)
+
+
+@pytest.fixture(scope="module")
+def logs(saloon, tmp_path_factory):
+    """Training and hold-out logs of the saloon (with ground truth), also written as CSV."""
+    folder = tmp_path_factory.mktemp("tune_logs")
+    written = {}
+    for role, cases in (("train", TRAINING), ("holdout", HOLDOUT)):
+        written[role] = []
+        for i, case in enumerate(cases):
+            log = case.simulate(saloon[1], 100.0, 1)
+            write_log(log, folder / f"{role}{i}.csv")
+            written[role].append((log, folder / f"{role}{i}.csv"))
+    return written
+
+
+def _run(saloon, logs, scheduler: str, trials: int = 6):
+    text, config = saloon
+    return tune(text, config, "switching", [log for log, _ in logs["train"]], [log for log, _ in logs["holdout"]],
+                trials, batch=3, scheduler=scheduler)
+
+
+def test_tuning_improves_training_and_a_local_cluster_gives_the_serial_result(saloon, logs, monkeypatch):
+    serial = _run(saloon, logs, "serial")
+    monkeypatch.setenv("VSEGEN_WORKERS", "2")
+    local = _run(saloon, logs, "local")
+    assert [t.score for t in local.trials] == [t.score for t in serial.trials]
+    assert local.text == serial.text
+    assert len(serial.trials) == 6 and len({tuple(t.point.values()) for t in serial.trials}) == 6
+    assert serial.tuned_train < serial.baseline_train
+    assert serial.tuned_holdout is not None and np.isfinite(serial.tuned_holdout)
+    tuned = parse_vehicle(serial.text, "tuned.toml", "rwd_saloon")
+    for dim in dimensions(tuned, "switching"):
+        value = tuned.settings("switching")[dim.key]
+        value = value if dim.index is None else np.diag(np.atleast_2d(value))[dim.index] \
+            if isinstance(value[0], tuple) else value[dim.index]
+        assert dim.range.low <= value <= dim.range.high, dim.label
+    changed = serial.text.count("# tuned by vsegen tune (rmse over 2 log(s), 6 trials, seed 1); was")
+    assert changed == len({dim.key for dim in dimensions(tuned, "switching")})
+
+
+def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_computes(saloon, logs):
+    """Setting the calibration at run time is the same as regenerating with those values: the
+    calibration struct is what the code reads."""
+    text, config = saloon
+    tuned = parse_vehicle(_run(saloon, logs, "serial", trials=3).text, "tuned.toml", "rwd_saloon")
+    log = logs["train"][0][0]
+    estimator, regenerated = compile_estimator(tuned, "switching", "double", "calibratable")
+    tuning = load_tuning_estimator(config, "switching")
+    tuning.set_calibration(parameters(tuned, "switching", "calibratable").values)
+    inputs = log.matrix(estimator.inputs.names)
+    assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
+
+
+def test_tune_needs_ground_truth_and_says_so_in_one_line(tmp_path: Path, logs):
+    log = logs["train"][0][0]
+    bare = Log({k: v for k, v in log.columns.items() if k != "beta_ref"}, "bare.csv")
+    write_log(bare, tmp_path / "bare.csv")
+    result = CliRunner().invoke(main, ["tune", "--estimator", "switching", "--log", str(tmp_path / "bare.csv"),
+                                       "--vehicle", str(VEHICLES / "rwd_saloon.toml"), "--out",
+                                       str(tmp_path / "t.toml"), "--scheduler", "serial"])
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [
+        f"vsegen: error: {tmp_path / 'bare.csv'}:1: missing column 'beta_ref': tune scores switching's beta "
+        "against it (a log with ground truth, e.g. an optical or GNSS/INS reference)"]
+
+
+def test_a_real_scheduler_and_worker_give_the_serial_result(tmp_path: Path, logs):
+    """A distributed scheduler and a worker started as separate processes, reached by address."""
+    scheduler_file = tmp_path / "scheduler.json"
+    processes = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--port", "0",
+                                   "--no-dashboard", "--scheduler-file", str(scheduler_file)],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for _ in range(300):
+            if scheduler_file.exists() and scheduler_file.read_text().strip():
+                break
+            time.sleep(0.1)
+        address = json.loads(scheduler_file.read_text())["address"]
+        processes.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                                           "--nworkers", "1", "--nthreads", "1", "--no-dashboard"],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        arguments = ["tune", "--estimator", "kf2dof", "--vehicle", str(VEHICLES / "rwd_saloon.toml"),
+                     "--trials", "4", "--batch", "2"]
+        for _, path in logs["train"]:
+            arguments += ["--log", str(path)]
+        runs = {}
+        for scheduler in ("serial", address):
+            out = tmp_path / f"tuned_{len(runs)}.toml"
+            result = CliRunner().invoke(main, [*arguments, "--scheduler", scheduler, "--out", str(out)])
+            assert result.exit_code == 0, result.output
+            runs[scheduler] = out.read_text()
+        assert runs["serial"] == runs[address]
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+            process.wait(timeout=30)
