@@ -26,6 +26,9 @@ from model.params import ParameterError, VehicleConfig, parse_vehicle
 
 OBJECTIVES = ("rmse", "max", "mean")
 """Per log: RMSE, largest |error| or mean |error|; averaged over the logs."""
+SPIN_SIDESLIP = np.radians(15.0)
+"""A log is scored up to the first sample where |beta_ref| exceeds this (the car spins: beyond
+what a sideslip estimator is specified for, and a few seconds of it would decide the search)."""
 DEGREES = 180.0 / np.pi
 
 
@@ -76,9 +79,14 @@ def prepare(config: VehicleConfig, name: str, logs: Sequence[Log]) -> list[Score
         if missing:
             raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {name} needs "
                            f"{', '.join(estimator.inputs.names)}")
+        reference = np.asarray(log[truth], dtype=float)
+        if truth == "beta_ref":
+            spin = np.flatnonzero(np.abs(reference) > SPIN_SIDESLIP)
+            if spin.size:
+                reference = reference.copy()
+                reference[spin[0]:] = np.nan
         prepared.append(Scored(str(log.source).rsplit("/", 1)[-1], log.matrix(estimator.inputs.names),
-                               np.asarray(log[truth], dtype=float), estimator.outputs.index(output),
-                               log.sample_time))
+                               reference, estimator.outputs.index(output), log.sample_time))
     return prepared
 
 
@@ -144,6 +152,12 @@ def evaluate(config: VehicleConfig, name: str, calibration: tuple[float, ...], l
     if objective == "max":
         return float(np.max(np.abs(error)))
     return float(np.mean(np.abs(error)))
+
+
+def objective_value(config: VehicleConfig, name: str, logs: Sequence[Log], objective: str = "rmse") -> float:
+    """The objective of ``config``'s own settings over ``logs``, mean over the logs (in process)."""
+    calibration = parameters(config, name, "calibratable").values
+    return float(np.mean([evaluate(config, name, calibration, log, objective) for log in prepare(config, name, logs)]))
 
 
 @dataclass
