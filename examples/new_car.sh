@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from harness.vehicles import with_settings
 text = with_settings(Path(sys.argv[1]).read_text(), "vehicle", mass=1780.0, yaw_inertia=3050.0,
-                     cg_to_front_axle=1.38, cg_to_rear_axle=1.57, wheelbase=2.95, wheel_radius=0.335,
+                     cg_to_front_axle=1.30, cg_to_rear_axle=1.65, wheelbase=2.95, wheel_radius=0.335,
                      track_width=1.60, cg_height=0.56)
 Path(sys.argv[2]).write_text(text)
 PY
@@ -30,7 +30,7 @@ vsegen simulate dlc --vehicle "$truth" --out track/dlc.csv
 vsegen simulate step_steer --vehicle "$truth" --out track/step.csv
 vsegen simulate sine_steer --vehicle "$truth" --out track/sine.csv
 vsegen simulate fishhook --vehicle "$truth" --out track/fishhook.csv
-vsegen simulate continuous_dlc --vehicle "$truth" --out track/continuous_dlc.csv
+vsegen simulate continuous_dlc --vehicle "$truth" --set speed_kmh=80 --out track/continuous_dlc.csv
 
 # 1. identify  2. tune  3. generate  4. verify
 vsegen identify --vehicle my_car.toml --out car.toml --report identify.md \

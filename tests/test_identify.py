@@ -146,3 +146,27 @@ def test_a_file_copied_to_another_car_warns_and_the_shipped_files_do_not(tmp_pat
     assert len(warnings) == 1
     assert ("[estimator.switching] roll_gradient = 0.0082, measurement_noise = [0.09, 0.0003046] were not "
             "derived for this vehicle (see vsegen identify") in warnings[0]
+
+
+def test_a_gnss_lateral_velocity_reference_enters_the_fit_and_narrows_it(config):
+    cf, cr = 120000.0, 110000.0
+    text = (VEHICLES / "c_class.toml").read_text().replace("roll_gradient = 0.0082", "roll_gradient = 0.0")
+    start = parse_vehicle(text, "start.toml", "c")
+    plain = _bicycle_log(cf, cr, config.vehicle)
+    vehicle = config.vehicle
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b, vx = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], 20.0
+    A = np.array([[-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx) - vx],
+                  [(b * cr - a * cf) / (iz * vx), -(a * a * cf + b * b * cr) / (iz * vx)]])
+    B = np.array([[cf / m], [a * cf / iz]])
+    _, vy, _ = lsim((A, B, np.array([[1.0, 0.0]]), np.zeros((1, 1))), plain["delta"], plain["t"])
+    rng = np.random.default_rng(11)
+    referenced = Log({**plain.columns, "vy_ref": vy + rng.normal(0, 0.02, len(vy))}, "gnss.csv")
+    without = identify([plain], start)
+    with_gnss = identify([referenced], start)
+    assert with_gnss.uses_reference and not without.uses_reference
+    for name in ("cornering_stiffness_front", "cornering_stiffness_rear"):
+        narrow, wide = with_gnss.estimates[name], without.estimates[name]
+        assert narrow.high - narrow.low < wide.high - wide.low
+        assert narrow.low < (cf if name.endswith("front") else cr) < narrow.high
+        assert "(with the beta reference)" in narrow.support

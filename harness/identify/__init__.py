@@ -66,4 +66,4 @@ def identify(logs: Sequence[Log], config: VehicleConfig) -> Identification:
     known = {r.name: r.value for r in results if isinstance(r, Estimate)}
     quantities = {**FALLBACK_NOISE, "roll_gradient": base_roll_gradient(config), **known, **offsets}
     results.extend(cornering_stiffness(logs, config.vehicle, quantities))
-    return Identification(tuple(results), any("beta_ref" in log for log in logs))
+    return Identification(tuple(results), any("beta_ref" in log or "vy_ref" in log for log in logs))

@@ -3,7 +3,7 @@
 The linear bicycle model (docs/conventions.md; mass, a, b, I_z are the user's) is simulated over
 each stretch of linear-range driving with the logged steer angle and speed, and C_f, C_r are chosen
 so that its yaw rate and lateral acceleration match the (offset- and roll-corrected) sensors; where
-a log carries ``beta_ref`` the sideslip angle is matched too. Each stretch starts from the
+a log carries ``beta_ref`` (or ``vy_ref``) the sideslip angle is matched too. Each stretch starts from the
 steady state of its first sample, and its first ``SETTLE`` seconds are not scored.
 """
 
@@ -76,7 +76,7 @@ def cornering_stiffness(logs: Sequence[Log], vehicle: Mapping[str, float], quant
                f"{yaw.std() if len(yaw) else 0.0:.3f} rad/s (needs 5 s and {MIN_YAW_EXCITATION} rad/s)")
         return [Refusal(name, why) for name in names]
     stretches = _stretches(linear, quantities)
-    with_reference = any("beta_ref" in log for log in logs)
+    with_reference = any("beta_ref" in log or "vy_ref" in log for log in logs)
     nominal = np.array([vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]])
 
     p, cov = _fit_log_stiffness(vehicle, nominal, stretches, quantities)
@@ -88,7 +88,7 @@ def cornering_stiffness(logs: Sequence[Log], vehicle: Mapping[str, float], quant
         n = len(stretches)
         jackknife = (n - 1) / n * ((others - others.mean(axis=0)) ** 2).sum(axis=0)
         cov = np.diag(np.maximum(np.diag(cov), jackknife))
-    support = linear.support + (" (with beta_ref)" if with_reference else "")
+    support = linear.support + (" (with the beta reference)" if with_reference else "")
     out: list[Estimate | Refusal] = []
     for i, name in enumerate(names):
         value = nominal[i] * np.exp(p[i])
@@ -121,6 +121,16 @@ def _fit_log_stiffness(vehicle, nominal: np.ndarray, stretches: list[dict],
     return fit(residual, np.zeros(2))
 
 
+def _reference_sideslip(log: Log, run: slice) -> np.ndarray | None:
+    """The log's reference sideslip angle over ``run``: ``beta_ref``, else atan2(vy_ref, v_x) from
+    a GNSS/INS lateral velocity, else None."""
+    if "beta_ref" in log:
+        return log["beta_ref"][run]
+    if "vy_ref" in log:
+        return np.arctan2(log["vy_ref"][run], log["vx"][run])
+    return None
+
+
 def _stretches(linear: Selection, quantities: Mapping[str, float]) -> list[dict]:
     """The contiguous linear-range stretches with corrected sensor signals."""
     out = []
@@ -134,6 +144,6 @@ def _stretches(linear: Selection, quantities: Mapping[str, float]) -> list[dict]
                 "delta": log["delta"][run], "vx": log["vx"][run],
                 "r": log["r"][run] - quantities["gyro_offset"],
                 "ay": ay_measured / (1.0 + GRAVITY * k),
-                "beta_ref": log["beta_ref"][run] if "beta_ref" in log else None,
+                "beta_ref": _reference_sideslip(log, run),
             })
     return out

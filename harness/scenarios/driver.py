@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from harness.plant.two_track import AIR_DENSITY, GRAVITY
+from harness.plant.tyre import cornering_stiffness
 
 BANDWIDTH = 2.0
 """Natural frequency of the driver's closed-loop lateral error (rad/s)."""
@@ -21,6 +22,20 @@ STEER_LIMIT = 0.5
 """Largest front road-wheel angle the driver commands (rad)."""
 STATE_X, STATE_Y, STATE_PSI, STATE_VX, STATE_VY = 0, 1, 2, 3, 4
 """Indices of the plant state the drivers read (harness.plant.two_track.STATE)."""
+
+
+def driver_view(config) -> Mapping[str, float]:
+    """What the simulated driver (and a synthetic scenario) knows of the car: the [vehicle] table
+    with the truth plant's axle cornering stiffnesses at static load (two tyres of the [plant]
+    Magic Formula load law), so a log never changes when the estimator-side [vehicle]
+    stiffnesses are identified or tuned. Without a [plant] table, the [vehicle] values."""
+    vehicle = dict(config.vehicle)
+    if config.plant is not None:
+        m, a, b = vehicle["mass"], vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+        front, rear = (m * GRAVITY * share / (2 * (a + b)) for share in (b, a))
+        vehicle["cornering_stiffness_front"] = 2 * float(cornering_stiffness(config.plant, front))
+        vehicle["cornering_stiffness_rear"] = 2 * float(cornering_stiffness(config.plant, rear))
+    return vehicle
 
 
 @dataclass

@@ -15,7 +15,7 @@ from harness.logs import Log
 from harness.plant.two_track import GRAVITY
 from harness.scenarios import course as courses
 from harness.scenarios import sensors
-from harness.scenarios.driver import PathFollower, SpeedHold
+from harness.scenarios.driver import PathFollower, SpeedHold, driver_view
 from harness.scenarios.simulate import SPIN_BETA, FrictionProfile, Run, simulate, substeps
 from model.params import VehicleConfig
 
@@ -110,7 +110,7 @@ def hil_sine(config: VehicleConfig, rate_hz: float, seed: int, mu: float, v_star
     lateral acceleration it asks for rises linearly from ``ay_start`` to ``ay_end`` times mu g
     over ``duration`` s (*assumptions*: the paper shows the driver's input only in figures).
     The steer angle for a demand a_y at speed vx is a_y l (1 + K_s vx^2) / vx^2."""
-    vehicle = config.vehicle
+    vehicle = driver_view(config)
     l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
     ks = vehicle["mass"] / l**2 * (vehicle["cg_to_rear_axle"] / vehicle["cornering_stiffness_front"]
                                    - vehicle["cg_to_front_axle"] / vehicle["cornering_stiffness_rear"])
@@ -135,7 +135,7 @@ def hil_sine(config: VehicleConfig, rate_hz: float, seed: int, mu: float, v_star
 def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
     """Synthetic steady-state cornering while the speed falls 12 -> 0 -> -1 (reverse) -> 12 m/s;
     exercises the estimators' low-speed hold (no plant: the plant needs |v| > 3.5 m/s)."""
-    vehicle = config.vehicle
+    vehicle = driver_view(config)
     l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
     t = np.arange(0.0, 24.0 + 0.5 / rate_hz, 1.0 / rate_hz)
     vx = np.interp(t, [0, 2, 9, 10, 11, 12, 13, 20, 24], [12, 12, 0, 0, -1, -1, 0, 12, 12])
@@ -239,7 +239,7 @@ def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, p
     key = (config.truth_fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment)
     if key not in _RUNS:
         dt = 1.0 / (rate_hz * substeps(rate_hz))
-        steer = PathFollower(config.vehicle, course.centre_line, dt)
+        steer = PathFollower(driver_view(config), course.centre_line, dt)
         hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
         _RUNS[key] = simulate(config, rate_hz, duration, speed, steer,
                               yaw_moment.torques(config.vehicle, hold), mu, progress=progress)
