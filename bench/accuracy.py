@@ -27,7 +27,7 @@ from harness.paths import DEFAULT_VEHICLE, REPO
 from harness.plot import plot
 from harness.run import run_estimator
 from harness.scenarios import Case
-from harness.score import score
+from harness.score import score_case
 from harness.vehicles import load_vehicle
 from model.estimators import build
 
@@ -181,12 +181,6 @@ def main(argv: list[str] | None = None) -> None:
         "",
     ])
     _write(args.out, text)
-
-
-def score_case(config, case: Case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list]]:
-    """(the run's notes, per estimator its scores) of one scenario and seed (a cluster job)."""
-    log = case.simulate(config, 1.0 / config.sample_time, seed)
-    return dict(log.notes), {name: score(log, run_estimator(config, name, log)) for name in names}
 
 
 def _shown_path(path: Path) -> str:

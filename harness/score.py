@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from harness.logs import Log, LogError
+from harness.run import run_estimator
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
     ("beta", "beta_ref", "deg", 180.0 / np.pi),
@@ -51,3 +52,11 @@ def score(log: Log, estimates: Log) -> list[Score]:
                 scores.append(Score(name, unit, e.size, float(np.abs(e).max()),
                                     float(np.abs(e).mean()), float(np.sqrt(np.mean(e * e)))))
     return scores
+
+
+def score_case(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:
+    """(the run's notes, per estimator its scores against the truth) of scenario ``case``
+    (``harness.scenarios.Case``) with sensor-noise ``seed``, each estimator's generated C run over
+    the log: one job of a Monte-Carlo sweep on the cluster (workers need only vsegen installed)."""
+    log = case.simulate(config, 1.0 / config.sample_time, seed)
+    return dict(log.notes), {name: score(log, run_estimator(config, name, log)) for name in names}
