@@ -48,10 +48,10 @@ def logs(saloon, tmp_path_factory):
     return written
 
 
-def _run(saloon, logs, scheduler: str, trials: int = 6):
+def _run(saloon, logs, scheduler: str, trials: int = 12):
     text, config = saloon
     return tune(text, config, "switching", [log for log, _ in logs["train"]], [log for log, _ in logs["holdout"]],
-                trials, batch=3, scheduler=scheduler)
+                trials, batch=4, scheduler=scheduler)
 
 
 def test_tuning_improves_training_and_a_local_cluster_gives_the_serial_result(saloon, logs, monkeypatch):
@@ -60,7 +60,7 @@ def test_tuning_improves_training_and_a_local_cluster_gives_the_serial_result(sa
     local = _run(saloon, logs, "local")
     assert [t.score for t in local.trials] == [t.score for t in serial.trials]
     assert local.text == serial.text
-    assert len(serial.trials) == 6 and len({tuple(t.point.values()) for t in serial.trials}) == 6
+    assert len(serial.trials) == 12 and len({tuple(t.point.values()) for t in serial.trials}) == 12
     assert serial.tuned_train < serial.baseline_train
     assert serial.tuned_holdout is not None and np.isfinite(serial.tuned_holdout)
     tuned = parse_vehicle(serial.text, "tuned.toml", "rwd_saloon")
@@ -69,7 +69,7 @@ def test_tuning_improves_training_and_a_local_cluster_gives_the_serial_result(sa
         value = value if dim.index is None else np.diag(np.atleast_2d(value))[dim.index] \
             if isinstance(value[0], tuple) else value[dim.index]
         assert dim.range.low <= value <= dim.range.high, dim.label
-    changed = serial.text.count("# tuned by vsegen tune (rmse over 2 log(s), 6 trials, seed 1); was")
+    changed = serial.text.count("# tuned by vsegen tune (rmse over 2 log(s), 12 trials, seed 1); was")
     assert changed == len({dim.key for dim in dimensions(tuned, "switching")})
 
 

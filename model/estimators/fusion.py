@@ -91,6 +91,6 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
-    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0),
-    "reference_timeout": Tunable(0.05, 1.0)}, KINEMATIC_DYNAMIC_STATUS,
+    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0)},
+    KINEMATIC_DYNAMIC_STATUS,
     {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
