@@ -11,6 +11,7 @@ REFERENCE_SUSPECT = 4
 PARAMETERS_PROJECTED = 8
 COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
+KINEMATIC_DWELL_LIMITED = 64
 
 STATUS_BITS = {
     "LOW_SPEED": (LOW_SPEED, "vx below the low-speed limit (or not yet back above the resume speed): "
@@ -27,5 +28,8 @@ STATUS_BITS = {
     "FILTER_RESTARTED": (FILTER_RESTARTED, "the estimate left the plausible envelope (speed far from the "
                                            "measured one, or an implausible sideslip angle); the filter "
                                            "restarted from this sample"),
+    "KINEMATIC_DWELL_LIMITED": (KINEMATIC_DWELL_LIMITED, "the kinematic scheme reached its maximum dwell "
+                                                         "with |a_y| still above the threshold: the model-based "
+                                                         "scheme runs beyond its linear range until |a_y| falls"),
 }
 """Every status bit by name: (value, meaning)."""

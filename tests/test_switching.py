@@ -154,7 +154,41 @@ def test_beyond_the_paper_options_are_equivalent_to_the_reference(vehicle_text, 
         assert result.ok, result
 
 
-def test_adaptive_threshold_follows_the_remembered_peak(vehicle_text):
+@pytest.mark.parametrize("real, params", [("double", "baked"), ("float", "baked"), ("double", "calibratable"),
+                                          ("float", "calibratable")])
+def test_the_kinematic_dwell_bound_is_equivalent_to_the_reference_in_every_form(vehicle_text, real, params):
+    """Beyond the paper: with kinematic_max_dwell the C matches the reference, including the samples
+    where the bound hands over to the KF (step steer and fishhook hold |a_y| above the threshold)."""
+    from harness.verify import verify_estimator
+
+    config = with_option(vehicle_text, "kinematic_max_dwell", 1.0)
+    for result in verify_estimator(config, "switching", (Case.of("step_steer"), Case.of("fishhook")),
+                                   real=real, params=params):
+        assert result.ok, result
+
+
+def test_the_kinematic_dwell_bound_hands_over_after_its_samples_and_says_so(vehicle_text):
+    """KIN for round(max_dwell / T) samples while |a_y,f| stays above the threshold, then DYN with
+    status KINEMATIC_DWELL_LIMITED until |a_y,f| falls below it, which resets the count."""
+    config = with_option(vehicle_text, "kinematic_max_dwell", 1.0)
+    est = build("switching", config)
+    log = Case.of("fishhook").simulate(config, 100.0)
+    outputs, states = load_estimator(est, render(config, "switching")).run(log.matrix(est.inputs.names))
+    mode, codes = outputs[:, 3].astype(int), outputs[:, 4].astype(int)
+    above = switching_signal(est, states) > config.settings("switching")["threshold"]
+    limited = (codes & status.KINEMATIC_DWELL_LIMITED) > 0
+    assert limited.any()
+    run, stays = 0, []
+    for k in range(len(above)):
+        if mode[k] == KIN:
+            run += 1
+        elif run:
+            stays.append(run)
+            run = 0
+        assert not (limited[k] and mode[k] == KIN)
+        assert limited[k] == (above[k] and mode[k] == DYN and states[k, est.states.index("kin_samples")] >= 100)
+    assert max(stays) == 100
+
     """M_k = max(|a_y,f|, M_k-1 exp(-T/tau)); the mode switches at max(a_yT, min(0.8 M, 2.5))."""
     config = with_option(vehicle_text, "adaptive_memory", 5.0)
     est = build("switching", config)

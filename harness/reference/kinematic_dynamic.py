@@ -26,18 +26,13 @@ def median_length(config, table) -> int:
     return 2 * round(config.settings(table)["median_span"] / config.sample_time / 2) + 1
 
 
-def adaptive(config, table) -> bool:
-    """The switching table's adaptive threshold is on (adaptive_memory > 0)."""
-    return config.settings(table).get("adaptive_memory", 0.0) > 0.0
-
-
-def state_names(config, table) -> tuple[str, ...]:
+def state_names(config, table, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The state entries; ``extra`` are an estimator's own (0 at init, kept while holding)."""
     n = median_length(config, table)
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
-            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding",
-            *(("ay_peak",) if adaptive(config, table) else ()))
+            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding", *extra)
 
 
 def prefilter(config, table):
@@ -76,7 +71,7 @@ def check(measured, reference, band, last, rejections, timeout):
     return last, last, rejections + 1, False
 
 
-def init(config, table, u0):
+def init(config, table, u0, extra: tuple[str, ...] = ()):
     s = config.settings(table)
     first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
                                          s["vx_resume"])
@@ -89,8 +84,7 @@ def init(config, table, u0):
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding,
-                     *([0.0] if adaptive(config, table) else [])])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding, *([0.0] * len(extra))])
 
 
 def held(config, table, x, inputs, ok):
@@ -146,14 +140,14 @@ def beta(config, table, vy, vx):
     return math.atan2(vy, clamp(config, table, vx))
 
 
-def step(config, table, state, u, scheme):
+def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
     """One step of a seed-000 estimator: the hold rule; when active, the shared pre-processing
     (§2.2-2.4) and then ``scheme(x, updates, r_k, ay_f, status, u) -> (next state by name,
     output)``, with ``x`` the state by name, ``updates`` the pre-processing's new entries and
     ``status`` including REFERENCE_SUSPECT. When not active: the held state and the output
     [0, 0, r_last, DYN, status]."""
     s = config.settings(table)
-    names = state_names(config, table)
+    names = state_names(config, table, extra)
     x = dict(zip(names, state))
     inputs = dict(zip(INPUTS, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],

@@ -13,30 +13,44 @@ from harness.reference.kinematic_dynamic import DYN, INPUTS, KIN
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
+KINEMATIC_DWELL_LIMITED = 64
+
+
+def extra(config) -> tuple[str, ...]:
+    """Own state entries: the remembered peak |a_y,f| (A10 on), the kinematic dwell count."""
+    s = config.settings(TABLE)
+    return (*(("ay_peak",) if s["adaptive_memory"] > 0 else ()),
+            *(("kin_samples",) if s["kinematic_max_dwell"] > 0 else ()))
 
 
 def names(config):
-    return INPUTS, kinematic_dynamic.state_names(config, TABLE), OUTPUTS
+    return INPUTS, kinematic_dynamic.state_names(config, TABLE, extra(config)), OUTPUTS
 
 
 def init(config, u0):
-    return kinematic_dynamic.init(config, TABLE, u0)
+    return kinematic_dynamic.init(config, TABLE, u0, extra(config))
 
 
 def step(config, state, u):
-    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _switch(config, *args))
+    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _switch(config, *args), extra(config))
 
 
 def _switch(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     threshold = s["threshold"]
     new = {**x, **updates}
-    if kinematic_dynamic.adaptive(config, TABLE):                                                # A10 option
+    if s["adaptive_memory"] > 0:                                                  # A10 option
         peak = max(abs(ay_f), x["ay_peak"] * math.exp(-config.sample_time / s["adaptive_memory"]))
         threshold = max(threshold, min(s["adaptive_fraction"] * peak, s["adaptive_max"]))
         new["ay_peak"] = peak
     hysteresis = s["hysteresis"] if x["mode"] == KIN else -s["hysteresis"]        # A7 option
     mode = KIN if abs(ay_f) > threshold - hysteresis else DYN
+    if s["kinematic_max_dwell"] > 0:                        # beyond the paper: bounded kinematic dwell
+        above = mode == KIN
+        if above and (x["kin_samples"] + 0.5) * config.sample_time > s["kinematic_max_dwell"]:
+            mode = DYN
+            status += KINEMATIC_DWELL_LIMITED
+        new["kin_samples"] = x["kin_samples"] + (1.0 if mode == KIN else 0.0) if above else 0.0
     new["mode"] = mode
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]

@@ -48,12 +48,8 @@ def window(params: Parameters, table: str) -> int:
     return filters.median_window(1.0 / numeric.sample_time, numeric.settings(table)["median_span"])
 
 
-def adaptive(settings) -> bool:
-    """Whether a table enables the adaptive switching threshold (switching's adaptive_memory)."""
-    return settings.get("adaptive_memory", 0.0) > 0.0
-
-
-def states(n_median: int, adaptive_threshold: bool = False) -> Layout:
+def states(n_median: int, extra: tuple[Signal, ...] = ()) -> Layout:
+    """The state layout; ``extra`` are an estimator's own entries (0 at init, kept while holding)."""
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -72,8 +68,7 @@ def states(n_median: int, adaptive_threshold: bool = False) -> Layout:
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
         signals.HOLDING,
-        *((Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)"),)
-          if adaptive_threshold else ()),
+        *extra,
     ))
 
 
@@ -108,14 +103,14 @@ class Preprocessed:
 class KinematicDynamic:
     """Layout, settings and helpers of one seed-000 estimator table."""
 
-    def __init__(self, params: Parameters, table: str) -> None:
+    def __init__(self, params: Parameters, table: str, extra: tuple[Signal, ...] = ()) -> None:
         self.params = params
         self.table = table
         self.settings = params.config.settings(table)
         self.T = params.config.sample_time
         self.n_median = window(params, table)
-        self.adaptive = adaptive(params.numeric.settings(table))
-        self.layout = states(self.n_median, self.adaptive)
+        self.extra = extra
+        self.layout = states(self.n_median, extra)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
@@ -196,7 +191,7 @@ class KinematicDynamic:
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0,
             "holding": holding,
-            **({"ay_peak": ca.SX(0)} if self.adaptive else {}),
+            **{entry.name: ca.SX(0) for entry in self.extra},
         })
 
     def notes(self) -> dict[str, str]:

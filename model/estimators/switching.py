@@ -5,8 +5,9 @@ shared/methods/000-switch-sideslip.md, §2.2-2.10 with the §5 defaults:
 * shared pre-processing (model.estimators.kinematic_dynamic, the ``select`` kernel): prefilter [E6],
   reliability checks of r against r_ref [E7-E10] and of a_y,b against vx r [E11] with
   hold-last-valid and a time-out (A6, status REFERENCE_SUSPECT), median a_y,f [E23];
-  mode = KIN if |a_y,f| > threshold [E24] (options beyond the paper: hysteresis, A7, and a
-  threshold adapted to the lateral acceleration the road has carried, A10);
+  mode = KIN if |a_y,f| > threshold [E24] (options beyond the paper: hysteresis, A7, a
+  threshold adapted to the lateral acceleration the road has carried, A10, and a bound on the
+  kinematic dwell, kinematic_max_dwell);
 * dynamic scheme (KF, kf2dof's ``dynamic_update`` with this table's KF settings), entered from KIN
   with x = [vy_kin, r_k-1], P = P_0 [E26]; z = [a_y,m raw, r_k] (A3);
 * kinematic scheme: vy_kin += T (a_y,k-1 - r_k-1 vx_k-1) [E14], entered from DYN with
@@ -39,6 +40,7 @@ from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_
 from model.layout import Layout
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 from model.signals import Signal
+from model.status import KINEMATIC_DWELL_LIMITED
 
 NAME = "switching"
 
@@ -54,9 +56,23 @@ SCHEMA = EstimatorSchema(
             fraction("adaptive_fraction", "share of the remembered peak |a_y,f| used as the "
                      "threshold (adaptive_memory > 0 only)", default=0.8),
             positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
-                     "(adaptive_memory > 0 only)", default=2.5)),
+                     "(adaptive_memory > 0 only)", default=2.5),
+            nonnegative("kinematic_max_dwell", "s", "beyond the paper: longest stay in the kinematic "
+                        "scheme while |a_y,f| stays above the threshold; then the dynamic scheme takes "
+                        "over (status KINEMATIC_DWELL_LIMITED) until |a_y,f| falls below it; 0 = "
+                        "unbounded (the paper)", default=0.0)),
     rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 HOLD = 2
+PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
+DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f| last fell below the "
+                                   "threshold (kinematic_max_dwell)")
+
+
+def extra_states(settings) -> tuple[Signal, ...]:
+    """switching's own state entries: the remembered peak (adaptive threshold on) and the
+    kinematic dwell counter (kinematic_max_dwell > 0)."""
+    return (*((PEAK,) if settings["adaptive_memory"] > 0.0 else ()),
+            *((DWELL,) if settings["kinematic_max_dwell"] > 0.0 else ()))
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, atan2(vy, vx) of the active scheme"),
@@ -96,9 +112,20 @@ def switching_threshold(seed: KinematicDynamic, mode_prev, peak=None):
     return threshold + ca.if_else(mode_prev == KIN, -h, h)
 
 
+def dwell_limited(seed: KinematicDynamic, candidate, samples):
+    """(mode, new kin_samples, limited) of the kinematic dwell bound: the kinematic scheme may run
+    for kinematic_max_dwell seconds while |a_y,f| stays above the threshold (``candidate`` KIN);
+    then the dynamic scheme takes over until ``candidate`` is DYN again, which resets the count.
+    (n + 1/2) T > max_dwell counts whole samples, robust to rounding in float builds."""
+    limited = ca.logic_and(candidate == KIN, (samples + 0.5) * seed.T > seed.settings["kinematic_max_dwell"])
+    mode = ca.if_else(limited, DYN, candidate)
+    new_samples = ca.if_else(candidate == KIN, samples + ca.if_else(mode == KIN, 1, 0), 0)
+    return mode, new_samples, limited
+
+
 def build(params: Parameters) -> Estimator:
     """The switching estimator ([vehicle], [inputs], [estimator.switching])."""
-    seed = KinematicDynamic(params, NAME)
+    seed = KinematicDynamic(params, NAME, extra_states(params.numeric.settings(NAME)))
     layout, T = seed.layout, seed.T
 
     # ---- select: pre-processing and the choice of scheme ---------------------------------------
@@ -106,17 +133,22 @@ def build(params: Parameters) -> Estimator:
     inputs, u = INPUTS.symbols("input")
     pre = seed.preprocess(s, u)
     active = pre.guard.active
-    adaptive = {}
+    extra = {}
     peak = None
-    if seed.adaptive:
+    if PEAK in seed.extra:
         peak = remembered_peak(seed, pre.ay_filtered, s["ay_peak"])
-        adaptive = {"ay_peak": ca.if_else(active, peak, s["ay_peak"])}
+        extra["ay_peak"] = ca.if_else(active, peak, s["ay_peak"])
     mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, s["mode"], peak),
                       KIN, DYN)
-    mid = {**s, **pre.updates, **adaptive, "mode": ca.if_else(active, mode, DYN)}
+    status = pre.status
+    if DWELL in seed.extra:
+        mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
+        extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
+        status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
+    mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
-                            "mode_prev": s["mode"], "status": pre.status})
+                            "mode_prev": s["mode"], "status": status})
 
     # ---- the three schemes, each from the select's outputs -------------------------------------
     update = kf2dof.dynamic_update(params, NAME)
@@ -170,5 +202,5 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
     "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0)},
-    KINEMATIC_DYNAMIC_STATUS,
+    (*KINEMATIC_DYNAMIC_STATUS, "KINEMATIC_DWELL_LIMITED"),
     {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
