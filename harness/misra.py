@@ -76,6 +76,20 @@ def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
     return results
 
 
+def distinct_code(estimators: list[tuple]) -> list[tuple]:
+    """The (config, name) pairs whose code can differ in structure: the first of each estimator
+    and set of choice settings (strings, e.g. discretisation or longitudinal_force). Two vehicles
+    with the same choices generate the same statements with other numbers, which MISRA does not
+    judge differently; checking both only doubled the scan."""
+    seen, kept = set(), []
+    for config, name in estimators:
+        choices = tuple(sorted((k, v) for k, v in config.settings(name).items() if isinstance(v, str)))
+        if (name, choices) not in seen:
+            seen.add((name, choices))
+            kept.append((config, name))
+    return kept
+
+
 def all_findings(estimators: list[tuple]) -> list[list[tuple[str, Counter]]]:
     """:func:`estimator_findings` of every (config, name) pair, spread over worker processes
     (cppcheck runs one process per folder)."""
