@@ -17,9 +17,11 @@ from harness.reference import kf2dof as reference
 from model.estimators import DEFINITIONS
 
 STEPS = 1_000_000
+HEAVY = ("ukf", "aukf", "pf_adaptive", "pf_improved")
+"""Estimators whose million sanitised steps take 4-6 s each: fuzzed in the slow suite."""
 
 
-@pytest.mark.parametrize("name", list(DEFINITIONS))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in HEAVY else n for n in DEFINITIONS])
 @pytest.mark.parametrize("real", ["double", "float"])
 def test_a_million_adversarial_steps(config, name, real):
     report = fuzz_estimator(config, name, real, STEPS, seed=7)
