@@ -23,6 +23,7 @@ from model.calibration import parameters
 from model.estimator import Tunable
 from model.estimators import DEFINITIONS, build
 from model.params import ParameterError, VehicleConfig, parse_vehicle
+from model.schema import shown
 
 OBJECTIVES = ("rmse", "max", "mean")
 """Per log: RMSE, largest |error| or mean |error|; averaged over the logs."""
@@ -120,14 +121,8 @@ def settings_text(text: str, name: str, config: VehicleConfig, point: dict[str, 
                                                for i, row in enumerate(settings[dim.key])]
             current[dim.index] = point[dim.label]
             values[dim.key] = current
-    comments = None if comment is None else {key: f"{comment}; was {_shown(settings[key])}" for key in values}
+    comments = None if comment is None else {key: f"{comment}; was {shown(settings[key])}" for key in values}
     return with_settings(text, f"estimator.{name}", comments=comments, **values)
-
-
-def _shown(value) -> str:
-    if isinstance(value, tuple):
-        return "[" + ", ".join(f"{row[i] if isinstance(row, tuple) else row:.4g}" for i, row in enumerate(value)) + "]"
-    return f"{value:.4g}"
 
 
 _BUILDS: dict[tuple[str, str, float], CEstimator] = {}

@@ -305,3 +305,12 @@ def _caps_above_floors(table: Mapping[str, Any]) -> str:
 
 CAPS_ABOVE_FLOORS = Rule("process_noise_max", _caps_above_floors)
 """An adaptive noise's ceilings lie above its floors, entry by entry (aukf, the particle filters)."""
+
+
+def shown(value: Any) -> str:
+    """A validated setting as a vehicle file would write it, short: numbers to 4 significant digits,
+    a list as [a, b], a matrix setting as the list of its diagonal."""
+    if isinstance(value, tuple):
+        entries = [row[i] if isinstance(row, tuple) else row for i, row in enumerate(value)]
+        return "[" + ", ".join(f"{v:.4g}" for v in entries) + "]"
+    return f"{value:.4g}" if isinstance(value, float) else str(value)

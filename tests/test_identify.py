@@ -84,16 +84,22 @@ def test_recovers_the_roll_gradient_and_the_axle_stiffnesses_without_ground_trut
     assert written.settings("switching")["roll_gradient"] == pytest.approx(k.value, rel=1e-3)
 
 
-def _bicycle_log(cf: float, cr: float, vehicle, seconds: float = 40.0, dt: float = 0.01) -> Log:
-    """A synthetic log of the linear bicycle model (scipy's lsim, independent of identify's own
-    integration) at 20 m/s with a chirp steer after 5 s of straight driving, seed-000 noise."""
+def _bicycle_matrices(cf: float, cr: float, vehicle, vx: float = 20.0):
+    """(A, B, vx) of the linear bicycle model, state [v_y, r], input delta (docs/conventions.md)."""
     m, iz = vehicle["mass"], vehicle["yaw_inertia"]
-    a, b, vx = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], 20.0
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
     A = np.array([[-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx) - vx],
                   [(b * cr - a * cf) / (iz * vx), -(a * a * cf + b * b * cr) / (iz * vx)]])
     B = np.array([[cf / m], [a * cf / iz]])
+    return A, B, vx
+
+
+def _bicycle_log(cf: float, cr: float, vehicle, seconds: float = 40.0, dt: float = 0.01) -> Log:
+    """A synthetic log of the linear bicycle model (scipy's lsim, independent of identify's own
+    integration) at 20 m/s with a chirp steer after 5 s of straight driving, seed-000 noise."""
+    A, B, vx = _bicycle_matrices(cf, cr, vehicle)
     C = np.array([[A[0, 0], A[0, 1] + vx], [0.0, 1.0]])
-    D = np.array([[cf / m], [0.0]])
+    D = np.array([[B[0, 0]], [0.0]])
     t = np.arange(0.0, seconds, dt)
     phase = 2 * np.pi * (0.1 * (t - 5) + 0.02 * (t - 5) ** 2)
     delta = np.where(t > 5, 0.012 * np.sin(phase), 0.0)
@@ -153,12 +159,7 @@ def test_a_gnss_lateral_velocity_reference_enters_the_fit_and_narrows_it(config)
     text = (VEHICLES / "c_class.toml").read_text().replace("roll_gradient = 0.0082", "roll_gradient = 0.0")
     start = parse_vehicle(text, "start.toml", "c")
     plain = _bicycle_log(cf, cr, config.vehicle)
-    vehicle = config.vehicle
-    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
-    a, b, vx = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], 20.0
-    A = np.array([[-(cf + cr) / (m * vx), (b * cr - a * cf) / (m * vx) - vx],
-                  [(b * cr - a * cf) / (iz * vx), -(a * a * cf + b * b * cr) / (iz * vx)]])
-    B = np.array([[cf / m], [a * cf / iz]])
+    A, B, _ = _bicycle_matrices(cf, cr, config.vehicle)
     _, vy, _ = lsim((A, B, np.array([[1.0, 0.0]]), np.zeros((1, 1))), plain["delta"], plain["t"])
     rng = np.random.default_rng(11)
     referenced = Log({**plain.columns, "vy_ref": vy + rng.normal(0, 0.02, len(vy))}, "gnss.csv")

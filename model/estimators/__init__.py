@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from model.calibration import parameters
 from model.estimator import Definition, Estimator
 from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
-from model.schema import EstimatorSchema
+from model.schema import EstimatorSchema, shown
 
 if TYPE_CHECKING:
     from model.params import VehicleConfig
@@ -35,16 +35,7 @@ def underived_warning(config: VehicleConfig, name: str) -> str | None:
     if not derived or name not in config.estimators or config.derived_for == fingerprint:
         return None
     settings = config.settings(name)
-    shown = ", ".join(f"{key} = {_shown(settings[key])}" for key in derived)
+    listed = ", ".join(f"{key} = {shown(settings[key])}" for key in derived)
     verb = "was" if len(derived) == 1 else "were"
-    return (f"{config.source}: warning: [estimator.{name}] {shown} {verb} not derived for this vehicle "
+    return (f"{config.source}: warning: [estimator.{name}] {listed} {verb} not derived for this vehicle "
             f"(see vsegen identify; after a review set [estimator] derived_for = \"{fingerprint}\")")
-
-
-def _shown(value) -> str:
-    if isinstance(value, tuple):
-        flat = [v for row in value for v in (row if isinstance(row, tuple) else (row,))]
-        if all(isinstance(row, tuple) for row in value):
-            flat = [row[i] for i, row in enumerate(value)]  # a matrix setting: its diagonal
-        return "[" + ", ".join(f"{v:.4g}" for v in flat) + "]"
-    return f"{value:.4g}" if isinstance(value, float) else str(value)
