@@ -21,7 +21,7 @@ import numpy as np
 from rich.console import Console
 from rich.progress import Progress
 
-from bench import seed001, seed002, seed003, table3, tuning, yaw_rate
+from bench import seed001, seed002, seed003, table3, transfer, tuning, yaw_rate
 from harness.cluster import Cluster
 from harness.paths import DEFAULT_VEHICLE, REPO
 from harness.plot import plot
@@ -129,6 +129,10 @@ def main(argv: list[str] | None = None) -> None:
         "## New car: identify, then tune (both truth cars)",
         "",
         *tuning.table(args.scheduler),
+        "",
+        "## Transfer between the two cars (every sideslip estimator)",
+        "",
+        *transfer.table(args.scheduler),
         "",
         "## Seed 000 Table 3 reproduced",
         "",
