@@ -90,6 +90,16 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     return not diffs
 
 
+def _read_log(path: Path):
+    """:func:`read_log`, saying on stderr (a line each) when the log was put on a uniform grid and
+    where it has gaps the estimators hold across."""
+    log = read_log(path)
+    for key in ("resampled", "gaps"):
+        if key in log.notes:
+            click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
+    return log
+
+
 def _warn_underived(config: VehicleConfig, name: str) -> None:
     """Say (stderr, one line) when ``name``'s car-specific settings were not derived for this car."""
     warning = underived_warning(config, name)
@@ -247,7 +257,7 @@ def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path:
     from harness.identify.vehicle_file import identified_vehicle_file, report
 
     config = load_vehicle(vehicle)
-    logs = [read_log(path) for path in log_paths]
+    logs = [_read_log(path) for path in log_paths]
     ident = identify_logs(logs, config)
     if not ident.estimates:
         for refusal in ident.refusals:
@@ -297,8 +307,8 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     _estimators(config, (estimator,))
     if trials < 1 or batch < 1:
         raise UserError(f"--trials {trials} --batch {batch}: expected both >= 1")
-    train = [read_log(path) for path in log_paths]
-    holdout = [read_log(path) for path in holdout_paths]
+    train = [_read_log(path) for path in log_paths]
+    holdout = [_read_log(path) for path in holdout_paths]
     with Progress(console=Console(stderr=True), transient=True) as progress:
         task = progress.add_task(f"tuning {estimator}", total=None)
         try:
@@ -345,7 +355,7 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path) 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
-    log = read_log(log_path)
+    log = _read_log(log_path)
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)
     write_log(estimates, out)
@@ -364,7 +374,7 @@ def score(log_path: Path, est_path: Path) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from harness.score import score as compute
 
-    log = read_log(log_path)
+    log = _read_log(log_path)
     scores = compute(log, read_estimates(est_path))
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
@@ -390,7 +400,7 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path) -> None:
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style)."""
     from harness.plot import plot as draw
 
-    log = read_log(log_path)
+    log = _read_log(log_path)
     if "beta_ref" not in log:
         raise UserError(f"{log_path}:1: missing column 'beta_ref': expected ground truth to plot")
     estimates = {}

@@ -2,17 +2,30 @@
 
 from __future__ import annotations
 
+import bz2
+import gzip
+import lzma
 import os
 import tempfile
 from pathlib import Path
 
+DECOMPRESSORS = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress}
+"""Compressed files are read by their suffix (e.g. drive.csv.gz)."""
+
 
 def read_user_text(path: Path, error: type[Exception], what: str) -> str:
-    """The UTF-8 text of ``path``; ``error`` with one line (file, reason, expectation) otherwise."""
+    """The UTF-8 text of ``path`` (decompressed when it ends in .gz, .bz2 or .xz); ``error`` with
+    one line (file, reason, expectation) otherwise."""
     try:
         raw = Path(path).read_bytes()
     except OSError as exc:
         raise error(f"{path}: cannot read {what}: {exc.strerror}") from None
+    opener = DECOMPRESSORS.get(Path(path).suffix.lower())
+    if opener is not None:
+        try:
+            raw = opener(raw)
+        except (OSError, EOFError, ValueError, lzma.LZMAError) as exc:
+            raise error(f"{path}: cannot decompress {what} ({Path(path).suffix}): {exc}") from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

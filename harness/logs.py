@@ -34,7 +34,14 @@ UNIT_CHECKS = {e.name: (e.signal.unit, e.unit_check) for e in signals.INPUTS if 
 beyond the limit is rejected. Single glitches pass: the estimators reject them per sample."""
 UNIT_FRACTION = 0.05
 SAMPLE_TIME_JITTER = 1e-3
-"""Allowed relative deviation of any time step from the mean step."""
+"""Relative deviation of every time step from the mean step below which a log counts as uniform
+and is used as it is."""
+MAX_GAP = 0.1
+"""s: on the uniform grid of a jittered or gappy log, a tick whose latest sample is older than this
+gets NaN in every numeric column (the estimators hold and report INVALID_INPUT; truth is not
+scored there); shorter gaps hold the latest sample."""
+GRID_DIGITS = 6
+"""The step of a resampled log is rounded to whole microseconds (a logger's clock period)."""
 
 
 class LogError(ValueError):
@@ -142,7 +149,8 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
             cells[col].append(_parse(cell, source, line, name) if name in known else cell)
     log = Log({name: np.array(cells[i], dtype=float if name in known else str)
                for i, name in enumerate(header)}, source)
-    _check_time(log["t"], source)
+    _check_increasing(log["t"], source)
+    log = on_uniform_grid(log)
     for name, (unit, check) in UNIT_CHECKS.items():
         if name in log:
             _check_unit(log[name], name, unit, check, source)
@@ -172,16 +180,56 @@ def _parse(cell: str, source: str, line: int, column: str) -> float:
     return value
 
 
-def _check_time(t: np.ndarray, source: str) -> None:
-    steps = np.diff(t)
-    bad = np.flatnonzero(steps <= 0)
+def _check_increasing(t: np.ndarray, source: str) -> None:
+    bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         i = int(bad[0]) + 1
         raise LogError(f"{source}:{i + 2}: column 't' = {float(t[i])!r} after {float(t[i - 1])!r}: expected "
                        f"strictly increasing time")
+
+
+def on_uniform_grid(log: Log) -> Log:
+    """``log`` itself when its time steps are uniform (within SAMPLE_TIME_JITTER); otherwise the log
+    on a uniform grid at its median step T, taken causally: each tick gets the latest sample at or
+    before it, never a later one. The grid lags the first sample by the largest late jitter, so a
+    sample stamped a little late still lands on its own tick; across gaps longer than MAX_GAP the
+    numeric columns are NaN. ``notes`` say what was done and where the gaps are."""
+    t = log["t"]
+    steps = np.diff(t)
     mean = (t[-1] - t[0]) / (len(t) - 1)
-    off = np.flatnonzero(np.abs(steps - mean) > SAMPLE_TIME_JITTER * mean)
-    if off.size:
-        i = int(off[0]) + 1
-        raise LogError(f"{source}:{i + 2}: column 't': step {float(steps[i - 1]):.6g} s: expected a constant "
-                       f"sample time of {mean:.6g} s (within {SAMPLE_TIME_JITTER:.0e} relative)")
+    if np.all(np.abs(steps - mean) <= SAMPLE_TIME_JITTER * mean):
+        return log
+    nominal = float(np.median(steps))
+    for _ in range(2):  # refine: the slope of the time stamps over their tick numbers
+        ticks_of_samples = np.round((t - t[0]) / nominal)
+        nominal = float(np.polyfit(ticks_of_samples, t, 1)[0])
+    nominal = round(nominal, GRID_DIGITS)
+    phase = (t - t[0]) / nominal
+    late = float(np.clip(((phase - np.round(phase)) * nominal).max(), 0.0, 0.49 * nominal))
+    ticks = t[0] + late + nominal * np.arange(int(np.floor((t[-1] - t[0] - late) / nominal)) + 1)
+    latest = np.searchsorted(t, ticks, side="right") - 1
+    stale = ticks - t[latest] > MAX_GAP
+    columns = {}
+    for name, column in log.columns.items():
+        values = column[latest]
+        if name != "t" and values.dtype.kind == "f":
+            values = np.where(stale, np.nan, values)
+        columns[name] = values
+    columns["t"] = ticks
+    deviation = (phase - np.round(phase)) * nominal
+    jitter = float(deviation.max() - deviation.min()) / 2
+    step = f"{nominal * 1e3:.6g} ms"
+    notes = {**log.notes, "resampled": f"time steps not uniform (jitter +-{jitter * 1e3:.3g} ms around a {step} "
+                                       f"step): taken causally onto a uniform {step} grid, {len(t)} samples -> "
+                                       f"{len(ticks)} ticks"}
+    gaps = [(float(ticks[run[0]]), float(ticks[run[-1]])) for run in _runs(stale)]
+    if gaps:
+        notes["gaps"] = (f"{len(gaps)} gap(s) longer than {MAX_GAP:g} s, estimators hold there: "
+                         + ", ".join(f"{a:.3f}..{b:.3f} s" for a, b in gaps[:5]) + (" ..." if len(gaps) > 5 else ""))
+    return Log(columns, log.source, notes)
+
+
+def _runs(mask: np.ndarray) -> list[np.ndarray]:
+    """The index runs where ``mask`` is true."""
+    indices = np.flatnonzero(mask)
+    return [run for run in np.split(indices, np.flatnonzero(np.diff(indices) > 1) + 1) if run.size]
