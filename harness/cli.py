@@ -57,6 +57,8 @@ REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), def
 PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratable"]), default=None,
                              help="Parameters as constants or a const calibration struct. "
                                   "Default: the vehicle file's [codegen] params.")
+CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), default=None,
+                               help="Channel map TOML: logger channel names, units and factors of the log columns.")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
                               show_default="vehicles/c_class.toml", help="Vehicle TOML.")
 
@@ -90,10 +92,18 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     return not diffs
 
 
-def _read_log(path: Path):
-    """:func:`read_log`, saying on stderr (a line each) when the log was put on a uniform grid and
+def _read_log(path: Path, channels: Path | None = None, sample_time: float = 0.01):
+    """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, saying on
+    stderr (a line each) when it was put on a uniform grid (MDF4 channels: at ``sample_time``) and
     where it has gaps the estimators hold across."""
-    log = read_log(path)
+    from harness.channels import read_channel_map
+    from harness.mdf import SUFFIXES, read_mdf
+
+    mapping = read_channel_map(channels)
+    if path.suffix.lower() in SUFFIXES:
+        log = read_mdf(path, mapping, sample_time)
+    else:
+        log = read_log(path, channels={c.channel: (c.name, c.scale) for c in mapping.columns.values()})
     for key in ("resampled", "gaps"):
         if key in log.notes:
             click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
@@ -250,14 +260,16 @@ def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, 
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="Vehicle TOML to write.")
 @click.option("--report", "report_path", type=click.Path(path_type=Path), default=None,
               help="Markdown report to write (estimates, intervals, refusals).")
+@CHANNELS_OPTION
 @user_errors
-def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path: Path | None) -> None:
+def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path: Path | None,
+             channels: Path | None) -> None:
     """Identify the car's parameters and car-specific settings from driving logs."""
     from harness.identify import identify as identify_logs
     from harness.identify.vehicle_file import identified_vehicle_file, report
 
     config = load_vehicle(vehicle)
-    logs = [_read_log(path) for path in log_paths]
+    logs = [_read_log(path, channels, config.sample_time) for path in log_paths]
     ident = identify_logs(logs, config)
     if not ident.estimates:
         for refusal in ident.refusals:
@@ -294,9 +306,11 @@ def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path:
                    "address such as tcp://host:8786 (also $VSEGEN_SCHEDULER).")
 @click.option("--plot", "plot_path", type=click.Path(path_type=Path), default=None,
               help="PNG of the search (default: next to --out).")
+@CHANNELS_OPTION
 @user_errors
 def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, holdout_paths: tuple[Path, ...],
-         trials: int, objective: str, seed: int, batch: int, scheduler: str | None, plot_path: Path | None) -> None:
+         trials: int, objective: str, seed: int, batch: int, scheduler: str | None, plot_path: Path | None,
+         channels: Path | None) -> None:
     """Tune an estimator's numeric settings on logs with ground truth, running its generated C."""
     from harness.cluster import ClusterError
     from harness.plot import tuning_plot
@@ -307,8 +321,8 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     _estimators(config, (estimator,))
     if trials < 1 or batch < 1:
         raise UserError(f"--trials {trials} --batch {batch}: expected both >= 1")
-    train = [_read_log(path) for path in log_paths]
-    holdout = [_read_log(path) for path in holdout_paths]
+    train = [_read_log(path, channels, config.sample_time) for path in log_paths]
+    holdout = [_read_log(path, channels, config.sample_time) for path in holdout_paths]
     with Progress(console=Console(stderr=True), transient=True) as progress:
         task = progress.add_task(f"tuning {estimator}", total=None)
         try:
@@ -341,24 +355,32 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
 
 
 @main.command()
-@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True, help="Input log CSV.")
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Input log: CSV (plain, .gz, .bz2, .xz) or MDF4 (.mf4, .mdf).")
 @click.option("--estimator", required=True, help="Estimator name.")
 @VEHICLE_OPTION
 @click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
               help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
-@click.option("--out", type=click.Path(path_type=Path), required=True, help="Estimates CSV to write.")
+@click.option("--out", type=click.Path(path_type=Path), required=True,
+              help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
+@CHANNELS_OPTION
 @user_errors
-def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path) -> None:
+def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, channels: Path | None) -> None:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
     from harness.run import run_estimator
 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
-    log = _read_log(log_path)
+    log = _read_log(log_path, channels, config.sample_time)
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)
-    write_log(estimates, out)
+    if out.suffix.lower() == ".mf4":
+        from harness.mdf import write_mdf
+
+        write_mdf(estimates, out)
+    else:
+        write_log(estimates, out)
     flagged = int(np.count_nonzero(estimates["status"]))
     console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, "
                   f"{flagged} with status != 0)")
@@ -369,13 +391,15 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path) 
               help="Log CSV with ground truth.")
 @click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
               help="Estimates CSV from `vsegen run`.")
+@CHANNELS_OPTION
 @user_errors
-def score(log_path: Path, est_path: Path) -> None:
+def score(log_path: Path, est_path: Path, channels: Path | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from harness.score import score as compute
 
-    log = _read_log(log_path)
-    scores = compute(log, read_estimates(est_path))
+    estimates = read_estimates(est_path)
+    log = _read_log(log_path, channels, estimates.sample_time)
+    scores = compute(log, estimates)
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
         table.add_column(column, justify="left" if column == "signal" else "right")
@@ -395,12 +419,13 @@ def score(log_path: Path, est_path: Path) -> None:
 @click.option("--est", "est_paths", type=click.Path(path_type=Path), multiple=True, required=True,
               help="Estimates CSV (repeatable).")
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="PNG to write.")
+@CHANNELS_OPTION
 @user_errors
-def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path) -> None:
+def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None) -> None:
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style)."""
     from harness.plot import plot as draw
 
-    log = _read_log(log_path)
+    log = _read_log(log_path, channels, read_estimates(est_paths[0]).sample_time)
     if "beta_ref" not in log:
         raise UserError(f"{log_path}:1: missing column 'beta_ref': expected ground truth to plot")
     estimates = {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,15 +117,19 @@ def read_estimates(path: Path) -> Log:
     return log
 
 
-def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool = False) -> Log:
+def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool = False,
+             channels: Mapping[str, tuple[str, float]] | None = None) -> Log:
     """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem. Columns
-    not named by design.md are kept as text unless ``all_numeric``."""
+    not named by docs/conventions.md are kept as text unless ``all_numeric``. ``channels`` maps a
+    logger's column name to (log column, factor to SI) (``harness.channels``)."""
     source = str(path)
     text = read_user_text(path, LogError, "CSV log")
     rows = list(csv.reader(io.StringIO(text)))
     if not rows or not any(cell.strip() for cell in rows[0]):
         raise LogError(f"{source}:1: empty file: expected a header row with columns {', '.join(required)}")
-    header = [cell.strip() for cell in rows[0]]
+    logged = [cell.strip() for cell in rows[0]]
+    channels = {c: mapped for c, mapped in (channels or {}).items() if c in logged}
+    header = [channels[cell][0] if cell in channels else cell for cell in logged]
     for name in header:
         if header.count(name) > 1:
             raise LogError(f"{source}:1: column '{name}' appears twice: expected unique column names")
@@ -149,6 +154,8 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
             cells[col].append(_parse(cell, source, line, name) if name in known else cell)
     log = Log({name: np.array(cells[i], dtype=float if name in known else str)
                for i, name in enumerate(header)}, source)
+    for name, scale in channels.values():
+        log.columns[name] = log.columns[name] * scale
     _check_increasing(log["t"], source)
     log = on_uniform_grid(log)
     for name, (unit, check) in UNIT_CHECKS.items():
