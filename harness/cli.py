@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import sys
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 import click
@@ -92,16 +93,17 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     return not diffs
 
 
-def _read_log(path: Path, channels: Path | None = None, sample_time: float = 0.01):
+def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float]):
     """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, saying on
-    stderr (a line each) when it was put on a uniform grid (MDF4 channels: at ``sample_time``) and
-    where it has gaps the estimators hold across."""
+    stderr (a line each) when it was put on a uniform grid (MDF4 channels: at ``sample_time``, a
+    number or a function giving it, called only for MDF4) and where it has gaps the estimators
+    hold across."""
     from harness.channels import read_channel_map
     from harness.mdf import SUFFIXES, read_mdf
 
     mapping = read_channel_map(channels)
     if path.suffix.lower() in SUFFIXES:
-        log = read_mdf(path, mapping, sample_time)
+        log = read_mdf(path, mapping, sample_time() if callable(sample_time) else sample_time)
     else:
         log = read_log(path, channels={c.channel: (c.name, c.scale) for c in mapping.columns.values()})
     for key in ("resampled", "gaps"):
@@ -397,9 +399,8 @@ def score(log_path: Path, est_path: Path, channels: Path | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from harness.score import score as compute
 
-    estimates = read_estimates(est_path)
-    log = _read_log(log_path, channels, estimates.sample_time)
-    scores = compute(log, estimates)
+    log = _read_log(log_path, channels, lambda: read_estimates(est_path).sample_time)
+    scores = compute(log, read_estimates(est_path))
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
         table.add_column(column, justify="left" if column == "signal" else "right")
@@ -425,7 +426,7 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path 
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style)."""
     from harness.plot import plot as draw
 
-    log = _read_log(log_path, channels, read_estimates(est_paths[0]).sample_time)
+    log = _read_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time)
     if "beta_ref" not in log:
         raise UserError(f"{log_path}:1: missing column 'beta_ref': expected ground truth to plot")
     estimates = {}
