@@ -60,6 +60,9 @@ PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratab
                                   "Default: the vehicle file's [codegen] params.")
 CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), default=None,
                                help="Channel map TOML: logger channel names, units and factors of the log columns.")
+UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=True,
+                                 help="Skip the physics check of the log's units (a_y against r v_x, "
+                                      "delta against l r / v_x).")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
                               show_default="vehicles/c_class.toml", help="Vehicle TOML.")
 
@@ -93,11 +96,13 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     return not diffs
 
 
-def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float]):
+def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
+              unit_check_wheelbase: float | None = None):
     """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, saying on
     stderr (a line each) when it was put on a uniform grid (MDF4 channels: at ``sample_time``, a
     number or a function giving it, called only for MDF4) and where it has gaps the estimators
-    hold across."""
+    hold across. With ``unit_check_wheelbase`` (m) the signals' physics is checked for wrong units
+    (``harness.unit_sanity``)."""
     from harness.channels import read_channel_map
     from harness.mdf import SUFFIXES, read_mdf
 
@@ -109,6 +114,10 @@ def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[
     for key in ("resampled", "gaps"):
         if key in log.notes:
             click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
+    if unit_check_wheelbase is not None:
+        from harness.unit_sanity import check_units
+
+        check_units(log, unit_check_wheelbase)
     return log
 
 
@@ -263,15 +272,17 @@ def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, 
 @click.option("--report", "report_path", type=click.Path(path_type=Path), default=None,
               help="Markdown report to write (estimates, intervals, refusals).")
 @CHANNELS_OPTION
+@UNIT_CHECK_OPTION
 @user_errors
 def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path: Path | None,
-             channels: Path | None) -> None:
+             channels: Path | None, no_unit_check: bool) -> None:
     """Identify the car's parameters and car-specific settings from driving logs."""
     from harness.identify import identify as identify_logs
     from harness.identify.vehicle_file import identified_vehicle_file, report
 
     config = load_vehicle(vehicle)
-    logs = [_read_log(path, channels, config.sample_time) for path in log_paths]
+    wheelbase = None if no_unit_check else config.vehicle["wheelbase"]
+    logs = [_read_log(path, channels, config.sample_time, wheelbase) for path in log_paths]
     ident = identify_logs(logs, config)
     if not ident.estimates:
         for refusal in ident.refusals:
@@ -309,10 +320,11 @@ def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path:
 @click.option("--plot", "plot_path", type=click.Path(path_type=Path), default=None,
               help="PNG of the search (default: next to --out).")
 @CHANNELS_OPTION
+@UNIT_CHECK_OPTION
 @user_errors
 def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, holdout_paths: tuple[Path, ...],
          trials: int, objective: str, seed: int, batch: int, scheduler: str | None, plot_path: Path | None,
-         channels: Path | None) -> None:
+         channels: Path | None, no_unit_check: bool) -> None:
     """Tune an estimator's numeric settings on logs with ground truth, running its generated C."""
     from harness.cluster import ClusterError
     from harness.plot import tuning_plot
@@ -323,8 +335,9 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     _estimators(config, (estimator,))
     if trials < 1 or batch < 1:
         raise UserError(f"--trials {trials} --batch {batch}: expected both >= 1")
-    train = [_read_log(path, channels, config.sample_time) for path in log_paths]
-    holdout = [_read_log(path, channels, config.sample_time) for path in holdout_paths]
+    wheelbase = None if no_unit_check else config.vehicle["wheelbase"]
+    train = [_read_log(path, channels, config.sample_time, wheelbase) for path in log_paths]
+    holdout = [_read_log(path, channels, config.sample_time, wheelbase) for path in holdout_paths]
     with Progress(console=Console(stderr=True), transient=True) as progress:
         task = progress.add_task(f"tuning {estimator}", total=None)
         try:
@@ -366,15 +379,17 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
 @click.option("--out", type=click.Path(path_type=Path), required=True,
               help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
 @CHANNELS_OPTION
+@UNIT_CHECK_OPTION
 @user_errors
-def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, channels: Path | None) -> None:
+def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, channels: Path | None,
+        no_unit_check: bool) -> None:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
     from harness.run import run_estimator
 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
-    log = _read_log(log_path, channels, config.sample_time)
+    log = _read_log(log_path, channels, config.sample_time, None if no_unit_check else config.vehicle["wheelbase"])
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)
     if out.suffix.lower() == ".mf4":
