@@ -155,7 +155,16 @@ def write(files: dict[str, str], folder: Path) -> None:
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{name}.")
         with os.fdopen(fd, "w", newline="\n") as handle:
             handle.write(text)
-        os.replace(tmp, folder / name)
+        publish(tmp, folder / name)
+
+
+def publish(tmp: str, path: Path) -> None:
+    """Rename the finished temporary file ``tmp`` to ``path`` with the mode a plain ``open`` would
+    have given it (0666 less the umask; mkstemp makes files 0600)."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)
+    os.replace(tmp, path)
 
 
 def check(files: dict[str, str], folder: Path, label: str) -> list[str]:

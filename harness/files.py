@@ -9,6 +9,8 @@ import os
 import tempfile
 from pathlib import Path
 
+from codegen.generate import publish
+
 DECOMPRESSORS = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress}
 """Compressed files are read by their suffix (e.g. drive.csv.gz)."""
 
@@ -44,7 +46,7 @@ def write_text_atomic(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", newline="") as handle:
             handle.write(text)
-        os.replace(tmp, path)
+        publish(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

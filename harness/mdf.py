@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from codegen.generate import publish
 from harness.channels import ChannelMap
 from harness.logs import MAX_GAP, OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError
 
@@ -66,7 +67,7 @@ def write_mdf(log: Log, path: Path) -> None:
     os.close(fd)
     try:
         mdf.save(tmp, overwrite=True)
-        os.replace(tmp, path)
+        publish(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

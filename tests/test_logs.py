@@ -104,3 +104,16 @@ def test_compressed_logs_are_read_by_their_suffix(tmp_path, suffix, compress):
     broken.write_bytes(GOOD.encode())
     with pytest.raises(LogError, match=rf"broken.csv{suffix}: cannot decompress CSV log"):
         read_log(broken)
+
+
+def test_written_files_get_the_mode_the_umask_allows(tmp_path):
+    import os
+
+    from harness.logs import Log
+
+    previous = os.umask(0o022)
+    try:
+        write_log(Log({"t": np.array([0.0, 0.01]), "beta": np.array([0.0, 0.0])}), tmp_path / "est.csv")
+    finally:
+        os.umask(previous)
+    assert (tmp_path / "est.csv").stat().st_mode & 0o777 == 0o644
