@@ -390,6 +390,10 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, 
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
     log = _read_log(log_path, channels, config.sample_time, None if no_unit_check else config.vehicle["wheelbase"])
+    if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
+        click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
+                   f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
+                   f"settings keep their meaning in time); generate for that rate to flash the same code", err=True)
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)
     if out.suffix.lower() == ".mf4":

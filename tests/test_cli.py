@@ -140,3 +140,20 @@ def test_yaw_rate_estimator_from_a_yaw_moment_log_is_scored_and_plotted(tmp_path
     bad.write_text("t,x\n0,1\n0.01,2\n")
     result = vsegen("score", "--log", str(log), "--est", str(bad))
     assert result.returncode == 2 and "no estimated signal: expected a column beta, vy or r" in result.stderr
+
+
+def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
+    from click.testing import CliRunner
+
+    from harness.cli import main
+    from harness.logs import write_log
+    from harness.scenarios import Case
+    from harness.vehicles import load_vehicle
+
+    config = load_vehicle(REPO / "vehicles" / "c_class.toml")
+    write_log(Case.of("sine_steer").simulate(config, 200.0, 1), tmp_path / "fast.csv")
+    result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / "fast.csv"), "--estimator", "kf2dof",
+                                       "--out", str(tmp_path / "est.csv")])
+    assert result.exit_code == 0, result.output
+    said = [line for line in result.stderr.splitlines() if "differs from [estimator] sample_time" in line]
+    assert len(said) == 1 and "sample time 0.005 s" in said[0] and "sample_time = 0.01 s" in said[0]
