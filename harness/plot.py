@@ -23,20 +23,29 @@ SIGNALS = (("beta", "beta_ref", "sideslip angle β (deg)", "|Δβ| (deg)"),
 
 def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> None:
     """Write a PNG with beta (deg) over time and the absolute error (deg) of each estimate (the
-    yaw rate in deg/s when an estimate has no beta, e.g. a yaw-rate estimator)."""
-    common = [s for s in SIGNALS if all(s[0] in est for est in estimates.values()) and s[1] in log]
+    yaw rate in deg/s when an estimate has no beta, e.g. a yaw-rate estimator). A log without the
+    truth column (a road log without a reference) shows the estimates and, below, their status."""
+    common = [s for s in SIGNALS if all(s[0] in est for est in estimates.values())]
     if not common:
         raise LogError(f"{next(iter(estimates.values())).source}:1: no column to plot: expected "
-                       "'beta' or 'r' in every estimate and its truth in the log")
-    name, truth, label_value, label_error = common[0]
+                       "'beta' or 'r' in every estimate")
+    with_truth = [s for s in common if s[1] in log]
+    name, truth, label_value, label_error = (with_truth or common)[0]
+    truth = truth if with_truth else None
     t = log["t"]
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(9, 5.5),
                                       gridspec_kw={"height_ratios": [3, 2]})
-    top.plot(t, np.rad2deg(log[truth]), color="black", lw=1.6, label="reference (truth)")
+    if truth is not None:
+        top.plot(t, np.rad2deg(log[truth]), color="black", lw=1.6, label="reference (truth)")
     for label, est in estimates.items():
         line, = top.plot(t, np.rad2deg(est[name]), lw=1.0, label=label)
-        error = np.abs(np.rad2deg(est[name] - log[truth]))
-        bottom.plot(t, error, lw=1.0, color=line.get_color(), label=label)
+        if truth is not None:
+            bottom.plot(t, np.abs(np.rad2deg(est[name] - log[truth])), lw=1.0, color=line.get_color(), label=label)
+        else:
+            bottom.step(t, est["status"], where="post", lw=1.0, color=line.get_color(), label=label)
+    if truth is None:
+        label_error = "status (0 = OK)"
+        title = f"{title} (no reference in the log)".strip()
     for est in estimates.values():
         if "mode" in est:
             for axis in (top, bottom):

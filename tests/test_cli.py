@@ -157,3 +157,19 @@ def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
     assert result.exit_code == 0, result.output
     said = [line for line in result.stderr.splitlines() if "differs from [estimator] sample_time" in line]
     assert len(said) == 1 and "sample time 0.005 s" in said[0] and "sample_time = 0.01 s" in said[0]
+
+
+def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path):
+    from click.testing import CliRunner
+
+    from harness.cli import main
+
+    runner = CliRunner()
+    for arguments in (["simulate", "sine_steer", "--no-truth", "--out", str(tmp_path / "road.csv")],
+                      ["run", "--log", str(tmp_path / "road.csv"), "--estimator", "kf2dof", "--out",
+                       str(tmp_path / "est.csv")],
+                      ["plot", "--log", str(tmp_path / "road.csv"), "--est", str(tmp_path / "est.csv"), "--out",
+                       str(tmp_path / "road.png")]):
+        result = runner.invoke(main, arguments)
+        assert result.exit_code == 0, result.output
+    assert (tmp_path / "road.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
