@@ -58,6 +58,12 @@ REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), def
 PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratable"]), default=None,
                              help="Parameters as constants or a const calibration struct. "
                                   "Default: the vehicle file's [codegen] params.")
+def window_options(command):
+    """--from and --to: the part of the log (s, in its own time) to use."""
+    command = click.option("--to", "stop", type=float, default=None, help="Use the log up to this time (s).")(command)
+    return click.option("--from", "start", type=float, default=None, help="Use the log from this time (s).")(command)
+
+
 CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), default=None,
                                help="Channel map TOML: logger channel names, units and factors of the log columns.")
 UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=True,
@@ -380,16 +386,21 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
               help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
 @CHANNELS_OPTION
 @UNIT_CHECK_OPTION
+@window_options
 @user_errors
 def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, channels: Path | None,
-        no_unit_check: bool) -> None:
+        no_unit_check: bool, start: float | None, stop: float | None) -> None:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
     from harness.run import run_estimator
 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
-    log = _read_log(log_path, channels, config.sample_time, None if no_unit_check else config.vehicle["wheelbase"])
+    log = _read_log(log_path, channels, config.sample_time).window(start, stop)
+    if not no_unit_check:
+        from harness.unit_sanity import check_units
+
+        check_units(log, config.vehicle["wheelbase"])
     if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
         click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
                    f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
@@ -413,12 +424,15 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, 
 @click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
               help="Estimates CSV from `vsegen run`.")
 @CHANNELS_OPTION
+@window_options
 @user_errors
-def score(log_path: Path, est_path: Path, channels: Path | None) -> None:
+def score(log_path: Path, est_path: Path, channels: Path | None, start: float | None, stop: float | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from harness.score import score as compute
 
     log = _read_log(log_path, channels, lambda: read_estimates(est_path).sample_time)
+    if start is not None or stop is not None:
+        log = log.window(start, stop)
     scores = compute(log, read_estimates(est_path))
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
@@ -440,13 +454,17 @@ def score(log_path: Path, est_path: Path, channels: Path | None) -> None:
               help="Estimates CSV (repeatable).")
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="PNG to write.")
 @CHANNELS_OPTION
+@window_options
 @user_errors
-def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None) -> None:
+def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None, start: float | None,
+         stop: float | None) -> None:
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style); without a
     reference in the log, the estimates and their status."""
     from harness.plot import plot as draw
 
     log = _read_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time)
+    if start is not None or stop is not None:
+        log = log.window(start, stop)
     estimates = {}
     for path in est_paths:
         est = read_estimates(path)

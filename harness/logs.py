@@ -74,6 +74,20 @@ class Log:
         t = self.columns["t"]
         return float((t[-1] - t[0]) / (len(t) - 1))
 
+    def window(self, start: float | None, stop: float | None) -> Log:
+        """The samples with start <= t <= stop (s; None: from the first / to the last); LogError
+        when fewer than two remain."""
+        t = self.columns["t"]
+        keep = np.ones(len(t), dtype=bool)
+        if start is not None:
+            keep &= t >= start
+        if stop is not None:
+            keep &= t <= stop
+        if keep.sum() < 2:
+            raise LogError(f"{self.source}: time window {start} .. {stop} s holds {int(keep.sum())} sample(s): "
+                           f"expected at least 2 inside {float(t[0]):.6g} .. {float(t[-1]):.6g} s")
+        return Log({name: column[keep] for name, column in self.columns.items()}, self.source, dict(self.notes))
+
     def missing(self, names: tuple[str, ...]) -> list[str]:
         """The ``names`` this log cannot provide (absent and without an ABSENT_MEANS value)."""
         return [n for n in names if n not in self.columns and n not in ABSENT_MEANS]

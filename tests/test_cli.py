@@ -173,3 +173,27 @@ def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path):
         result = runner.invoke(main, arguments)
         assert result.exit_code == 0, result.output
     assert (tmp_path / "road.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path):
+    from click.testing import CliRunner
+
+    from harness.cli import main
+    from harness.logs import read_estimates
+
+    runner = CliRunner()
+    log, est = str(tmp_path / "dlc.csv"), str(tmp_path / "est.csv")
+    assert runner.invoke(main, ["simulate", "dlc", "--out", log]).exit_code == 0
+    window = ["--from", "2", "--to", "6"]
+    for arguments in (["run", "--log", log, "--estimator", "kf2dof", "--out", est, *window],
+                      ["score", "--log", log, "--est", est, *window],
+                      ["plot", "--log", log, "--est", est, "--out", str(tmp_path / "p.png"), *window]):
+        result = runner.invoke(main, arguments)
+        assert result.exit_code == 0, result.output
+    t = read_estimates(tmp_path / "est.csv")["t"]
+    assert t[0] >= 2.0 and t[-1] <= 6.0 and len(t) == 401
+    result = runner.invoke(main, ["run", "--log", log, "--estimator", "kf2dof", "--out", str(tmp_path / "x.csv"),
+                                  "--from", "50"])
+    assert result.exit_code == 2
+    assert "time window 50.0 .. None s holds 0 sample(s): expected at least 2 inside 0 .. " in result.stderr
+    assert not (tmp_path / "x.csv").exists()
