@@ -103,14 +103,16 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
 
 
 def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
-              unit_check_wheelbase: float | None = None):
-    """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, saying on
-    stderr (a line each) when it was put on a uniform grid (MDF4 channels: at ``sample_time``, a
-    number or a function giving it, called only for MDF4) and where it has gaps the estimators
-    hold across. With ``unit_check_wheelbase`` (m) the signals' physics is checked for wrong units
-    (``harness.unit_sanity``)."""
+              window: tuple[float | None, float | None] = (None, None),
+              unit_check: VehicleConfig | None = None):
+    """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, cut to the
+    time ``window`` (s), saying on stderr (a line each) when it was put on a uniform grid (MDF4
+    channels: at ``sample_time``, a number or a function giving it, called only for MDF4) and where
+    it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the signals' physics is
+    checked for wrong units (``harness.unit_sanity``)."""
     from harness.channels import read_channel_map
     from harness.mdf import SUFFIXES, read_mdf
+    from harness.unit_sanity import check_units
 
     mapping = read_channel_map(channels)
     if path.suffix.lower() in SUFFIXES:
@@ -120,10 +122,9 @@ def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[
     for key in ("resampled", "gaps"):
         if key in log.notes:
             click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
-    if unit_check_wheelbase is not None:
-        from harness.unit_sanity import check_units
-
-        check_units(log, unit_check_wheelbase)
+    log = log.window(*window)
+    if unit_check is not None:
+        check_units(log, unit_check.vehicle["wheelbase"])
     return log
 
 
@@ -287,8 +288,8 @@ def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path:
     from harness.identify.vehicle_file import identified_vehicle_file, report
 
     config = load_vehicle(vehicle)
-    wheelbase = None if no_unit_check else config.vehicle["wheelbase"]
-    logs = [_read_log(path, channels, config.sample_time, wheelbase) for path in log_paths]
+    checked = None if no_unit_check else config
+    logs = [_read_log(path, channels, config.sample_time, unit_check=checked) for path in log_paths]
     ident = identify_logs(logs, config)
     if not ident.estimates:
         for refusal in ident.refusals:
@@ -341,9 +342,9 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     _estimators(config, (estimator,))
     if trials < 1 or batch < 1:
         raise UserError(f"--trials {trials} --batch {batch}: expected both >= 1")
-    wheelbase = None if no_unit_check else config.vehicle["wheelbase"]
-    train = [_read_log(path, channels, config.sample_time, wheelbase) for path in log_paths]
-    holdout = [_read_log(path, channels, config.sample_time, wheelbase) for path in holdout_paths]
+    checked = None if no_unit_check else config
+    train = [_read_log(path, channels, config.sample_time, unit_check=checked) for path in log_paths]
+    holdout = [_read_log(path, channels, config.sample_time, unit_check=checked) for path in holdout_paths]
     with Progress(console=Console(stderr=True), transient=True) as progress:
         task = progress.add_task(f"tuning {estimator}", total=None)
         try:
@@ -396,11 +397,7 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
-    log = _read_log(log_path, channels, config.sample_time).window(start, stop)
-    if not no_unit_check:
-        from harness.unit_sanity import check_units
-
-        check_units(log, config.vehicle["wheelbase"])
+    log = _read_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
     if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
         click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
                    f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
@@ -430,9 +427,7 @@ def score(log_path: Path, est_path: Path, channels: Path | None, start: float | 
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from harness.score import score as compute
 
-    log = _read_log(log_path, channels, lambda: read_estimates(est_path).sample_time)
-    if start is not None or stop is not None:
-        log = log.window(start, stop)
+    log = _read_log(log_path, channels, lambda: read_estimates(est_path).sample_time, (start, stop))
     scores = compute(log, read_estimates(est_path))
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
@@ -462,9 +457,7 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path 
     reference in the log, the estimates and their status."""
     from harness.plot import plot as draw
 
-    log = _read_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time)
-    if start is not None or stop is not None:
-        log = log.window(start, stop)
+    log = _read_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time, (start, stop))
     estimates = {}
     for path in est_paths:
         est = read_estimates(path)

@@ -77,6 +77,8 @@ class Log:
     def window(self, start: float | None, stop: float | None) -> Log:
         """The samples with start <= t <= stop (s; None: from the first / to the last); LogError
         when fewer than two remain."""
+        if start is None and stop is None:
+            return self
         t = self.columns["t"]
         keep = np.ones(len(t), dtype=bool)
         if start is not None:
@@ -228,8 +230,7 @@ def on_uniform_grid(log: Log) -> Log:
     phase = (t - t[0]) / nominal
     late = float(np.clip(((phase - np.round(phase)) * nominal).max(), 0.0, 0.49 * nominal))
     ticks = t[0] + late + nominal * np.arange(int(np.floor((t[-1] - t[0] - late) / nominal)) + 1)
-    latest = np.searchsorted(t, ticks, side="right") - 1
-    stale = ticks - t[latest] > MAX_GAP
+    latest, stale = latest_samples(t, ticks)
     columns = {}
     for name, column in log.columns.items():
         values = column[latest]
@@ -243,14 +244,23 @@ def on_uniform_grid(log: Log) -> Log:
     notes = {**log.notes, "resampled": f"time steps not uniform (jitter +-{jitter * 1e3:.3g} ms around a {step} "
                                        f"step): taken causally onto a uniform {step} grid, {len(t)} samples -> "
                                        f"{len(ticks)} ticks"}
-    gaps = [(float(ticks[run[0]]), float(ticks[run[-1]])) for run in _runs(stale)]
+    gaps = [(float(ticks[run.start]), float(ticks[run.stop - 1])) for run in runs(stale)]
     if gaps:
         notes["gaps"] = (f"{len(gaps)} gap(s) longer than {MAX_GAP:g} s, estimators hold there: "
                          + ", ".join(f"{a:.3f}..{b:.3f} s" for a, b in gaps[:5]) + (" ..." if len(gaps) > 5 else ""))
     return Log(columns, log.source, notes)
 
 
-def _runs(mask: np.ndarray) -> list[np.ndarray]:
-    """The index runs where ``mask`` is true."""
-    indices = np.flatnonzero(mask)
-    return [run for run in np.split(indices, np.flatnonzero(np.diff(indices) > 1) + 1) if run.size]
+def latest_samples(t: np.ndarray, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(index of the latest sample at or before each tick, whether that sample is missing or older
+    than MAX_GAP): the causal rule every resampling uses (no look-ahead). Indices of ticks before
+    the first sample are 0 and stale."""
+    latest = np.searchsorted(t, ticks, side="right") - 1
+    stale = (latest < 0) | (ticks - t[np.maximum(latest, 0)] > MAX_GAP)
+    return np.maximum(latest, 0), stale
+
+
+def runs(mask: np.ndarray) -> list[slice]:
+    """The contiguous runs where ``mask`` is true, as slices."""
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], np.asarray(mask, dtype=np.int8), [0]))))
+    return [slice(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]

@@ -11,7 +11,7 @@ import numpy as np
 
 from codegen.generate import publish
 from harness.channels import ChannelMap
-from harness.logs import MAX_GAP, OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError
+from harness.logs import OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError, latest_samples
 
 SUFFIXES = (".mf4", ".mdf")
 
@@ -45,9 +45,8 @@ def read_mdf(path: Path, channels: ChannelMap, sample_time: float) -> Log:
                        f"two samples of {sample_time:g} s")
     columns = {"t": ticks}
     for name, (t, values) in series.items():
-        latest = np.searchsorted(t, ticks, side="right") - 1
-        stale = (latest < 0) | (ticks - t[np.maximum(latest, 0)] > MAX_GAP)
-        columns[name] = np.where(stale, np.nan, values[np.maximum(latest, 0)])
+        latest, stale = latest_samples(t, ticks)
+        columns[name] = np.where(stale, np.nan, values[latest])
     rates = ", ".join(f"{name} {1.0 / np.median(np.diff(t)):.4g} Hz" for name, (t, _) in series.items() if len(t) > 1)
     notes = {"resampled": f"MDF4 channels ({rates}) taken causally onto a uniform {sample_time * 1e3:g} ms grid"}
     return Log(columns, str(path), notes)

@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from harness.logs import Log, LogError
+from harness.logs import Log, LogError, runs
 
 DYNAMIC = 0
 
@@ -75,9 +75,8 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
 
 
 def _shade(axis, t: np.ndarray, mask: np.ndarray) -> None:
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(int), [0]))))
-    for start, stop in zip(edges[::2], edges[1::2]):
-        axis.axvspan(t[start], t[min(stop, len(t) - 1)], color="tab:green", alpha=0.12, lw=0)
+    for run in runs(mask):
+        axis.axvspan(t[run.start], t[min(run.stop, len(t) - 1)], color="tab:green", alpha=0.12, lw=0)
 
 
 def tuning_plot(scores: list[float], baseline_train: float, tuned_train: float,

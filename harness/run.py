@@ -18,8 +18,22 @@ SAMPLE_TIME_DIGITS = 9
 
 def config_for_log(config: VehicleConfig, log: Log) -> VehicleConfig:
     """``config`` at the log's sample time."""
-    sample_time = round(log.sample_time, SAMPLE_TIME_DIGITS)
+    return config_at(config, log.sample_time)
+
+
+def config_at(config: VehicleConfig, sample_time: float) -> VehicleConfig:
+    """``config`` at ``sample_time`` (s, rounded to SAMPLE_TIME_DIGITS decimals)."""
+    sample_time = round(sample_time, SAMPLE_TIME_DIGITS)
     return config if sample_time == config.sample_time else config.with_sample_time(sample_time)
+
+
+def estimator_inputs(estimator, log: Log):
+    """The log's columns the estimator reads, as a matrix; one line when one is missing."""
+    missing = log.missing(estimator.inputs.names)
+    if missing:
+        raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs "
+                       f"{', '.join(estimator.inputs.names)}")
+    return log.matrix(estimator.inputs.names)
 
 
 def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c",
@@ -28,11 +42,7 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
     (C only) defaults to the vehicle file's [codegen] real."""
     config = config_for_log(config, log)
     estimator = build(name, config)
-    missing = log.missing(estimator.inputs.names)
-    if missing:
-        raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {name} needs "
-                       f"{', '.join(estimator.inputs.names)}")
-    inputs = log.matrix(estimator.inputs.names)
+    inputs = estimator_inputs(estimator, log)
     if backend == "c":
         outputs, _ = load_estimator(estimator, render(config, name, real)).run(inputs)
     else:

@@ -17,13 +17,14 @@ import numpy as np
 
 from harness.build import CEstimator, load_tuning_estimator
 from harness.cluster import Cluster
-from harness.logs import Log, LogError
+from harness.logs import Log
+from harness.run import config_at, estimator_inputs
 from harness.vehicles import with_settings
 from model.calibration import parameters
 from model.estimator import Tunable
 from model.estimators import DEFINITIONS, build
 from model.params import ParameterError, VehicleConfig, parse_vehicle
-from model.schema import shown
+from model.schema import rounded, shown
 
 OBJECTIVES = ("rmse", "max", "mean")
 """Per log: RMSE, largest |error| or mean |error|; averaged over the logs."""
@@ -76,17 +77,14 @@ def prepare(config: VehicleConfig, name: str, logs: Sequence[Log]) -> list[Score
         if truth not in log:
             raise TuneError(f"{log.source}:1: missing column '{truth}': tune scores {name}'s {output} "
                             f"against it (a log with ground truth, e.g. an optical or GNSS/INS reference)")
-        missing = log.missing(estimator.inputs.names)
-        if missing:
-            raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {name} needs "
-                           f"{', '.join(estimator.inputs.names)}")
+        inputs = estimator_inputs(estimator, log)
         reference = np.asarray(log[truth], dtype=float)
         if truth == "beta_ref":
             spin = np.flatnonzero(np.abs(reference) > SPIN_SIDESLIP)
             if spin.size:
                 reference = reference.copy()
                 reference[spin[0]:] = np.nan
-        prepared.append(Scored(str(log.source).rsplit("/", 1)[-1], log.matrix(estimator.inputs.names),
+        prepared.append(Scored(str(log.source).rsplit("/", 1)[-1], inputs,
                                reference, estimator.outputs.index(output), log.sample_time))
     return prepared
 
@@ -132,8 +130,7 @@ _BUILDS: dict[tuple[str, str, float], CEstimator] = {}
 def evaluate(config: VehicleConfig, name: str, calibration: tuple[float, ...], log: Scored,
              objective: str) -> float:
     """The objective of one candidate calibration on one log (rad or rad/s; a job for the cluster)."""
-    config = config.with_sample_time(round(log.sample_time, 9)) \
-        if abs(log.sample_time - config.sample_time) > 1e-12 else config
+    config = config_at(config, log.sample_time)
     key = (config.fingerprint(), name, config.sample_time)
     if key not in _BUILDS:
         _BUILDS[key] = load_tuning_estimator(config, name)
@@ -237,7 +234,7 @@ def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], hold
         best = min(history, key=lambda t: t.score)
         if best.score >= baseline_train:  # nothing beat the settings we started from
             best = Trial({}, baseline_train)
-        tuned_text = settings_text(text, name, config, {k: float(f"{v:.4g}") for k, v in best.point.items()},
+        tuned_text = settings_text(text, name, config, {k: rounded(v) for k, v in best.point.items()},
                                    f"tuned by vsegen tune ({objective} over {len(train_logs)} log(s), "
                                    f"{trials} trials, seed {seed})")
         tuned = _calibration(tuned_text, config.source, config.name, name)

@@ -307,6 +307,12 @@ CAPS_ABOVE_FLOORS = Rule("process_noise_max", _caps_above_floors)
 """An adaptive noise's ceilings lie above its floors, entry by entry (aukf, the particle filters)."""
 
 
+def rounded(value: float, digits: int = 4) -> float:
+    """``value`` to ``digits`` significant digits, for a value written into a vehicle file by a
+    tool (what the file shows is what the code uses)."""
+    return float(f"{value:.{digits}g}")
+
+
 def shown(value: Any) -> str:
     """A validated setting as a vehicle file would write it, short: numbers to 4 significant digits,
     a list as [a, b], a matrix setting as the list of its diagonal."""

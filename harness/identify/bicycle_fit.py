@@ -15,8 +15,8 @@ import numpy as np
 
 from harness.identify import segments
 from harness.identify.estimates import Z95, Estimate, Refusal, Selection, fit, interval, select
-from harness.logs import Log
-from model.bicycle import GRAVITY
+from harness.logs import Log, runs
+from model.bicycle import GRAVITY, stability_factor
 
 SETTLE = 0.5
 """s of each stretch not scored (the start-up of the simulated model)."""
@@ -57,7 +57,8 @@ def simulate(vehicle: Mapping[str, float], cf: float, cr: float, delta: np.ndarr
 
 def _steady_state(m, a, b, cf, cr, delta, vx) -> tuple[float, float]:
     l = a + b
-    ks = m / l**2 * (b / cf - a / cr)
+    ks = stability_factor({"mass": m, "cg_to_front_axle": a, "cg_to_rear_axle": b,
+                           "cornering_stiffness_front": cf, "cornering_stiffness_rear": cr})
     r = vx * delta / (l * (1 + ks * vx * vx))
     # rear axle: F_yr = m a_y a / l = C_r alpha_r, alpha_r = -(vy - b r)/vx
     alpha_r = m * vx * r * a / (l * cr)
@@ -137,7 +138,7 @@ def _stretches(linear: Selection, quantities: Mapping[str, float]) -> list[dict]
     k = quantities["roll_gradient"]
     for log, mask in zip(linear.logs, linear.masks):
         dt = log.sample_time
-        for run in segments.runs(mask):
+        for run in runs(mask):
             ay_measured = log["ay"][run] - quantities["ay_offset"]
             out.append({
                 "dt": dt, "settle": int(round(SETTLE / dt)),

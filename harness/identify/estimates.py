@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from harness.identify import segments
-from harness.logs import Log
+from harness.logs import Log, runs
 from model.bicycle import GRAVITY
 
 Z95 = 1.96
@@ -67,7 +67,7 @@ class Selection:
     @property
     def support(self) -> str:
         used = [(log, m) for log, m in zip(self.logs, self.masks) if m.any()]
-        pieces = sum(len(segments.runs(m)) for _, m in used)
+        pieces = sum(len(runs(m)) for _, m in used)
         names = ", ".join(_name(log) for log, _ in used)
         return f"{self.seconds:.1f} s in {pieces} segment(s) of {names}"
 
@@ -82,7 +82,7 @@ class Selection:
         means = []
         for log, mask in zip(self.logs, self.masks):
             values, n = _values(log, signal), max(1, int(round(seconds / log.sample_time)))
-            for run in segments.runs(mask):
+            for run in runs(mask):
                 chunk = values[run]
                 count = len(chunk) // n
                 means.extend(chunk[:count * n].reshape(count, n).mean(axis=1))
@@ -159,7 +159,7 @@ def sensor_offsets_and_noise(logs: Sequence[Log]) -> list[Estimate | Refusal]:
     for name, column, unit in (("gyro_noise", "r", "rad/s"), ("ay_noise", "ay", "m/s^2"),
                                ("ax_noise", "ax", "m/s^2")):
         second = np.concatenate([np.diff(log[column][run], 2)
-                                 for log, mask in zip(logs, straight.masks) for run in segments.runs(mask)])
+                                 for log, mask in zip(logs, straight.masks) for run in runs(mask)])
         sigma = float(np.sqrt(np.mean(second**2) / 6.0))
         sd = sigma / np.sqrt(2.0 * len(second) / 3.0)  # neighbouring second differences overlap
         out.append(interval(name, sigma, sd, unit, straight.support))

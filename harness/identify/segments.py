@@ -11,7 +11,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
 
-from harness.logs import Log
+from harness.logs import Log, runs
 
 MIN_SPEED = 5.0
 """m/s: below this the wheel-speed v_x and the bicycle model are too coarse to identify from."""
@@ -56,17 +56,10 @@ def finite(log: Log, names: tuple[str, ...]) -> np.ndarray:
 def long_runs(mask: np.ndarray, samples: int) -> np.ndarray:
     """``mask`` with its contiguous runs shorter than ``samples`` removed."""
     out = np.zeros_like(mask)
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    for start, stop in zip(edges[::2], edges[1::2]):
-        if stop - start >= samples:
-            out[start:stop] = True
+    for run in runs(mask):
+        if run.stop - run.start >= samples:
+            out[run] = True
     return out
-
-
-def runs(mask: np.ndarray) -> list[slice]:
-    """The contiguous runs of ``mask`` as slices."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    return [slice(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
 
 
 def _window(log: Log) -> int:

@@ -12,14 +12,10 @@ from harness.identify.estimates import Estimate
 from harness.vehicles import with_settings
 from model.estimators import DEFINITIONS
 from model.params import VehicleConfig, parse_vehicle
+from model.schema import rounded
 
 VEHICLE_KEYS = ("cornering_stiffness_front", "cornering_stiffness_rear")
 """[vehicle] keys identify may replace."""
-
-
-def rounded(value: float, digits: int = 4) -> float:
-    """``value`` to ``digits`` significant digits (what the file shows is what the code uses)."""
-    return float(f"{value:.{digits}g}")
 
 
 def derived_settings(config: VehicleConfig, ident: Identification) -> dict[str, dict[str, tuple]]:

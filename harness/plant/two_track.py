@@ -64,9 +64,7 @@ class Plant:
 
     def static_loads(self) -> tuple[float, float]:
         """Static load of one front and one rear wheel (N)."""
-        m, l = self.vehicle["mass"], self.vehicle["wheelbase"]
-        return (m * GRAVITY * self.vehicle["cg_to_rear_axle"] / (2 * l),
-                m * GRAVITY * self.vehicle["cg_to_front_axle"] / (2 * l))
+        return static_wheel_loads(self.vehicle)
 
     def initial_state(self, speed: float, y: float = 0.0) -> np.ndarray:
         """Straight running at ``speed`` m/s, wheels rolling freely, at lateral position ``y``."""
@@ -150,3 +148,10 @@ def _equations(vehicle, params, x, u):
     )
     truth = ca.vertcat(ax, ay, *loads, fy_axle["f"], fy_axle["r"])
     return derivative, truth
+
+
+def static_wheel_loads(vehicle) -> tuple[float, float]:
+    """Static load of one front and one rear wheel (N): m g b / (2 l) and m g a / (2 l)."""
+    m, l = vehicle["mass"], vehicle["wheelbase"]
+    return (m * GRAVITY * vehicle["cg_to_rear_axle"] / (2 * l),
+            m * GRAVITY * vehicle["cg_to_front_axle"] / (2 * l))

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.plant.two_track import AIR_DENSITY, GRAVITY
+from harness.plant.two_track import AIR_DENSITY, GRAVITY, static_wheel_loads
 from harness.plant.tyre import cornering_stiffness
 
 BANDWIDTH = 2.0
@@ -31,8 +31,7 @@ def driver_view(config) -> Mapping[str, float]:
     stiffnesses are identified or tuned. Without a [plant] table, the [vehicle] values."""
     vehicle = dict(config.vehicle)
     if config.plant is not None:
-        m, a, b = vehicle["mass"], vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
-        front, rear = (m * GRAVITY * share / (2 * (a + b)) for share in (b, a))
+        front, rear = static_wheel_loads(vehicle)
         vehicle["cornering_stiffness_front"] = 2 * float(cornering_stiffness(config.plant, front))
         vehicle["cornering_stiffness_rear"] = 2 * float(cornering_stiffness(config.plant, rear))
     return vehicle
