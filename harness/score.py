@@ -12,6 +12,7 @@ import numpy as np
 
 from harness.logs import Log, LogError
 from harness.run import run_estimator
+from harness.scenarios.simulate import SPIN_BETA as SPIN_SIDESLIP
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
     ("beta", "beta_ref", "deg", 180.0 / np.pi),
@@ -52,6 +53,34 @@ def score(log: Log, estimates: Log) -> list[Score]:
                 scores.append(Score(name, unit, e.size, float(np.abs(e).max()),
                                     float(np.abs(e).mean()), float(np.sqrt(np.mean(e * e)))))
     return scores
+
+
+SILENT_LIMIT = np.deg2rad(2.0)
+"""rad: a sideslip error beyond this must be flagged by the status ("never silently wrong")."""
+SILENT_DURATION = 0.5
+"""s: the longest an error beyond :data:`SILENT_LIMIT` may last with status 0."""
+
+
+def silent_error_time(log: Log, estimates: Log, limit: float = SILENT_LIMIT) -> tuple[float, float]:
+    """(longest stretch, its start) in s of consecutive samples with |beta - beta_ref| > ``limit``
+    (rad) and status 0, before the car spins (|beta_ref| > 15 deg from then on is not scored): the
+    "never silently wrong" rule asks this to stay within :data:`SILENT_DURATION`. A sample with a
+    non-finite estimate counts as wrong."""
+    spun = np.maximum.accumulate(np.abs(log["beta_ref"]) > SPIN_SIDESLIP)
+    error = np.abs(estimates["beta"] - log["beta_ref"])
+    silent = (~(error <= limit)) & (estimates["status"] == 0) & ~spun
+    longest, start, run_start = 0.0, float("nan"), None
+    t = log["t"]
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    for k, bad in enumerate(np.append(silent, False)):
+        if bad and run_start is None:
+            run_start = k
+        elif not bad and run_start is not None:
+            length = t[k - 1] - t[run_start] + step
+            if length > longest:
+                longest, start = length, float(t[run_start])
+            run_start = None
+    return longest, start
 
 
 def score_case(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:

@@ -149,6 +149,22 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
     return Field(key, expected, check, doc)
 
 
+def vector(key: str, size: int, unit: str, doc: str = "",
+           default: tuple[float, ...] | None = None) -> Field:
+    """``size`` finite numbers in ``unit`` (e.g. a position). Normalised to a tuple of floats."""
+    expected = f"a list of {size} finite numbers ({unit})"
+
+    def check(value: Any) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != size:
+            raise Invalid(expected)
+        try:
+            return tuple(_number(v) for v in value)
+        except Invalid:
+            raise Invalid(expected) from None
+
+    return Field(key, expected, check, doc, default)
+
+
 def integer(key: str, low: int, high: int, doc: str = "") -> Field:
     """A whole number from ``low`` to ``high``; stays an int, so it is structural (baked even in
     calibratable mode)."""
@@ -203,7 +219,14 @@ PLANT: tuple[Field, ...] = (
     positive("wheel_inertia_front", "kg*m^2", "spin inertia of one front wheel incl. driveline share"),
     positive("wheel_inertia_rear", "kg*m^2", "spin inertia of one rear wheel"),
     choice("driven_axle", ("front", "rear"), "axle the drive torque goes to"),
-    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration (quasi-static)"),
+    nonnegative("roll_gradient", "rad/(m/s^2)", "body roll per lateral acceleration (steady state)"),
+    nonnegative("roll_frequency", "Hz", "natural frequency of the body's roll mode; 0 = quasi-static "
+                "roll (roll_gradient times the lagged a_y of the load transfer)", default=0.0),
+    positive("roll_damping_ratio", "-", "damping ratio of the roll mode (roll_frequency > 0 only)",
+             default=0.4),
+    vector("sensor_position", 3, "m", "position of the inertial sensors (accelerometers, gyro) from "
+           "the CG in body axes x forward, y left, z up; they sit on the rolling body",
+           default=(0.0, 0.0, 0.0)),
     nonnegative("pitch_gradient", "rad/(m/s^2)", "body pitch per longitudinal deceleration (quasi-static)"),
     fraction("roll_stiffness_front_share", "share of lateral load transfer taken by the front axle"),
     positive("load_transfer_time_constant", "s", "lag of load transfer behind the accelerations"),

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
 
 from harness.plant import tyre
-from harness.plant.two_track import build_plant
+from harness.plant.two_track import INPUT, STATE, equations, build_plant
 from harness.reference import blocks
 from harness.scenarios.driver import SpeedHold
 from harness.scenarios.simulate import simulate
@@ -91,3 +93,39 @@ def test_driven_wheels_spin_up_under_traction(config):
     front = run.state("omega_fl")[-1] * config.vehicle["wheel_radius"]
     rear = run.state("omega_rl")[-1] * config.vehicle["wheel_radius"]
     assert front > rear * 1.001 and run.state("vx")[-1] > 20.0
+
+
+def test_roll_mode_has_the_configured_frequency_and_damping(config):
+    """The roll states' linearisation is the damped oscillator of [plant] roll_frequency and
+    roll_damping_ratio: eigenvalues -zeta w_n +- j w_n sqrt(1 - zeta^2)."""
+    params = {**config.plant, "roll_frequency": 1.4, "roll_damping_ratio": 0.35}
+    x, u = ca.SX.sym("x", len(STATE)), ca.SX.sym("u", len(INPUT))
+    jacobian = ca.Function("j", [x, u], [ca.jacobian(equations(config.vehicle, params, x, u)[0], x)])
+    state = build_plant(config.vehicle, params, 1e-3).initial_state(20.0)
+    roll = [STATE.index("phi"), STATE.index("phi_rate")]
+    block = np.asarray(jacobian(state, [0.0, 0, 0, 0, 0, 1.0]))[np.ix_(roll, roll)]
+    poles = np.linalg.eigvals(block)
+    assert np.abs(poles) == pytest.approx(2 * np.pi * 1.4, rel=1e-9)
+    assert -poles.real / np.abs(poles) == pytest.approx(0.35, rel=1e-9)
+
+
+@pytest.mark.parametrize("frequency", [0.0, 1.4])
+def test_steady_cornering_rolls_by_the_roll_gradient(config, frequency):
+    """In steady cornering both roll models settle at phi = roll_gradient * ay."""
+    params = {**config.plant, "roll_frequency": frequency}
+    run = run_open_loop(replace(config, plant=params), 20.0, lambda t, s: 0.03, 6.0)
+    ay, roll = run.truth_of("ay")[-1], run.truth_of("roll")[-1]
+    assert ay > 3.0
+    assert roll == pytest.approx(params["roll_gradient"] * ay, rel=1e-3)
+
+
+def test_roll_mode_overshoots_a_steer_step_and_quasi_static_roll_does_not(config):
+    """An underdamped roll mode overshoots the steady roll angle after a steer step."""
+    peaks = {}
+    for frequency in (0.0, 1.0):
+        params = {**config.plant, "roll_frequency": frequency, "roll_damping_ratio": 0.2}
+        run = run_open_loop(replace(config, plant=params), 20.0,
+                            lambda t, s: 0.03 if t > 0.5 else 0.0, 6.0)
+        roll = run.truth_of("roll")
+        peaks[frequency] = roll.max() / roll[-1]
+    assert peaks[0.0] < 1.02 < 1.1 < peaks[1.0]

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from harness.logs import REQUIRED, TRUTH
+from harness.plant.two_track import GRAVITY
+from harness.scenarios import sensors
 from harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option
 
 STABLE_NAMES = {"dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook"}
@@ -125,3 +128,40 @@ def test_logs_do_not_share_memory_with_cached_runs(config):
     first.columns["delta"][:] = np.nan
     again = Case.of("dlc", speed_kmh=90.0).simulate(config, 100.0, seed=6)
     assert np.all(np.isfinite(again["delta"]))
+
+
+def test_accelerometers_read_the_specific_force_of_the_rotated_body():
+    """sensors.specific_force against scipy's rotations: R = Rz(psi) Ry(theta) Rx(phi), f_body =
+    R^T (a_world + [0, 0, g])."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        psi, theta, phi = rng.uniform(-0.3, 0.3, 3)
+        ax, ay = rng.uniform(-8, 8, 2)
+        yaw = Rotation.from_euler("z", psi)
+        body = Rotation.from_euler("ZYX", [psi, theta, phi])
+        world = yaw.apply([ax, ay, 0.0]) + [0.0, 0.0, GRAVITY]
+        np.testing.assert_allclose(sensors.specific_force(ax, ay, phi, theta),
+                                   body.inv().apply(world), atol=1e-12)
+
+
+def test_yaw_gyro_reads_the_body_rate():
+    """sensors.body_yaw_rate against the body rate of R(t): skew(w) = R^T R' (central difference)."""
+    def attitude(t):
+        return Rotation.from_euler("ZYX", [0.4 * t, 0.05 * np.sin(2 * t), 0.1 * np.sin(3 * t)])
+    t, h = 0.7, 1e-6
+    rate = (attitude(t).inv() * attitude(t + h)).as_rotvec() / (2 * h) \
+        - (attitude(t).inv() * attitude(t - h)).as_rotvec() / (2 * h)
+    theta, phi = 0.05 * np.sin(2 * t), 0.1 * np.sin(3 * t)
+    assert sensors.body_yaw_rate(0.4, phi, theta, 0.1 * np.cos(2 * t)) == pytest.approx(rate[2], abs=1e-7)
+
+
+def test_lever_arm_of_a_sensor_above_the_cg():
+    """A sensor z above the CG of a body rolling with phi'' reads -phi'' z laterally; one x ahead
+    of it reads r' x laterally and -r^2 x longitudinally."""
+    roll_acc, yaw_acc, r = 2.0, 0.5, 0.4
+    lateral_z = sensors.lever_arm_acceleration(np.array([0.0, 0.0, 0.3]), np.zeros((3, 1)),
+                                               np.array([[roll_acc], [0.0], [0.0]]))
+    assert lateral_z[:, 0] == pytest.approx([0.0, -roll_acc * 0.3, 0.0])
+    ahead = sensors.lever_arm_acceleration(np.array([0.5, 0.0, 0.0]), np.array([[0.0], [0.0], [r]]),
+                                           np.array([[0.0], [0.0], [yaw_acc]]))
+    assert ahead[:, 0] == pytest.approx([-r * r * 0.5, yaw_acc * 0.5, 0.0])

@@ -1,8 +1,9 @@
-"""Two-track vehicle model: planar motion, four wheel spins, lagged load transfer, quasi-static
-roll and pitch for the body-fixed accelerometers.
+"""Two-track vehicle model: planar motion, four wheel spins, lagged load transfer, body roll (a
+damped roll mode or quasi-static) and quasi-static pitch for the sensors on the body.
 
-State (12): X, Y (m, world), psi (rad), vx, vy (m/s, body), r (rad/s), omega_fl, omega_fr, omega_rl,
-omega_rr (rad/s), ax_lt, ay_lt (m/s^2, the accelerations the load transfer follows).
+State (14): X, Y (m, world), psi (rad), vx, vy (m/s, body), r (rad/s), omega_fl, omega_fr, omega_rl,
+omega_rr (rad/s), ax_lt, ay_lt (m/s^2, the accelerations the load transfer follows), phi (rad),
+phi_rate (rad/s): roll angle (ISO: positive with the left side up, i.e. outward in a left turn).
 Input (6): delta (rad, both front wheels), T_fl, T_fr, T_rl, T_rr (N*m, drive minus brake torque at
 each wheel), mu (road friction).
 
@@ -19,6 +20,17 @@ tan(alpha) = -v_lat/|v| with |v| regularised as sqrt(v_long^2 + 1 m^2/s^2). Tyre
     m (vx' - r vy) = sum Fx - 0.5 rho CdA vx |vx|        m (vy' + r vx) = sum Fy
     Iz r' = sum (x_i Fy_i - y_i Fx_i)                     I_w omega_i' = T_i - R Fx_i - f_r Fz_i R tanh(omega_i/0.5)
     tau ax_lt' = ax - ax_lt,  tau ay_lt' = ay - ay_lt     (ax, ay: body accelerations of the CG)
+
+Body roll and pitch (the sensors sit on the body, harness.scenarios.sensors), with k_phi =
+roll_gradient, k_theta = pitch_gradient:
+
+* roll mode, roll_frequency f > 0 (omega_n = 2 pi f, damping ratio zeta): the body is a damped
+  oscillator driven by the lateral acceleration, phi'' = omega_n^2 (k_phi ay - phi) - 2 zeta
+  omega_n phi', so that steady cornering gives phi = k_phi ay;
+* quasi-static roll, f = 0: phi = k_phi ay_lt, phi' = k_phi (ay - ay_lt) / tau, phi'' taken as 0
+  (the roll states stay 0);
+* pitch, always quasi-static: theta = -k_theta ax_lt (nose down under braking), theta' = -k_theta
+  (ax - ax_lt) / tau.
 
 Integrated with classic RK4 at a fixed step (>= 1 kHz: the wheel-spin modes are the fastest,
 about 9500/vx 1/s, so RK4 at 1 ms is stable above ~3.5 m/s).
@@ -37,11 +49,13 @@ from harness.plant import tyre
 GRAVITY = 9.81
 AIR_DENSITY = 1.2
 STATE = ("X", "Y", "psi", "vx", "vy", "r", "omega_fl", "omega_fr", "omega_rl", "omega_rr",
-         "ax_lt", "ay_lt")
+         "ax_lt", "ay_lt", "phi", "phi_rate")
 INPUT = ("delta", "T_fl", "T_fr", "T_rl", "T_rr", "mu")
-TRUTH = ("ax", "ay", "fz_fl", "fz_fr", "fz_rl", "fz_rr", "fy_front", "fy_rear")
-"""Algebraic outputs of :meth:`Plant.truth`: body accelerations (m/s^2), wheel loads (N), axle
-lateral forces in the body frame (N)."""
+TRUTH = ("ax", "ay", "fz_fl", "fz_fr", "fz_rl", "fz_rr", "fy_front", "fy_rear", "yaw_acceleration",
+         "roll", "roll_rate", "roll_acceleration", "pitch", "pitch_rate")
+"""Algebraic outputs of :meth:`Plant.truth`: body accelerations of the CG (m/s^2), wheel loads (N),
+axle lateral forces in the body frame (N), r' (rad/s^2), roll angle, rate and acceleration (rad,
+rad/s, rad/s^2) and pitch angle and rate (rad, rad/s) as the docstring defines them."""
 
 
 @dataclass
@@ -80,7 +94,7 @@ def build_plant(vehicle: Mapping[str, float], params: Mapping[str, float], dt: f
     """The plant of ``vehicle`` ([vehicle]) with truth-plant ``params`` ([plant]), RK4 step ``dt``."""
     x = ca.SX.sym("x", len(STATE))
     u = ca.SX.sym("u", len(INPUT))
-    derivative, truth = _equations(vehicle, params, x, u)
+    derivative, truth = equations(vehicle, params, x, u)
     f = ca.Function("f", [x, u], [derivative])
     k1 = f(x, u)
     k2 = f(x + dt / 2 * k1, u)
@@ -91,7 +105,8 @@ def build_plant(vehicle: Mapping[str, float], params: Mapping[str, float], dt: f
     return Plant(vehicle, params, step_fn, truth_fn, dt)
 
 
-def _equations(vehicle, params, x, u):
+def equations(vehicle, params, x, u):
+    """(x', truth) of the plant as CasADi expressions of state ``x`` and input ``u``."""
     m, iz = vehicle["mass"], vehicle["yaw_inertia"]
     a, b, l = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"], vehicle["wheelbase"]
     t, h, radius = vehicle["track_width"], vehicle["cg_height"], vehicle["wheel_radius"]
@@ -135,19 +150,43 @@ def _equations(vehicle, params, x, u):
     ay = sum_fy / m
     tau = params["load_transfer_time_constant"]
     psi = s["psi"]
+    yaw_acceleration = yaw_moment / iz
+    roll, roll_rate, roll_acceleration = _roll(params, s, ay, tau)
+    pitch = -params["pitch_gradient"] * s["ax_lt"]
+    pitch_rate = -params["pitch_gradient"] * (ax - s["ax_lt"]) / tau
     derivative = ca.vertcat(
         vx * ca.cos(psi) - vy * ca.sin(psi),
         vx * ca.sin(psi) + vy * ca.cos(psi),
         r,
         ax + r * vy,
         ay - r * vx,
-        yaw_moment / iz,
+        yaw_acceleration,
         *wheel_rates,
         (ax - s["ax_lt"]) / tau,
         (ay - s["ay_lt"]) / tau,
+        s["phi_rate"] if _roll_mode(params) else 0.0,
+        roll_acceleration if _roll_mode(params) else 0.0,
     )
-    truth = ca.vertcat(ax, ay, *loads, fy_axle["f"], fy_axle["r"])
+    truth = ca.vertcat(ax, ay, *loads, fy_axle["f"], fy_axle["r"], yaw_acceleration,
+                       roll, roll_rate, roll_acceleration, pitch, pitch_rate)
     return derivative, truth
+
+
+def _roll_mode(params) -> bool:
+    """True when the body has a roll mode (roll_frequency > 0), False for quasi-static roll."""
+    return params["roll_frequency"] > 0.0
+
+
+def _roll(params, s, ay, tau):
+    """(phi, phi', phi'') of the body: the roll mode's states, or quasi-static roll (see the
+    module docstring)."""
+    gradient = params["roll_gradient"]
+    if not _roll_mode(params):
+        return gradient * s["ay_lt"], gradient * (ay - s["ay_lt"]) / tau, 0.0
+    omega = 2.0 * np.pi * params["roll_frequency"]
+    acceleration = (omega * omega * (gradient * ay - s["phi"])
+                    - 2.0 * params["roll_damping_ratio"] * omega * s["phi_rate"])
+    return s["phi"], s["phi_rate"], acceleration
 
 
 def static_wheel_loads(vehicle) -> tuple[float, float]:
