@@ -129,7 +129,8 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
     return Field(key, expected, check, doc)
 
 
-def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False) -> Field:
+def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
+             default: tuple[float, ...] | None = None) -> Field:
     """The ``size`` diagonal entries of a diagonal covariance, each > 0 (or >= 0 when
     ``zero_allowed``). Normalised to a tuple of floats."""
     bound = ">= 0" if zero_allowed else "> 0"
@@ -146,7 +147,7 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
             raise Invalid(expected)
         return entries
 
-    return Field(key, expected, check, doc)
+    return Field(key, expected, check, doc, default)
 
 
 def vector(key: str, size: int, unit: str, doc: str = "",

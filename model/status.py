@@ -12,6 +12,7 @@ PARAMETERS_PROJECTED = 8
 COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
 KINEMATIC_DWELL_LIMITED = 64
+MODEL_INCONSISTENT = 128
 
 STATUS_BITS = {
     "LOW_SPEED": (LOW_SPEED, "vx below the low-speed limit (or not yet back above the resume speed): "
@@ -31,5 +32,8 @@ STATUS_BITS = {
     "KINEMATIC_DWELL_LIMITED": (KINEMATIC_DWELL_LIMITED, "the kinematic scheme reached its maximum dwell "
                                                          "with |a_y| still above the threshold: the model-based "
                                                          "scheme runs beyond its linear range until |a_y| falls"),
+    "MODEL_INCONSISTENT": (MODEL_INCONSISTENT, "the measurements disagree with the model's predictions "
+                                               "(mean squared innovation above residual_limit sensor "
+                                               "variances over residual_window): the estimate is suspect"),
 }
 """Every status bit by name: (value, meaning)."""

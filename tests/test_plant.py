@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from harness.plant import tyre
-from harness.plant.two_track import INPUT, STATE, equations, build_plant
+from harness.plant.two_track import INPUT, STATE, build_plant, equations
 from harness.reference import blocks
 from harness.scenarios.driver import SpeedHold
 from harness.scenarios.simulate import simulate

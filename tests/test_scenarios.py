@@ -8,8 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from harness.logs import REQUIRED, TRUTH
 from harness.plant.two_track import GRAVITY
-from harness.scenarios import sensors
-from harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option
+from harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option, sensors
 
 STABLE_NAMES = {"dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook"}
 

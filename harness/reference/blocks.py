@@ -102,6 +102,18 @@ def unpacked(values, n: int) -> np.ndarray:
     return P
 
 
+def residual_mean(previous, innovation, settings, T):
+    """The consistency monitor's m_k = a m_k-1 + (1 - a) mean_i(min(nu_i^2 / sigma_i^2, 100)), a =
+    exp(-T / residual_window), sigma = sensor_noise (model.consistency); 0 when it is off."""
+    window = settings["residual_window"]
+    if window == 0.0:
+        return 0.0
+    sigma = np.array(settings["sensor_noise"], dtype=float)
+    ratio = float(np.mean(np.minimum(np.asarray(innovation, dtype=float) ** 2 / sigma ** 2, 100.0)))
+    keep = np.exp(-T / window)
+    return keep * previous + (1 - keep) * ratio
+
+
 def roll_corrected(ay_measured, roll_gradient):
     """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
     to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""

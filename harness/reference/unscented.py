@@ -26,6 +26,7 @@ OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
 WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
+MODEL_INCONSISTENT = 128
 AIR_DENSITY = 1.2
 N = 6
 
@@ -42,8 +43,9 @@ class Variant:
         wheels = WHEEL_SPEEDS if s["longitudinal_force"] == "wheel_speeds" else ()
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
-        return (("delta", "vx", "ax", "ay", "r", *wheels), (*STATE, *COVARIANCE, *extra, "holding"),
-                OUTPUTS)
+        monitor = ("residual",) if s["residual_window"] > 0 else ()
+        return (("delta", "vx", "ax", "ay", "r", *wheels),
+                (*STATE, *COVARIANCE, *extra, *monitor, "holding"), OUTPUTS)
 
     def init(self, config, u0):
         s = config.settings(self.table)
@@ -51,7 +53,7 @@ class Variant:
         first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"])
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
-                 if self.adaptive else [])
+                 if self.adaptive else []) + ([0.0] if s["residual_window"] > 0 else [])
         return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra
                         + [2 * holding], dtype=float)
 
@@ -107,7 +109,8 @@ class Variant:
         P_zz = (z_dev * wc) @ z_dev.T + R
         P_xz = (deviations * wc) @ z_dev.T
         K = P_xz @ _inverse3(P_zz)
-        eps = np.array([inputs["ax"], inputs["ay"], inputs["r"]], dtype=LD) - z_hat
+        ay = blocks.roll_corrected(inputs["ay"], s["roll_gradient"])
+        eps = np.array([inputs["ax"], ay, inputs["r"]], dtype=LD) - z_hat
         X_new = mean + K @ eps
         P_new = P_pred - K @ P_zz @ K.T
 
@@ -127,10 +130,18 @@ class Variant:
                         "fading": LD(x["fading"]) * f})
         new["holding"] = 0.0
         status |= COVARIANCE_REPAIRED if repaired else 0
+        first_inconsistent = False
+        if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
+            new["residual"] = blocks.residual_mean(x["residual"], eps, s, config.sample_time)
+            if new["residual"] > s["residual_limit"]:
+                status |= MODEL_INCONSISTENT
+                first_inconsistent = not x["residual"] > s["residual_limit"]
         speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
         if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
-                or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)):
-            new = dict(zip(state_names, self.init(config, u)), holding=0.0)   # restart here
+                or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)
+                or first_inconsistent):
+            new = dict(zip(state_names, self.init(config, u)), holding=0.0,   # restart here
+                       **({"residual": new["residual"]} if "residual" in new else {}))
             X_new = np.array([new[k] for k in STATE], dtype=LD)
             status |= FILTER_RESTARTED
         output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]

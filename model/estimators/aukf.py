@@ -33,10 +33,10 @@ from dataclasses import replace
 
 import casadi as ca
 
-from model import kalman, signals, status, unscented
+from model import consistency, kalman, signals, status, unscented
 from model.bicycle import GRAVITY
 from model.calibration import Parameters
-from model.estimator import Definition, Estimator, Tunable, make_functions, make_repeated
+from model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
 from model.guard import first_sample, hold, input_guard
 from model.increments import Pair, lift
 from model.layout import Layout, covariance_signals
@@ -44,6 +44,7 @@ from model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
+    ROLL_CORRECTION,
     EstimatorSchema,
     Field,
     between,
@@ -53,6 +54,7 @@ from model.schema import (
     number_field,
     positive,
 )
+from model.sensors import roll_corrected
 from model.signals import Signal
 from model.three_dof import ThreeDof
 
@@ -80,6 +82,8 @@ UKF_FIELDS: tuple[Field, ...] = (
                 "current sample when |u - v_x| exceeds this (status FILTER_RESTARTED); 0 = never"),
     nonnegative("restart_sideslip", "rad", "beyond the spec: restart when |atan2(v, u)| exceeds "
                 "this; 0 = never"),
+    ROLL_CORRECTION,
+    *consistency.fields(("ax", "ay", "r")),
     *LOW_SPEED_FIELDS,
 )
 """Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""
@@ -102,6 +106,10 @@ X_NAMES = tuple(name for name, _, _ in STATE)
 N = len(STATE)
 MEASURED = (4, 5, 2)
 """Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
+CHANNELS = ("ax", "ay", "r")
+"""The measured channels, in Z's order (the consistency monitor's sensor_noise order)."""
+RESIDUAL = Signal("residual", "-", "consistency monitor: mean squared innovation in sensor "
+                                   "variances (model.consistency)")
 Q_FLOOR = 1e-3
 """Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
 _BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
@@ -133,6 +141,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
            *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
+        *((RESIDUAL,) if consistency.enabled(settings) else ()),
         signals.HOLDING_REASON,
     ))
     outputs = Layout((
@@ -228,6 +237,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     for row, column in enumerate(MEASURED):
         H[row, column] = 1
 
+    monitored = consistency.enabled(params.numeric.settings(name))
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
     guard = input_guard(u, config.limits, vx_min, vx_resume, kept["holding"])
@@ -243,6 +253,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
+        **({"residual": ca.SX(0)} if monitored else {}),
         "holding": 2 * holding,
     })
     # the first sample after a low-speed hold (holding = 2) restarts the filter from itself
@@ -273,7 +284,9 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     x_pred = propagated + q
 
     # ---- update (13)-(14) -------------------------------------------------------------------------
-    z = ca.vertcat(*[hold(u[n], active, 0) for n in ("ax", "ay", "r")])
+    z = ca.vertcat(hold(u["ax"], active, 0),
+                   roll_corrected(hold(u["ay"], active, 0), settings["roll_gradient"]),
+                   hold(u["r"], active, 0))
     P_zz = ca.mtimes([H, spread, H.T]) + R
     P_xz = ca.mtimes(spread, H.T)
     K = ca.mtimes(P_xz, ca.inv(P_zz))
@@ -303,16 +316,26 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     def keep(value, key):
         return ca.if_else(active, value, kept[key])
 
+    # beyond the spec: a monitor of the innovations; the sample it first fires restarts the filter
+    suspect = rising = ca.SX(0)
+    if monitored:
+        residual = consistency.averaged(s["residual"], innovation, settings, config.sample_time)
+        suspect = ca.logic_and(active, consistency.inconsistent(residual, settings))
+        rising = ca.logic_and(suspect, ca.logic_not(consistency.inconsistent(s["residual"], settings)))
+        extra["residual"] = residual
+
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, "holding": ca.SX(0)})
     held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
     restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
+                           **({"residual": extra["residual"]} if monitored else {}),
                            "holding": ca.SX(0)})
-    restarted = ca.logic_and(active, diverged(x_new, u["vx"], settings))
+    restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), rising))
     x_out = ca.if_else(restarted, restart[:N], x_new)
     code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
-            + ca.if_else(restarted, status.FILTER_RESTARTED, 0))
+            + ca.if_else(restarted, status.FILTER_RESTARTED, 0)
+            + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0))
     output = outputs.pack({
         "beta": ca.if_else(active, ca.atan2(x_out[1], x_out[0]), 0),
         **{out: keep(x_out[X_NAMES.index(n)], n) for out, n in
@@ -341,9 +364,12 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
 
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
-_UKF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "COVARIANCE_REPAIRED", "FILTER_RESTARTED")
+_UKF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "COVARIANCE_REPAIRED", "FILTER_RESTARTED",
+               "MODEL_INCONSISTENT")
+_UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
 DEFINITIONS = (
-    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE, _UKF_STATUS),
+    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE, _UKF_STATUS, _UKF_DERIVED),
     Definition(NAME, build_adaptive, AUKF_SCHEMA,
-               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}, _UKF_STATUS),
+               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}, _UKF_STATUS,
+               _UKF_DERIVED),
 )

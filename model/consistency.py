@@ -1,0 +1,75 @@
+"""Consistency monitor shared by the estimators: do the model's predictions still explain the
+measurements? Beyond the papers; the rule it serves: never a silently wrong estimate.
+
+Each sample, the prior innovations nu_i = z_i - h_i(x-) (i over the measured channels) are
+compared with the car's sensor noise sigma_i (``sensor_noise``, from ``vsegen identify``; not the
+filter's R, which is a tuning knob and often far from the sensor's noise):
+
+    m_k = a m_k-1 + (1 - a) (1/n) sum_i min(nu_i^2 / sigma_i^2, 100),   a = exp(-T / residual_window):
+
+one sample counts at most 100 variances (a 10-sigma outlier, e.g. seed 000's gyro spikes, moves m
+by at most 100/n (1 - a), far below the limit).
+
+While the model explains the data, m stays near 1 plus the prior's own share; when it no longer
+does (tyres beyond the model's friction, a wrong parameter, an unmodelled disturbance), m rises.
+m > ``residual_limit`` raises the status bit MODEL_INCONSISTENT for as long as it lasts; an
+estimator may also act on the sample it is first raised (the UKFs restart). ``residual_window``
+= 0 switches the monitor off (m stays 0).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from model.estimator import Derived
+from model.schema import Field, diagonal, nonnegative, positive
+
+OUTLIER_CAP = 100.0
+"""Most one channel's squared innovation counts, in sensor variances (a 10-sigma outlier)."""
+CHANNELS = {"ax": ("ax_noise", "m/s^2"), "ay": ("ay_noise", "m/s^2"), "r": ("gyro_noise", "rad/s")}
+"""Measured channels by name: the identified quantity that is its sensor noise, and its unit."""
+TABLE_2 = {"ax": 0.3, "ay": 0.3, "r": 0.017453}
+"""Seed 000 Table 2's sensor noise (1 sigma), the default before a car's logs are identified."""
+
+
+def fields(channels: tuple[str, ...]) -> tuple[Field, ...]:
+    """The monitor's settings for an estimator measuring ``channels`` (keys of :data:`CHANNELS`)."""
+    units = ", ".join(CHANNELS[c][1] for c in channels)
+    return (
+        nonnegative("residual_window", "s", "beyond the papers: time constant of the consistency "
+                    "monitor's mean of the squared innovations; 0 = no monitor", default=0.0),
+        positive("residual_limit", "-", "mean squared innovation, in units of the sensor noise "
+                 "variance, above which status MODEL_INCONSISTENT is raised", default=9.0),
+        diagonal("sensor_noise", len(channels), f"[{', '.join(channels)}]: {units}",
+                 "the sensors' noise, 1 sigma (the consistency monitor's yardstick)",
+                 default=tuple(TABLE_2[c] for c in channels)),
+    )
+
+
+def derived(channels: tuple[str, ...]) -> dict[str, Derived]:
+    """``sensor_noise`` follows from the identified noise of each channel."""
+    return {"sensor_noise": Derived(tuple(CHANNELS[c][0] for c in channels),
+                                    lambda *sigmas: list(sigmas))}
+
+
+def enabled(numeric_settings) -> bool:
+    """Whether the generated code has the monitor (structural: ``residual_window`` > 0 when it is
+    generated, also in calibratable mode)."""
+    return numeric_settings["residual_window"] > 0.0
+
+
+def averaged(previous, innovation, settings, sample_time: float):
+    """m_k from m_k-1 = ``previous`` and the prior ``innovation`` (CasADi column, one entry per
+    channel, in ``sensor_noise`` order), ``settings`` the estimator's (numbers or calibration
+    symbols); call only when :func:`enabled`."""
+    sigma = settings["sensor_noise"]
+    n = len(sigma)
+    ratio = sum(ca.fmin(innovation[i] * innovation[i] / (sigma[i] * sigma[i]), OUTLIER_CAP)
+                for i in range(n)) / n
+    keep = ca.exp(-sample_time / settings["residual_window"])
+    return keep * previous + (1 - keep) * ratio
+
+
+def inconsistent(mean_square, settings):
+    """1 while the monitor's mean ``mean_square`` exceeds ``residual_limit``."""
+    return mean_square > settings["residual_limit"]

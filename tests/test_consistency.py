@@ -1,0 +1,87 @@
+"""The consistency monitor (model.consistency) and the "never silently wrong" rule (harness.score)."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from harness.logs import Log
+from harness.run import run_estimator
+from harness.scenarios import VERIFICATION_SET, Case
+from harness.score import SILENT_DURATION, silent_error_time
+from harness.vehicles import load_vehicle
+from model import consistency
+from model.status import MODEL_INCONSISTENT
+
+SETTINGS = {"residual_window": 0.2, "residual_limit": 6.0, "sensor_noise": (0.3, 0.3, 0.0175)}
+
+
+def test_monitor_mean_follows_its_definition():
+    """m_k = a m_k-1 + (1 - a) mean(min(nu^2 / sigma^2, 100)), a = exp(-T / window)."""
+    nu = ca.SX.sym("nu", 3)
+    previous = ca.SX.sym("m")
+    f = ca.Function("m", [previous, nu], [consistency.averaged(previous, nu, SETTINGS, 0.01)])
+    a = math.exp(-0.01 / 0.2)
+    for innovation in ([0.3, -0.6, 0.0175], [0.0, 0.0, 1.0], [10.0, 0.1, 0.0]):
+        ratios = np.minimum(np.square(innovation) / np.square(SETTINGS["sensor_noise"]), 100.0)
+        expected = a * 2.0 + (1 - a) * ratios.mean()
+        assert float(f(2.0, innovation)) == pytest.approx(expected, rel=1e-12)
+
+
+def _log(t, beta_ref, beta, status):
+    return (Log({"t": t, "beta_ref": beta_ref}, source="<truth>"),
+            Log({"t": t, "beta": beta, "status": status}, source="<estimate>"))
+
+
+def test_silent_error_time_counts_only_unflagged_wrong_samples_before_a_spin():
+    t = np.arange(0.0, 4.0, 0.01)
+    truth = np.zeros_like(t)
+    estimate = np.where((t >= 1.0) & (t < 2.0), np.deg2rad(3.0), 0.0)   # 1 s wrong by 3 deg
+    status = np.zeros_like(t)
+    log, estimates = _log(t, truth, estimate, status)
+    assert silent_error_time(log, estimates) == pytest.approx((1.0, 1.0))
+    status[(t >= 1.4) & (t < 1.5)] = 128                                # flagged in the middle
+    longest, start = silent_error_time(*_log(t, truth, estimate, status))
+    assert longest == pytest.approx(0.5) and start == pytest.approx(1.5)
+    spun = np.where(t >= 1.2, np.deg2rad(20.0), 0.0)                    # the car spins at 1.2 s
+    longest, _ = silent_error_time(*_log(t, spun, estimate + spun, np.zeros_like(t)))
+    assert longest == pytest.approx(0.2)
+    nan = np.where(t >= 3.0, np.nan, 0.0)                               # a NaN is wrong
+    assert silent_error_time(*_log(t, truth, nan, np.zeros_like(t)))[0] == pytest.approx(1.0)
+
+
+MONITORED = ("ukf",)
+"""The estimators for which the rule holds today, on both truth cars (docs/accuracy.md lists the
+others' longest silent errors)."""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", MONITORED)
+@pytest.mark.parametrize("vehicle", ["c_class", "rwd_saloon"])
+def test_never_silently_wrong(name, vehicle):
+    """On every verification scenario, |beta error| > 2 deg lasts at most 0.5 s with status 0
+    (samples after the car spins are not scored)."""
+    config = load_vehicle(f"vehicles/{vehicle}.toml")
+    for case in VERIFICATION_SET:
+        log = case.simulate(config, 1.0 / config.sample_time, 1)
+        longest, start = silent_error_time(log, run_estimator(config, name, log))
+        assert longest <= SILENT_DURATION, f"{case.label}: silently wrong for {longest:.2f} s from {start:.2f} s"
+
+
+@pytest.mark.slow
+def test_the_monitor_flags_the_ukf_beyond_its_friction(variant):
+    """At mu = 0.5 (the ukf assumes 1.0) the ukf without its monitor is silently wrong for more
+    than 0.5 s; with it, the status says MODEL_INCONSISTENT."""
+    case = Case.of("dlc", speed_kmh=120.0, mu=0.5)
+    silent = {}
+    for window in (0.0, 0.2):
+        config = variant("estimator.ukf", residual_window=window)
+        log = case.simulate(config, 100.0, 1)
+        estimates = run_estimator(config, "ukf", log)
+        silent[window] = silent_error_time(log, estimates)[0]
+        flagged = (estimates["status"].astype(int) & MODEL_INCONSISTENT) > 0
+        assert flagged.any() == (window > 0)
+    assert silent[0.0] > SILENT_DURATION >= silent[0.2]
