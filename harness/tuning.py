@@ -95,6 +95,8 @@ def dimensions(config: VehicleConfig, name: str) -> list[Dimension]:
     settings = config.settings(name)
     dims = []
     for key, tunable in DEFINITIONS[name].tunable.items():
+        if not tunable.applies(settings):
+            continue
         value = settings[key]
         if isinstance(value, tuple):
             dims += [Dimension(key, i, tunable) for i in range(len(value))]

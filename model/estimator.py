@@ -235,11 +235,17 @@ class Estimator:
 class Tunable:
     """A numeric setting ``vsegen tune`` may search: the scalar, or each entry of a list or
     matrix diagonal, between ``low`` and ``high`` (units of the setting), on a log scale when
-    ``log``. Only settings read at run time by the calibratable C (no structural ones)."""
+    ``log``. Only settings read at run time by the calibratable C (no structural ones); ``when``
+    (of the estimator's settings) says whether the configured options read it."""
 
     low: float
     high: float
     log: bool = True
+    when: Callable[[Mapping[str, Any]], bool] | None = None
+
+    def applies(self, settings: Mapping[str, Any]) -> bool:
+        """Whether the generated code of ``settings`` reads this setting."""
+        return self.when is None or self.when(settings)
 
 
 IDENTIFIED = {"roll_gradient": "rad/(m/s^2)", "gyro_noise": "rad/s", "ay_noise": "m/s^2",

@@ -80,7 +80,7 @@ def init(config, table, u0, extra: tuple[str, ...] = ()):
     b, a = prefilter(config, table)
     ay_b = ay * b.sum() / a.sum()  # DC steady state of the prefilter
     r_ref = reference_yaw_rate(config, delta, clamp(config, table, vx))
-    r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] else r_ref
+    r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
@@ -109,8 +109,12 @@ def preprocess(config, table, x, u):
     ay_b = (b[0] * ay_m + b[1] * x["ay_m_1"] + b[2] * x["ay_m_2"]
             - a[1] * x["ay_b_1"] - a[2] * x["ay_b_2"])
     timeout = max(1, round(s["reference_timeout"] / config.sample_time))
-    r_k, r_last, r_rej, r_forced = check(r_m, reference_yaw_rate(config, delta, vx),
-                                         s["yaw_rate_band"], x["r_last"], x["r_rejections"], timeout)
+    if s["yaw_rate_check"] == "reference":
+        r_ref, band = reference_yaw_rate(config, delta, vx), s["yaw_rate_band"]
+    else:
+        r_ref = x["r_last"]
+        band = s["yaw_rate_jump"] + s["yaw_acceleration_max"] * config.sample_time * (x["r_rejections"] + 1)
+    r_k, r_last, r_rej, r_forced = check(r_m, r_ref, band, x["r_last"], x["r_rejections"], timeout)
     _, ay_last, ay_rej, ay_forced = check(ay_b, vx * r_k, s["lateral_acceleration_band"],
                                              x["ay_last"], x["ay_rejections"], timeout)
     n = median_length(config, table)

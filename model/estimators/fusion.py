@@ -23,7 +23,13 @@ from model.estimator import (
     make_functions,
 )
 from model.estimators import kf2dof
-from model.estimators.kinematic_dynamic import COVARIANCE, INPUTS, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
+from model.estimators.kinematic_dynamic import (
+    COVARIANCE,
+    INPUTS,
+    KINEMATIC_DYNAMIC_FIELDS,
+    YAW_RATE_CHECK_TUNABLES,
+    KinematicDynamic,
+)
 from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from model.guard import hold
 from model.layout import Layout
@@ -91,6 +97,6 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
-    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0)},
+    **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
     KINEMATIC_DYNAMIC_STATUS,
     {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)

@@ -14,6 +14,7 @@ import casadi as ca
 from model import filters, kalman, signals, status
 from model.bicycle import stability_factor
 from model.calibration import Parameters, matrix
+from model.estimator import Tunable
 from model.estimators import kf2dof
 from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
 from model.layout import Layout, covariance_signals
@@ -28,18 +29,40 @@ DYN, KIN = 0, 1
 STATUS_BITS = ("LOW_SPEED", "INVALID_INPUT", "REFERENCE_SUSPECT")
 """What seed 000's estimators can raise: the hold rule's bits and the reliability checks' time-out."""
 
+YAW_RATE_CHECKS = ("reference", "yaw_acceleration")
 KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
     choice("prefilter", ("printed", "bessel"), "a_y prefilter: the paper's printed "
            "10000/(s^2+200s+10000) or a phase-normalised 2nd-order Bessel at prefilter_omega"),
     positive("prefilter_omega", "rad/s", "Bessel cut-off (prefilter = \"bessel\" only)"),
     positive("median_span", "s", "median window span (odd length 2 round(span/2T) + 1)"),
     positive("yaw_rate_band", "rad/s", "half-width of the credible band around r_ref"),
+    choice("yaw_rate_check", YAW_RATE_CHECKS, "the yaw-rate reliability check: against the "
+           "steady-state bicycle reference r_ref (the paper, A5; wrong at the grip limit, where it "
+           "rejects genuine samples) or, beyond the paper, a physical bound on the yaw "
+           "acceleration: |r - r_last| <= yaw_rate_jump + yaw_acceleration_max (n + 1) T after n "
+           "rejections", default="reference"),
+    positive("yaw_acceleration_max", "rad/s^2", "largest yaw acceleration a car reaches "
+             "(yaw_rate_check = \"yaw_acceleration\" only)", default=5.0),
+    positive("yaw_rate_jump", "rad/s", "sample-to-sample gyro noise allowance "
+             "(yaw_rate_check = \"yaw_acceleration\" only)", default=0.1),
     positive("lateral_acceleration_band", "m/s^2", "half-width of the band around vx r"),
     positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
     ROLL_CORRECTION,
 )
 """Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
+
+
+def _checks_against(kind: str):
+    return lambda settings: settings["yaw_rate_check"] == kind
+
+
+YAW_RATE_CHECK_TUNABLES = {
+    "yaw_rate_band": Tunable(0.05, 1.0, when=_checks_against("reference")),
+    "yaw_acceleration_max": Tunable(1.0, 20.0, when=_checks_against("yaw_acceleration")),
+    "yaw_rate_jump": Tunable(0.03, 0.5, when=_checks_against("yaw_acceleration")),
+}
+"""What ``tune`` may search of the yaw-rate check, for the configured kind of check."""
 
 
 def window(params: Parameters, table: str) -> int:
@@ -134,9 +157,15 @@ class KinematicDynamic:
                                    s["ay_b_2"])
         vx = self.speed(hold(u["vx"], ok["vx"], self.vx_min))
         r_m = hold(u["r"], ok["r"], s["r_last"])
-        r_ref = reference_yaw_rate(self.params, hold(u["delta"], ok["delta"], 0), vx)
-        r_check = filters.reliability_check(r_m, r_ref, settings["yaw_rate_band"], s["r_last"],
-                                            s["r_rejections"], self.timeout)
+        if self.params.numeric.settings(self.table)["yaw_rate_check"] == "reference":
+            r_ref = reference_yaw_rate(self.params, hold(u["delta"], ok["delta"], 0), vx)
+            band = settings["yaw_rate_band"]
+        else:   # beyond the paper: a physical bound on the yaw acceleration since the last valid r
+            r_ref = s["r_last"]
+            band = settings["yaw_rate_jump"] + settings["yaw_acceleration_max"] * self.T * (
+                s["r_rejections"] + 1)
+        r_check = filters.reliability_check(r_m, r_ref, band, s["r_last"], s["r_rejections"],
+                                            self.timeout)
         ay_check = filters.reliability_check(ay_b, vx * r_check.value,
                                              settings["lateral_acceleration_band"], s["ay_last"],
                                              s["ay_rejections"], self.timeout)
@@ -182,6 +211,8 @@ class KinematicDynamic:
         ay0, r0, delta0, vx0 = self.roll_corrected(first["ay"]), first["r"], first["delta"], first["vx"]
         r_ref0 = reference_yaw_rate(self.params, delta0, self.speed(vx0))
         r_last0 = ca.if_else(ca.fabs(r0 - r_ref0) <= self.settings["yaw_rate_band"], r0, r_ref0)
+        if self.params.numeric.settings(self.table)["yaw_rate_check"] == "yaw_acceleration":
+            r_last0 = r0
         ay_b0 = ay0 * self.biquad.dc_gain
         return self.layout.pack({
             "ay_m_1": ay0, "ay_m_2": ay0, "ay_b_1": ay_b0, "ay_b_2": ay_b0,

@@ -35,7 +35,15 @@ from model.estimator import (
     make_schemes,
 )
 from model.estimators import kf2dof
-from model.estimators.kinematic_dynamic import COVARIANCE, DYN, INPUTS, KIN, KINEMATIC_DYNAMIC_FIELDS, KinematicDynamic
+from model.estimators.kinematic_dynamic import (
+    COVARIANCE,
+    DYN,
+    INPUTS,
+    KIN,
+    KINEMATIC_DYNAMIC_FIELDS,
+    YAW_RATE_CHECK_TUNABLES,
+    KinematicDynamic,
+)
 from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from model.layout import Layout
 from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
@@ -201,6 +209,6 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
-    "yaw_rate_band": Tunable(0.05, 1.0), "lateral_acceleration_band": Tunable(1.0, 8.0)},
+    **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
     (*KINEMATIC_DYNAMIC_STATUS, "KINEMATIC_DWELL_LIMITED"),
     {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
