@@ -12,17 +12,22 @@ by at most 100/n (1 - a), far below the limit).
 
 While the model explains the data, m stays near 1 plus the prior's own share; when it no longer
 does (tyres beyond the model's friction, a wrong parameter, an unmodelled disturbance), m rises.
-m > ``residual_limit`` raises the status bit MODEL_INCONSISTENT for as long as it lasts; an
-estimator may also act on the sample it is first raised (the UKFs restart). ``residual_window``
-= 0 switches the monitor off (m stays 0).
+m > ``residual_limit`` raises the status bit MODEL_INCONSISTENT for as long as it lasts and
+``residual_hold`` seconds longer (the error built up while the model failed outlasts the
+innovations, which calm down as soon as the filter has absorbed it); an estimator may also act on
+the sample m first exceeds the limit (the UKFs restart). ``residual_window`` = 0 switches the
+monitor off (no state, no status).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import casadi as ca
 
 from model.estimator import Derived
 from model.schema import Field, diagonal, nonnegative, positive
+from model.signals import Signal
 
 OUTLIER_CAP = 100.0
 """Most one channel's squared innovation counts, in sensor variances (a 10-sigma outlier)."""
@@ -39,11 +44,25 @@ def fields(channels: tuple[str, ...]) -> tuple[Field, ...]:
         nonnegative("residual_window", "s", "beyond the papers: time constant of the consistency "
                     "monitor's mean of the squared innovations; 0 = no monitor", default=0.0),
         positive("residual_limit", "-", "mean squared innovation, in units of the sensor noise "
-                 "variance, above which status MODEL_INCONSISTENT is raised", default=9.0),
+                 "variance, above which status MODEL_INCONSISTENT is raised", default=6.0),
+        nonnegative("residual_hold", "s", "how long MODEL_INCONSISTENT stays raised after the mean "
+                    "fell below the limit", default=0.0),
         diagonal("sensor_noise", len(channels), f"[{', '.join(channels)}]: {units}",
                  "the sensors' noise, 1 sigma (the consistency monitor's yardstick)",
                  default=tuple(TABLE_2[c] for c in channels)),
     )
+
+
+LINEAR_RANGE = nonnegative(
+    "linear_range", "m/s^2", "beyond the papers: above this |a_y| the linear tyre model no longer "
+    "holds and the status says BEYOND_LINEAR_RANGE (about half the friction limit: 4 for a dry "
+    "road); 0 = never", default=0.0)
+"""For estimators built on a linear tyre model."""
+
+
+def beyond_linear_range(ay, settings):
+    """1 when |``ay``| exceeds ``linear_range`` (> 0)."""
+    return ca.logic_and(settings["linear_range"] > 0, ca.fabs(ay) > settings["linear_range"])
 
 
 def derived(channels: tuple[str, ...]) -> dict[str, Derived]:
@@ -56,6 +75,35 @@ def enabled(numeric_settings) -> bool:
     """Whether the generated code has the monitor (structural: ``residual_window`` > 0 when it is
     generated, also in calibratable mode)."""
     return numeric_settings["residual_window"] > 0.0
+
+
+STATES = (
+    Signal("residual", "-", "consistency monitor: mean squared innovation in sensor variances"),
+    Signal("residual_hold_left", "-", "consistency monitor: samples MODEL_INCONSISTENT stays raised"),
+)
+"""The monitor's state entries (when it is on), 0 at init."""
+
+
+@dataclass(frozen=True)
+class Monitored:
+    """One step of the monitor: the new state entries, whether the estimate is suspect (status
+    MODEL_INCONSISTENT) and whether the mean first exceeded the limit on this sample."""
+
+    updates: dict
+    suspect: object
+    first: object
+
+
+def monitor(s: dict, innovation, settings, sample_time: float) -> Monitored:
+    """The monitor's step from the state entries ``s`` (:data:`STATES`) and the prior
+    ``innovation``; call only when :func:`enabled`."""
+    mean = averaged(s["residual"], innovation, settings, sample_time)
+    now, before = inconsistent(mean, settings), inconsistent(s["residual"], settings)
+    hold_samples = ca.floor(settings["residual_hold"] / sample_time + 0.5)
+    left = ca.if_else(now, hold_samples, ca.fmax(s["residual_hold_left"] - 1, 0))
+    return Monitored({"residual": mean, "residual_hold_left": left},
+                     ca.logic_or(now, s["residual_hold_left"] > 0),
+                     ca.logic_and(now, ca.logic_not(before)))
 
 
 def averaged(previous, innovation, settings, sample_time: float):

@@ -13,6 +13,7 @@ COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
 KINEMATIC_DWELL_LIMITED = 64
 MODEL_INCONSISTENT = 128
+BEYOND_LINEAR_RANGE = 256
 
 STATUS_BITS = {
     "LOW_SPEED": (LOW_SPEED, "vx below the low-speed limit (or not yet back above the resume speed): "
@@ -35,5 +36,7 @@ STATUS_BITS = {
     "MODEL_INCONSISTENT": (MODEL_INCONSISTENT, "the measurements disagree with the model's predictions "
                                                "(mean squared innovation above residual_limit sensor "
                                                "variances over residual_window): the estimate is suspect"),
+    "BEYOND_LINEAR_RANGE": (BEYOND_LINEAR_RANGE, "the lateral acceleration is beyond linear_range, where the estimator's linear "
+                                                 "tyre model no longer holds: the estimate is suspect"),
 }
 """Every status bit by name: (value, meaning)."""

@@ -66,7 +66,7 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
 
     fn = dynamic_update(baked(config))
     assert fn.name_in() == ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
-    assert fn.name_out() == ["x_next", "P_next", "beta"]
+    assert fn.name_out() == ["x_next", "P_next", "beta", "innovation"]
     s = config.settings("kf2dof")
     x, P = np.array([0.1, 0.05]), np.array([[0.02, 0.001], [0.001, 0.003]])
     out = fn(x=x, P=[P[0, 0], P[0, 1], P[1, 1]], delta_prev=0.01, vx_prev=20.0, delta=0.012,

@@ -114,6 +114,22 @@ def residual_mean(previous, innovation, settings, T):
     return keep * previous + (1 - keep) * ratio
 
 
+MONITOR_STATES = ("residual", "residual_hold_left")
+"""The consistency monitor's state entries (model.consistency.STATES)."""
+
+
+def residual_monitor(x, innovation, settings, T):
+    """(new monitor entries, suspect, first) of the consistency monitor: the mean (residual_mean),
+    the flag raised above residual_limit and held residual_hold seconds after, and whether the
+    mean first exceeded the limit on this sample."""
+    mean = residual_mean(x["residual"], innovation, settings, T)
+    now, before = mean > settings["residual_limit"], x["residual"] > settings["residual_limit"]
+    hold = math.floor(settings["residual_hold"] / T + 0.5)
+    left = hold if now else max(x["residual_hold_left"] - 1, 0)
+    return ({"residual": mean, "residual_hold_left": float(left)},
+            now or x["residual_hold_left"] > 0, now and not before)
+
+
 def roll_corrected(ay_measured, roll_gradient):
     """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
     to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""

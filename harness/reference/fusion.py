@@ -6,30 +6,44 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.reference import kinematic_dynamic
+from harness.reference import blocks, kinematic_dynamic
 from harness.reference.kinematic_dynamic import DYN, INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
 
 
+MODEL_INCONSISTENT = 128
+
+
+def extra(config) -> tuple[str, ...]:
+    """fusion's own state entries: the consistency monitor's mean when it is on."""
+    return blocks.MONITOR_STATES if config.settings(TABLE)["residual_window"] > 0 else ()
+
+
 def names(config):
-    return INPUTS, kinematic_dynamic.state_names(config, TABLE), OUTPUTS
+    return INPUTS, kinematic_dynamic.state_names(config, TABLE, extra(config)), OUTPUTS
 
 
 def init(config, u0):
-    return kinematic_dynamic.init(config, TABLE, u0)
+    return kinematic_dynamic.init(config, TABLE, u0, extra(config))
 
 
 def step(config, state, u):
-    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _fuse(config, *args))
+    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _fuse(config, *args),
+                                  extra(config))
 
 
 def _fuse(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
-    xk, P = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"], x["vx_prev"], u, r_k)
+    xk, P, innovation = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
+                                                 x["vx_prev"], u, r_k)
+    monitor = {}
+    if "residual" in x:                       # the consistency monitor (beyond the paper)
+        monitor, suspect, _ = blocks.residual_monitor(x, innovation, s, T)
+        status |= MODEL_INCONSISTENT if suspect else 0
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
@@ -37,5 +51,5 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
             + (1 - w) * kinematic_dynamic.beta(config, TABLE, xk[0], u[1]))
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
-           "holding": 0.0, "mode": DYN}
+           "holding": 0.0, "mode": DYN, **monitor}
     return new, [beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]

@@ -11,13 +11,18 @@ import numpy as np
 from harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
-STATES = ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding")
 OUTPUTS = ("beta", "vy", "r", "status")
+MODEL_INCONSISTENT, BEYOND_LINEAR_RANGE = 128, 256
+
+
+def _monitored(config) -> bool:
+    return _settings(config)["residual_window"] > 0
 
 
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
-    return INPUTS, STATES, OUTPUTS
+    return (INPUTS, ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
+                     *(blocks.MONITOR_STATES if _monitored(config) else ()), "holding"), OUTPUTS)
 
 
 def _settings(config):
@@ -30,7 +35,7 @@ def init(config, u0) -> np.ndarray:
                                          s["vx_resume"])
     P0 = np.array(s["initial_covariance"])
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
-                     holding])
+                     *([0.0] * len(blocks.MONITOR_STATES) if _monitored(config) else []), holding])
 
 
 def step(config, state, u):
@@ -38,13 +43,15 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(INPUTS, u))
-    vy, r, p11, p12, p22, delta_prev, vx_prev, holding = state
+    monitor = list(state[7:-1])                       # the monitor's entries when it is on
+    vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
+    holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                          holding > 0.5)
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])
-        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep, 1.0])
+        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep, *monitor, 1.0])
         return new, np.array([0.0, 0.0, r, float(status)])
 
     def clamp(v):
@@ -59,6 +66,14 @@ def step(config, state, u):
     vx = clamp(inputs["vx"])
     _, _, C, D = blocks.bicycle(config.vehicle, vx)
     z = np.array([inputs["ay"], inputs["r"]])
+    innovation = z - C @ x - D @ np.array([inputs["delta"]])
     x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
-    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, 0.0])
+    if s["linear_range"] > 0 and abs(inputs["ay"]) > s["linear_range"]:
+        status |= BEYOND_LINEAR_RANGE
+    if monitor:
+        updates, suspect, _ = blocks.residual_monitor(dict(zip(blocks.MONITOR_STATES, monitor)),
+                                                      innovation, s, T)
+        monitor = [updates[k] for k in blocks.MONITOR_STATES]
+        status |= MODEL_INCONSISTENT if suspect else 0
+    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *monitor, 0.0])
     return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

@@ -127,7 +127,8 @@ def preprocess(config, table, x, u):
 
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
-    """The 2-DOF KF: predict with the previous inputs, update with [a_y,m, r_k]."""
+    """The 2-DOF KF: predict with the previous inputs, update with z = [a_y,m, r_k]; returns
+    (x, P, the prior innovation z - C x- - D delta)."""
     s = config.settings(table)
     T = config.sample_time
     A, B, _, _ = blocks.bicycle(config.vehicle, clamp(config, table, vx_prev))
@@ -135,9 +136,10 @@ def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
     xk, P = blocks.kf_predict(np.array([vy, r]), P, Phi, Gamma, np.array([delta_prev]),
                               np.array(s["process_noise"]) * T)
     _, _, C, D = blocks.bicycle(config.vehicle, clamp(config, table, u[1]))
-    return blocks.kf_update(xk, P, np.array([roll_corrected(config, table, u[2]), r_k]), C, D,
-                            np.array([u[0]]),
-                            np.array(s["measurement_noise"]))
+    z = np.array([roll_corrected(config, table, u[2]), r_k])
+    innovation = z - C @ xk - D @ np.array([u[0]])
+    x_new, P_new = blocks.kf_update(xk, P, z, C, D, np.array([u[0]]), np.array(s["measurement_noise"]))
+    return x_new, P_new, innovation
 
 
 def beta(config, table, vy, vx):

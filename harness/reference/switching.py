@@ -62,7 +62,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         else:
             vy0, r0 = x["vy"], x["r"]
             P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
-        xk, P = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
+        xk, P, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
     new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)

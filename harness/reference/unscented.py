@@ -43,7 +43,7 @@ class Variant:
         wheels = WHEEL_SPEEDS if s["longitudinal_force"] == "wheel_speeds" else ()
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
-        monitor = ("residual",) if s["residual_window"] > 0 else ()
+        monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
         return (("delta", "vx", "ax", "ay", "r", *wheels),
                 (*STATE, *COVARIANCE, *extra, *monitor, "holding"), OUTPUTS)
 
@@ -53,7 +53,8 @@ class Variant:
         first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"])
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
-                 if self.adaptive else []) + ([0.0] if s["residual_window"] > 0 else [])
+                 if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
+                                              if s["residual_window"] > 0 else [])
         return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra
                         + [2 * holding], dtype=float)
 
@@ -132,16 +133,15 @@ class Variant:
         status |= COVARIANCE_REPAIRED if repaired else 0
         first_inconsistent = False
         if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
-            new["residual"] = blocks.residual_mean(x["residual"], eps, s, config.sample_time)
-            if new["residual"] > s["residual_limit"]:
-                status |= MODEL_INCONSISTENT
-                first_inconsistent = not x["residual"] > s["residual_limit"]
+            monitor, suspect, first_inconsistent = blocks.residual_monitor(x, eps, s, config.sample_time)
+            new.update(monitor)
+            status |= MODEL_INCONSISTENT if suspect else 0
         speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
         if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
                 or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)
                 or first_inconsistent):
             new = dict(zip(state_names, self.init(config, u)), holding=0.0,   # restart here
-                       **({"residual": new["residual"]} if "residual" in new else {}))
+                       **{k: new[k] for k in blocks.MONITOR_STATES if k in new})
             X_new = np.array([new[k] for k in STATE], dtype=LD)
             status |= FILTER_RESTARTED
         output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]

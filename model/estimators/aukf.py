@@ -108,8 +108,6 @@ MEASURED = (4, 5, 2)
 """Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
 CHANNELS = ("ax", "ay", "r")
 """The measured channels, in Z's order (the consistency monitor's sensor_noise order)."""
-RESIDUAL = Signal("residual", "-", "consistency monitor: mean squared innovation in sensor "
-                                   "variances (model.consistency)")
 Q_FLOOR = 1e-3
 """Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
 _BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
@@ -141,7 +139,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
            *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
-        *((RESIDUAL,) if consistency.enabled(settings) else ()),
+        *(consistency.STATES if consistency.enabled(settings) else ()),
         signals.HOLDING_REASON,
     ))
     outputs = Layout((
@@ -253,7 +251,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
-        **({"residual": ca.SX(0)} if monitored else {}),
+        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
         "holding": 2 * holding,
     })
     # the first sample after a low-speed hold (holding = 2) restarts the filter from itself
@@ -319,17 +317,17 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     # beyond the spec: a monitor of the innovations; the sample it first fires restarts the filter
     suspect = rising = ca.SX(0)
     if monitored:
-        residual = consistency.averaged(s["residual"], innovation, settings, config.sample_time)
-        suspect = ca.logic_and(active, consistency.inconsistent(residual, settings))
-        rising = ca.logic_and(suspect, ca.logic_not(consistency.inconsistent(s["residual"], settings)))
-        extra["residual"] = residual
+        check = consistency.monitor(s, innovation, settings, config.sample_time)
+        suspect = ca.logic_and(active, check.suspect)
+        rising = ca.logic_and(active, check.first)
+        extra.update(check.updates)
 
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, "holding": ca.SX(0)})
     held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
     restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
-                           **({"residual": extra["residual"]} if monitored else {}),
+                           **({e.name: extra[e.name] for e in consistency.STATES} if monitored else {}),
                            "holding": ca.SX(0)})
     restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), rising))
     x_out = ca.if_else(restarted, restart[:N], x_new)

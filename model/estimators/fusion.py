@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import signals
+from model import consistency, signals, status
 from model.calibration import Parameters
 from model.estimator import (
     KF_MEASUREMENT_NOISE,
@@ -41,7 +41,8 @@ NAME = "fusion"
 SCHEMA = EstimatorSchema(
     fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
-                     "integrator towards the KF")),
+                     "integrator towards the KF"),
+            *consistency.fields(kf2dof.CHANNELS)),
     rules=LOW_SPEED_RULES)
 
 OUTPUTS = Layout((
@@ -55,7 +56,8 @@ OUTPUTS = Layout((
 
 def build(params: Parameters) -> Estimator:
     """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
-    seed = KinematicDynamic(params, NAME)
+    monitored = consistency.enabled(params.numeric.settings(NAME))
+    seed = KinematicDynamic(params, NAME, consistency.STATES if monitored else ())
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
@@ -75,9 +77,14 @@ def build(params: Parameters) -> Estimator:
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta = weight * ca.atan2(vy_kin, vx) + (1 - weight) * result["beta"]
+    code, monitor = pre.status, {}
+    if monitored:   # beyond the paper: the consistency monitor of the KF's innovations
+        check = consistency.monitor(s, result["innovation"], seed.settings, T)
+        monitor = check.updates
+        code = code + ca.if_else(ca.logic_and(active, check.suspect), status.MODEL_INCONSISTENT, 0)
     running = seed.advanced({**s, **pre.updates}, u, {
         "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
-        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}})
+        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor})
     holding = seed.held({**s, **pre.updates}, u)
     next_state = ca.if_else(active, layout.pack(running), layout.pack(holding))
     output = OUTPUTS.pack({
@@ -85,7 +92,7 @@ def build(params: Parameters) -> Estimator:
         "vy": ca.if_else(active, weight * vy_kin + (1 - weight) * vy_kf, 0),
         "r": ca.if_else(active, pre.r_checked, s["r_last"]),
         "weight": ca.if_else(active, weight, 0),
-        "status": pre.status,
+        "status": code,
     })
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, output, params)
@@ -98,5 +105,5 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
     "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
     **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
-    KINEMATIC_DYNAMIC_STATUS,
-    {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
+    (*KINEMATIC_DYNAMIC_STATUS, "MODEL_INCONSISTENT"),
+    {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)

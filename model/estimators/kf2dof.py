@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import discretize, kalman, signals
+from model import consistency, discretize, kalman, signals, status
 from model.bicycle import bicycle_matrices, state_matrix_norm_bound
 from model.calibration import Parameters, matrix
 from model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, SingleStep, Tunable, make_functions
@@ -29,19 +29,25 @@ from model.signals import Signal
 
 NAME = "kf2dof"
 
-SCHEMA = EstimatorSchema(fields=KF_FIELDS, rules=LOW_SPEED_RULES)
+CHANNELS = ("ay", "r")
+"""The KF's measured channels (the consistency monitor's sensor_noise order)."""
+SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *consistency.fields(CHANNELS), consistency.LINEAR_RANGE),
+                         rules=LOW_SPEED_RULES)
 
 INPUTS = Layout(signals.inputs("delta", "vx", "ay", "r"))
 
 _ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
-STATES = Layout((
-    *_ESTIMATES,
-    *covariance_signals("P", _ESTIMATES),
-    Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
-    Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
-    signals.HOLDING,
-))
+def states(settings) -> Layout:
+    """The state layout; the monitor's entry only when it is on."""
+    return Layout((
+        *_ESTIMATES,
+        *covariance_signals("P", _ESTIMATES),
+        Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
+        Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
+        *(consistency.STATES if consistency.enabled(settings) else ()),
+        signals.HOLDING,
+    ))
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, atan2(vy, vx)"),
@@ -59,7 +65,8 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
     With calibratable parameters, a last input ``params`` carries them. ``table`` names the
     [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
-    Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad).
+    Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad), ``innovation`` =
+    z - C x- - D delta (the prior innovation of [a_y, r], for the consistency monitor).
     Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
     are plausible. Reused by every estimator with a dynamic (KF) scheme.
     """
@@ -83,14 +90,15 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     x_pred, P_pred = kalman.predict(x, kalman.unpack_symmetric(P_packed, 2), Phi, Gamma,
                                     delta_prev, Qd)
     _, _, C, D = bicycle_matrices(vehicle, model_speed(vx))
-    x_new, P_new, _ = kalman.update_joseph(x_pred, P_pred, ca.vertcat(ay, r_meas), C, D, delta, R)
+    x_new, P_new, innovation = kalman.update_joseph(x_pred, P_pred, ca.vertcat(ay, r_meas), C, D,
+                                                    delta, R)
     names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
     return ca.Function(
         f"{table}_dynamic_update",
         [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
-        [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx))],
+        [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx)), innovation],
         names + ["params"] * params.calibratable,
-        ["x_next", "P_next", "beta"],
+        ["x_next", "P_next", "beta", "innovation"],
     )
 
 
@@ -125,8 +133,10 @@ def build(params: Parameters) -> Estimator:
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     update = dynamic_update(params)
+    monitored = consistency.enabled(params.numeric.settings(NAME))
+    layout = states(params.numeric.settings(NAME))
 
-    state, s = STATES.symbols("state")
+    state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
     guard = input_guard(u, limits, vx_min, vx_resume, s["holding"])
     ok = guard.plausible
@@ -145,35 +155,46 @@ def build(params: Parameters) -> Estimator:
     vy_next = ca.if_else(active, result["x_next"][0], 0)
     r_next = ca.if_else(active, result["x_next"][1], s["r"])
     P_next = ca.if_else(active, result["P_next"], P0)
-    next_state = STATES.pack({
+    code = guard.status + ca.if_else(
+        ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
+        status.BEYOND_LINEAR_RANGE, 0)
+    monitor = {}
+    if monitored:
+        check = consistency.monitor(s, result["innovation"], settings, config.sample_time)
+        monitor = {k: ca.if_else(active, v, s[k]) for k, v in check.updates.items()}
+        code = code + ca.if_else(ca.logic_and(active, check.suspect), status.MODEL_INCONSISTENT, 0)
+    next_state = layout.pack({
         "vy": vy_next,
         "r": r_next,
         **{name: P_next[i] for i, name in enumerate(_COVARIANCE)},
         **previous_inputs(u, ok, s),
+        **monitor,
         "holding": ca.if_else(active, 0, 1),
     })
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, result["beta"], 0),
         "vy": vy_next,
         "r": r_next,
-        "status": guard.status,
+        "status": code,
     })
 
     first, holding = first_sample(u, limits, vx_min, vx_resume)
-    init_state = STATES.pack({
+    init_state = layout.pack({
         "vy": ca.SX(0),
         "r": first["r"],
         **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
+        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
         "holding": holding,
     })
-    init, step = make_functions(NAME, INPUTS, STATES, OUTPUTS, inputs, state, init_state,
+    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
-                     INPUTS, STATES, OUTPUTS, init, SingleStep(step), params, zoh_note(params))
+                     INPUTS, layout, OUTPUTS, init, SingleStep(step), params, zoh_note(params))
 
 
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {"process_noise": Tunable(1e-4, 1e2),
                                                 "measurement_noise": Tunable(1e-6, 1e1)},
-                          derived=KF_MEASUREMENT_NOISE),)
+                          ("LOW_SPEED", "INVALID_INPUT", "MODEL_INCONSISTENT", "BEYOND_LINEAR_RANGE"),
+                          derived={**KF_MEASUREMENT_NOISE, **consistency.derived(CHANNELS)}),)
