@@ -36,7 +36,8 @@ STATUS_BITS = {
     "MODEL_INCONSISTENT": (MODEL_INCONSISTENT, "the measurements disagree with the model's predictions "
                                                "(mean squared innovation above residual_limit sensor "
                                                "variances over residual_window): the estimate is suspect"),
-    "BEYOND_LINEAR_RANGE": (BEYOND_LINEAR_RANGE, "the lateral acceleration is beyond linear_range, where the estimator's linear "
-                                                 "tyre model no longer holds: the estimate is suspect"),
+    "BEYOND_LINEAR_RANGE": (BEYOND_LINEAR_RANGE, "the lateral acceleration is beyond linear_range, where "
+                                                 "the estimator's linear tyre model no longer holds: the "
+                                                 "estimate is suspect"),
 }
 """Every status bit by name: (value, meaning)."""

@@ -20,6 +20,7 @@ RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
 STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
           "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
 OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
+MODEL_INCONSISTENT = 128
 KINEMATIC = ("beta_kin", "ax_f", "ay_f", "r_f", "delta_f", "beta_f")
 """States of the ``kinematic_slip`` regressor: its integral method (re-seeded from the fused beta
 only while lambda = 0) and the low-passed a_x, a_y, r, delta and beta_kin."""
@@ -30,8 +31,10 @@ def names(config):
 
 
 def states(config) -> tuple[str, ...]:
-    kinematic = config.settings(TABLE)["stiffness_regressor"] == "kinematic_slip"
-    return (*STATES, *(KINEMATIC if kinematic else ()))
+    s = config.settings(TABLE)
+    kinematic = s["stiffness_regressor"] == "kinematic_slip"
+    monitor = s["residual_window"] > 0
+    return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()))
 
 
 def _loads(v, ax, ay):
@@ -95,9 +98,10 @@ def init(config, u0):
     p = s["rls_initial_covariance"]
     kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                  "delta_f": first["delta"], "beta_f": 0.0}
+    extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
                      first["r"], 0.0, 0.0, 0.0, holding,
-                     *(kinematic[k] for k in states(config)[len(STATES):])])
+                     *(extra[k] for k in states(config)[len(STATES):])])
 
 
 def step(config, state, u):
@@ -172,8 +176,12 @@ def step(config, state, u):
     Pe = blocks.unpacked([x[k] for k in EKF_P], 2)
     F = np.eye(2) + T * _jacobian(v, delta, vx, x["c_front"], x["c_rear"])
     P_pred = F @ Pe @ F.T + np.array(s["process_noise"]) * T
+    innovation = np.array([r - x_pred[1]])
     xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
                               np.zeros((1, 1)), np.zeros(1), np.array([[s["measurement_noise"]]]))
+    if s["residual_window"] > 0:            # the consistency monitor (beyond the paper)
+        monitor, suspect_ekf, _ = blocks.residual_monitor(x, innovation, s, T)
+        new |= monitor
 
     # weight [37], fusion
     rate = max(abs(cf - x["c_front"]) / (T * v["cornering_stiffness_front"]),
@@ -184,6 +192,8 @@ def step(config, state, u):
     else:
         weight = 1.0
     beta = (1 - weight) * xe[0] + weight * beta_int
+    if s["residual_window"] > 0 and suspect_ekf and weight < 0.5:   # the EKF carries the output
+        status |= MODEL_INCONSISTENT
 
     new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
             "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,

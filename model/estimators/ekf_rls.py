@@ -38,7 +38,7 @@ import math
 
 import casadi as ca
 
-from model import filters, kalman, signals
+from model import consistency, filters, kalman, signals, status
 from model.bicycle import GRAVITY
 from model.calibration import Parameters, matrix
 from model.estimator import GYRO_VARIANCE, ROLL_GRADIENT, Definition, Estimator, SingleStep, Tunable, make_functions
@@ -61,6 +61,8 @@ from model.signals import Signal
 
 NAME = "ekf_rls"
 
+CHANNELS = ("r",)
+"""The EKF's measured channel (the consistency monitor's sensor_noise)."""
 SCHEMA = EstimatorSchema(
     fields=(
         choice("stiffness", ("rls", "constant"), "cornering stiffness: estimated online (the "
@@ -87,6 +89,7 @@ SCHEMA = EstimatorSchema(
         nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         ROLL_CORRECTION,
+        *consistency.fields(CHANNELS),
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
@@ -178,11 +181,12 @@ def nominal_c0(vehicle):
         vehicle["mass"] * GRAVITY)
 
 
-def states(regressor: str) -> Layout:
-    """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals."""
-    if regressor == "kinematic_slip":
-        return Layout((*STATES.signals, *KINEMATIC_STATES.signals))
-    return STATES
+def states(settings) -> Layout:
+    """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals, the
+    consistency monitor its entries."""
+    kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
+    monitor = consistency.STATES if consistency.enabled(settings) else ()
+    return Layout((*STATES.signals, *kinematic, *monitor))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -277,7 +281,8 @@ def build(params: Parameters) -> Estimator:
     settings = config.settings(NAME)
     choices = params.numeric.settings(NAME)
     regressor = choices["stiffness_regressor"]
-    layout = states(regressor)
+    layout = states(choices)
+    monitored = consistency.enabled(choices)
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
     c_front_nom = vehicle["cornering_stiffness_front"]
     c_rear_nom = vehicle["cornering_stiffness_rear"]
@@ -331,7 +336,7 @@ def build(params: Parameters) -> Estimator:
     x_pred, P_pred = kalman.ekf_predict(
         x + T * f, kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _EKF]), 2),
         ca.SX.eye(2) + T * jacobian, matrix(settings["process_noise"]) * T)
-    x_ekf, P_ekf, _ = kalman.update_joseph(x_pred, P_pred, r_m, ca.horzcat(0, 1),
+    x_ekf, P_ekf, innovation = kalman.update_joseph(x_pred, P_pred, r_m, ca.horzcat(0, 1),
                                            ca.SX.zeros(1, 1), ca.SX(0),
                                            settings["measurement_noise"])
 
@@ -347,6 +352,13 @@ def build(params: Parameters) -> Estimator:
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
+    code, monitor = guard.status, {}
+    if monitored:   # beyond the paper: the consistency monitor of the EKF's yaw-rate innovation
+        check = consistency.monitor(s, innovation, settings, T)
+        monitor = {n: keep(value, n) for n, value in check.updates.items()}
+        # ... which concerns the output only while the EKF carries most of it (lambda < 1/2)
+        suspect = ca.logic_and(ca.logic_and(active, check.suspect), weight < 0.5)
+        code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
     next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
@@ -357,12 +369,13 @@ def build(params: Parameters) -> Estimator:
         "indicator": keep(indicator, "indicator"), "beta": keep(beta, "beta"),
         "holding": ca.if_else(active, 0, 1),
         **{n: keep(value, n) for n, value in kinematic.items()},
+        **monitor,
     })
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, beta, 0), "beta_ekf": ca.if_else(active, x_ekf[0], 0),
         "beta_int": ca.if_else(active, beta_int, 0), "r": keep(x_ekf[1], "r_ekf"),
         "weight": ca.if_else(active, weight, 0), "c_front": keep(c_front, "c_front"),
-        "c_rear": keep(c_rear, "c_rear"), "status": guard.status,
+        "c_rear": keep(c_rear, "c_rear"), "status": code,
     })
 
     # ---- initialisation (§2.7) -------------------------------------------------------------------
@@ -384,6 +397,7 @@ def build(params: Parameters) -> Estimator:
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
+        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
     })
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)
@@ -402,4 +416,5 @@ DEFINITIONS = (Definition(NAME, build, SCHEMA, {
     "process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
     "forgetting_factor": Tunable(0.95, 0.9999, log=False),
     "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)},
-    derived={**ROLL_GRADIENT, **GYRO_VARIANCE}),)
+    ("LOW_SPEED", "INVALID_INPUT", "MODEL_INCONSISTENT"),
+    derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)
