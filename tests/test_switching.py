@@ -143,7 +143,8 @@ def with_hysteresis(vehicle_text, value):
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
 @pytest.mark.parametrize("table, key, value", [
     ("switching", "hysteresis", 0.2), ("switching", "adaptive_memory", 5.0),
-    ("switching", "yaw_rate_check", "reference"), ("fusion", "yaw_rate_check", "yaw_acceleration")])
+    ("switching", "yaw_rate_check", "reference"), ("fusion", "yaw_rate_check", "yaw_acceleration"),
+    ("switching", "offset_memory", 2.0)])
 def test_options_are_equivalent_to_the_reference(vehicle_text, params, table, key, value):
     """A7/A10 beyond the paper, and the yaw-rate check the shipped file does not use: the C matches
     the reference step by step and in the mode sequence, on the HIL-like scenario, the continuous
@@ -154,6 +155,22 @@ def test_options_are_equivalent_to_the_reference(vehicle_text, params, table, ke
     cases = (Case.of("hil_sine", duration=20.0), Case.of("continuous_dlc"), Case.of("fishhook"))
     for result in verify_estimator(config, table, cases, params=params):
         assert result.ok, result
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("table, key, value", [
+    ("switching", "yaw_rate_check", "reference"), ("fusion", "yaw_rate_check", "yaw_acceleration"),
+    ("switching", "offset_memory", 2.0)])
+def test_options_are_equivalent_to_the_reference_in_float(vehicle_text, table, key, value):
+    """The same options in float (and calibratable float): the C matches the reference within the
+    float tolerance."""
+    from harness.verify import verify_estimator
+
+    config = with_option(vehicle_text, key, value, table)
+    cases = (Case.of("continuous_dlc"), Case.of("fishhook", bias=True))
+    for params in ("baked", "calibratable"):
+        for result in verify_estimator(config, table, cases, real="float", params=params):
+            assert result.ok, result
 
 
 def test_the_yaw_acceleration_check_keeps_genuine_samples_at_the_limit(vehicle_text):
@@ -250,3 +267,19 @@ def test_hysteresis_must_be_below_the_threshold(vehicle_text):
     with pytest.raises(ParameterError, match=r"hysteresis = 1.5: expected .* below threshold"):
         parse_vehicle(vehicle_text.replace("hysteresis = 0.0 ", "hysteresis = 1.5 "), "h.toml",
                       "c_class")
+
+
+def test_the_learned_offset_converges_to_the_sensor_biases(vehicle_text):
+    """Beyond the paper: in straight driving the learned offset c tends to what the biases add to
+    a_y - r v_x: the roll-corrected accelerometer bias minus v_x times the gyro bias."""
+    config = with_option(vehicle_text, "offset_memory", 2.0)
+    est = build("switching", config)
+    log = Case.of("step_steer", bias=True, t_step=8.0, duration=8.5).simulate(config, 100.0)
+    _, states = load_estimator(est, render(config, "switching")).run(log.matrix(est.inputs.names))
+    settings, sensors = config.settings("switching"), config.sensors
+    straight = log["t"] < 7.9
+    vx = float(np.mean(log["vx"][straight]))
+    expected = sensors["accel_bias"] / (1 + 9.81 * settings["roll_gradient"]) - vx * sensors["gyro_bias"]
+    learned = states[int(np.flatnonzero(straight)[-1]), est.states.index("kin_offset")]
+    assert learned == pytest.approx(expected, abs=0.03)
+    assert abs(expected) > 0.3

@@ -20,7 +20,8 @@ def extra(config) -> tuple[str, ...]:
     """Own state entries: the remembered peak |a_y,f| (A10 on), the kinematic dwell count."""
     s = config.settings(TABLE)
     return (*(("ay_peak",) if s["adaptive_memory"] > 0 else ()),
-            *(("kin_samples",) if s["kinematic_max_dwell"] > 0 else ()))
+            *(("kin_samples",) if s["kinematic_max_dwell"] > 0 else ()),
+            *(("kin_offset",) if s["offset_memory"] > 0 else ()))
 
 
 def names(config):
@@ -43,6 +44,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         peak = max(abs(ay_f), x["ay_peak"] * math.exp(-config.sample_time / s["adaptive_memory"]))
         threshold = max(threshold, min(s["adaptive_fraction"] * peak, s["adaptive_max"]))
         new["ay_peak"] = peak
+    offset = x.get("kin_offset", 0.0)
     hysteresis = s["hysteresis"] if x["mode"] == KIN else -s["hysteresis"]        # A7 option
     mode = KIN if abs(ay_f) > threshold - hysteresis else DYN
     if s["kinematic_max_dwell"] > 0:                        # beyond the paper: bounded kinematic dwell
@@ -52,9 +54,13 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
             status += KINEMATIC_DWELL_LIMITED
         new["kin_samples"] = x["kin_samples"] + (1.0 if mode == KIN else 0.0) if above else 0.0
     new["mode"] = mode
+    straight = abs(ay_f - offset) < s["offset_band"] and abs(r_k * u[1]) < s["offset_band"]
+    if s["offset_memory"] > 0 and mode == DYN and straight:     # beyond the paper: learn the offset
+        gain = 1 - math.exp(-config.sample_time / s["offset_memory"])
+        new["kin_offset"] = offset + gain * (new["ay_last"] - new["r_last"] * u[1] - offset)
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]
-        vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"])    # [E14]
+        vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)  # [E14]
         new["vy_kin"] = vy = vy_kin
     else:
         if x["mode"] == KIN:                                                           # [E26]

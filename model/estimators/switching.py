@@ -65,6 +65,13 @@ SCHEMA = EstimatorSchema(
                      "threshold (adaptive_memory > 0 only)", default=0.8),
             positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
                      "(adaptive_memory > 0 only)", default=2.5),
+            nonnegative("offset_memory", "s", "beyond the paper: time constant of the learned "
+                        "kinematic offset c, the mean of a_y - r v_x while the dynamic scheme runs "
+                        "(accelerometer and gyro biases; v_y' averages to 0); the kinematic scheme "
+                        "integrates a_y - r v_x - c; 0 = off (the paper)", default=0.0),
+            positive("offset_band", "m/s^2", "the offset is learned only while |a_y,f - c| and |r v_x| "
+                     "are below this (near-straight driving, where v_y' and the roll and lever-arm "
+                     "terms vanish; offset_memory > 0 only)", default=0.5),
             nonnegative("kinematic_max_dwell", "s", "beyond the paper: longest stay in the kinematic "
                         "scheme while |a_y,f| stays above the threshold; then the dynamic scheme takes "
                         "over (status KINEMATIC_DWELL_LIMITED) until |a_y,f| falls below it; 0 = "
@@ -72,15 +79,36 @@ SCHEMA = EstimatorSchema(
     rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 HOLD = 2
 PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
+OFFSET = Signal("kin_offset", "m/s^2", "learned kinematic offset c: mean of a_y - r v_x in the dynamic "
+                                      "scheme (offset_memory)")
 DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f| last fell below the "
                                    "threshold (kinematic_max_dwell)")
 
 
 def extra_states(settings) -> tuple[Signal, ...]:
-    """switching's own state entries: the remembered peak (adaptive threshold on) and the
-    kinematic dwell counter (kinematic_max_dwell > 0)."""
+    """switching's own state entries: the remembered peak (adaptive threshold on), the kinematic
+    dwell counter (kinematic_max_dwell > 0) and the learned offset (offset_memory > 0)."""
     return (*((PEAK,) if settings["adaptive_memory"] > 0.0 else ()),
-            *((DWELL,) if settings["kinematic_max_dwell"] > 0.0 else ()))
+            *((DWELL,) if settings["kinematic_max_dwell"] > 0.0 else ()),
+            *((OFFSET,) if settings["offset_memory"] > 0.0 else ()))
+
+
+def near_straight(seed: KinematicDynamic, active, mode, pre, vx, offset):
+    """Whether the offset learns on this sample: active, the dynamic scheme, and |a_y,f - c| and
+    |r v_x| both below offset_band (straight driving, where a_y - r v_x = v_y' is 0; centred on
+    the learned c, so that an accelerometer bias near the band does not truncate what is learned)."""
+    band = seed.settings["offset_band"]
+    return ca.logic_and(ca.logic_and(active, mode == DYN),
+                        ca.logic_and(ca.fabs(pre.ay_filtered - offset) < band,
+                                     ca.fabs(pre.r_checked * vx) < band))
+
+
+def learned_offset(seed: KinematicDynamic, previous, ay_checked, r_checked, vx, learning):
+    """c_k = c_k-1 + (1 - exp(-T / offset_memory)) (a_y - r v_x - c_k-1) while ``learning`` (the
+    sample is :func:`near_straight`), else c_k-1: what the accelerometer and gyro
+    biases add to the kinematic derivative a_y - r v_x, which is 0 in near-straight driving."""
+    gain = 1 - ca.exp(-seed.T / seed.settings["offset_memory"])
+    return ca.if_else(learning, previous + gain * (ay_checked - r_checked * vx - previous), previous)
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, atan2(vy, vx) of the active scheme"),
@@ -153,6 +181,11 @@ def build(params: Parameters) -> Estimator:
         mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
         extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
+    if OFFSET in seed.extra:
+        extra["kin_offset"] = learned_offset(seed, s["kin_offset"], pre.updates["ay_last"],
+                                             pre.updates["r_last"], u["vx"],
+                                             near_straight(seed, active, mode, pre, u["vx"],
+                                                           s["kin_offset"]))
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
@@ -188,7 +221,8 @@ def build(params: Parameters) -> Estimator:
 
     def kinematic(m, c, v):
         start = ca.if_else(c["mode_prev"] == DYN, m["vy"], m["vy_kin"])
-        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"])
+        offset = m["kin_offset"] if OFFSET in seed.extra else 0
+        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - offset)
         return (seed.advanced(m, v, {"vy_kin": vy_kin}),
                 output(ca.atan2(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))
