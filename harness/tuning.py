@@ -20,7 +20,7 @@ from harness.cluster import Cluster
 from harness.logs import Log
 from harness.run import config_at, estimator_inputs
 from harness.vehicles import with_settings
-from model.calibration import parameters
+from model.calibration import calibration_values
 from model.estimator import Tunable
 from model.estimators import DEFINITIONS, build
 from model.params import ParameterError, VehicleConfig, parse_vehicle
@@ -150,7 +150,7 @@ def evaluate(config: VehicleConfig, name: str, calibration: tuple[float, ...], l
 
 def objective_value(config: VehicleConfig, name: str, logs: Sequence[Log], objective: str = "rmse") -> float:
     """The objective of ``config``'s own settings over ``logs``, mean over the logs (in process)."""
-    calibration = parameters(config, name, "calibratable").values
+    calibration = calibration_values(config, name, build(name, config, "calibratable").parameters.names)
     return float(np.mean([evaluate(config, name, calibration, log, objective) for log in prepare(config, name, logs)]))
 
 
@@ -175,13 +175,15 @@ class TuneResult:
     """The tuned vehicle file."""
 
 
-def _calibration(text: str, source: str, vehicle_name: str, name: str) -> tuple[float, ...] | None:
-    """The calibration vector of a candidate file, or None if its settings break a rule."""
+def _calibration(text: str, source: str, vehicle_name: str, name: str,
+                 names: tuple[str, ...]) -> tuple[float, ...] | None:
+    """The calibration vector (entries ``names``) of a candidate file, or None if its settings
+    break a rule."""
     try:
         config = parse_vehicle(text, source, vehicle_name)
     except ParameterError:
         return None
-    return parameters(config, name, "calibratable").values
+    return calibration_values(config, name, names)
 
 
 def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], holdout: Sequence[Log],
@@ -196,7 +198,7 @@ def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], hold
         raise TuneError(f"estimator {name} declares no tunable settings")
     train_logs, holdout_logs = prepare(config, name, train), prepare(config, name, holdout)
     dims = dimensions(config, name)
-    names = parameters(config, name, "calibratable").names
+    names = build(name, config, "calibratable").parameters.names
     total_runs = trials * len(train_logs) + 2 * (len(train_logs) + len(holdout_logs))
     done = 0
 
@@ -214,7 +216,7 @@ def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], hold
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True, n_startup_trials=min(10, trials))
     study = optuna.create_study(direction="minimize", sampler=sampler)
-    base = parameters(config, name, "calibratable").values
+    base = calibration_values(config, name, names)
     history: list[Trial] = []
     with Cluster(scheduler) as cluster:
         baseline_train, = scores(cluster, [base], train_logs)
@@ -222,11 +224,8 @@ def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], hold
             asked = [study.ask() for _ in range(min(batch, trials - len(history)))]
             points = [{d.label: t.suggest_float(d.label, d.range.low, d.range.high, log=d.range.log)
                        for d in dims} for t in asked]
-            calibrations = [_calibration(settings_text(text, name, config, p), config.source, config.name, name)
-                            for p in points]
-            for c in calibrations:
-                if c is not None and len(c) != len(names):
-                    raise TuneError(f"estimator {name}: a candidate changed the calibration's structure")
+            calibrations = [_calibration(settings_text(text, name, config, p), config.source, config.name,
+                                         name, names) for p in points]
             for trial, point, value in zip(asked, points, scores(cluster, calibrations, train_logs)):
                 if np.isfinite(value):
                     study.tell(trial, value)
@@ -239,7 +238,7 @@ def tune(text: str, config: VehicleConfig, name: str, train: Sequence[Log], hold
         tuned_text = settings_text(text, name, config, {k: rounded(v) for k, v in best.point.items()},
                                    f"tuned by vsegen tune ({objective} over {len(train_logs)} log(s), "
                                    f"{trials} trials, seed {seed})")
-        tuned = _calibration(tuned_text, config.source, config.name, name)
+        tuned = _calibration(tuned_text, config.source, config.name, name, names)
         tuned_train, = scores(cluster, [tuned], train_logs)
         baseline_holdout = tuned_holdout = None
         if holdout_logs:

@@ -36,6 +36,8 @@ class Parameters:
             ``process_noise_12``.
         values: their values (the generated calibration).
         symbols: the symbolic calibration vector, or None when baked.
+        fixed: numeric values that stay baked in calibratable mode because the code reads them
+            only at generation (structural: e.g. a window length) or not at all.
     """
 
     numeric: VehicleConfig
@@ -43,6 +45,7 @@ class Parameters:
     names: tuple[str, ...] = ()
     values: tuple[float, ...] = ()
     symbols: ca.SX | None = None
+    fixed: tuple[str, ...] = ()
 
     @property
     def calibratable(self) -> bool:
@@ -70,12 +73,18 @@ class _Entry(int):
     """Index of a calibration entry (unlike a whole-number setting, which stays baked)."""
 
 
-def calibratable(config: VehicleConfig, estimator: str) -> Parameters:
+def calibratable(config: VehicleConfig, estimator: str,
+                 only: tuple[str, ...] | None = None) -> Parameters:
     """Symbolic parameters for ``estimator``: one entry per numeric value it may read (a symmetric
-    matrix contributes its upper triangle, named ``<key>_<row><column>``)."""
+    matrix contributes its upper triangle, named ``<key>_<row><column>``); with ``only``, just
+    those entries, the other values baked (``Parameters.fixed``)."""
     entries: list[tuple[str, float]] = []
+    fixed: list[str] = []
 
-    def entry(name: str, value: float) -> _Entry:
+    def entry(name: str, value: float) -> _Entry | float:
+        if only is not None and name not in only:
+            fixed.append(name)
+            return value
         entries.append((name, value))
         return _Entry(len(entries) - 1)
 
@@ -104,13 +113,22 @@ def calibratable(config: VehicleConfig, estimator: str) -> Parameters:
 
     config_symbolic = replace(
         config,
-        vehicle=MappingProxyType({k: vector[i] for k, i in vehicle.items()}),
-        limits=MappingProxyType({k: vector[i] for k, i in limits.items()}),
+        vehicle=MappingProxyType({k: symbolic(i) for k, i in vehicle.items()}),
+        limits=MappingProxyType({k: symbolic(i) for k, i in limits.items()}),
         estimators=MappingProxyType({**config.estimators, estimator: MappingProxyType(
             {k: symbolic(v) for k, v in settings.items()})}),
     )
     return Parameters(config, config_symbolic, tuple(n for n, _ in entries),
-                      tuple(v for _, v in entries), vector)
+                      tuple(v for _, v in entries), vector, tuple(fixed))
+
+
+def calibration_values(config: VehicleConfig, estimator: str,
+                       names: tuple[str, ...]) -> tuple[float, ...]:
+    """The values ``config`` gives the calibration entries ``names`` (e.g. a built estimator's
+    ``parameters.names``, for a candidate file of ``vsegen tune``)."""
+    full = calibratable(config, estimator)
+    table = dict(zip(full.names, full.values))
+    return tuple(table[name] for name in names)
 
 
 def parameters(config: VehicleConfig, estimator: str, mode: str) -> Parameters:

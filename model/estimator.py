@@ -223,6 +223,19 @@ class Estimator:
         particle filter."""
         return self.structure.step
 
+    def read_parameters(self) -> tuple[str, ...]:
+        """The calibration entries some Function of the generated code depends on (CasADi's
+        which_depends on the ``params`` input), in calibration order; () when baked."""
+        names = self.parameters.names
+        read: set[int] = set()
+        for function in (self.init, *self.structure.kernel_functions):
+            if "params" not in function.name_in():
+                continue
+            for output in function.name_out():
+                flags = function.which_depends("params", [output], 1, False)
+                read |= {i for i, flag in enumerate(flags) if flag}
+        return tuple(names[i] for i in sorted(read))
+
     @property
     def operation_counts(self) -> dict[str, int]:
         """CasADi instructions of one step and of init (a particle filter's for its particle

@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from types import MappingProxyType
+
 import numpy as np
 import pytest
 
 from codegen.generate import render
-from harness.build import load_estimator
+from harness.build import load_estimator, load_tuning_estimator
 from harness.compare import TOLERANCES, difference
+from harness.paths import VEHICLES
+from harness.reference import REFERENCES
 from harness.reference import kf2dof as reference
 from harness.reference.run import run_reference
 from harness.scenarios import Case
+from harness.vehicles import load_vehicle
+from model.calibration import calibratable, calibration_values
 from model.estimators import build
 from model.params import parse_vehicle
 
@@ -49,3 +56,76 @@ def test_recalibration_without_regenerating(config, vehicle_text):
 def test_unknown_parameter_mode(config):
     with pytest.raises(ValueError, match="parameter mode"):
         build("kf2dof", config, "flashy")
+
+
+@pytest.mark.parametrize("vehicle", ["c_class", "rwd_saloon"])
+def test_every_calibration_field_is_read_at_run_time(vehicle):
+    """The calibration struct holds only what the code reads at run time (CasADi's which_depends);
+    the values read only at generation are baked and listed in the header."""
+    config = load_vehicle(VEHICLES / f"{vehicle}.toml")
+    for name in config.estimators:
+        estimator = build(name, config, "calibratable")
+        assert estimator.read_parameters() == estimator.parameters.names, name
+        full = calibratable(config, name)
+        assert set(estimator.parameters.names) | set(estimator.parameters.fixed) == set(full.names)
+        if estimator.parameters.fixed:
+            header = render(config, name, params="calibratable")[f"vse_{name}.h"]
+            assert "Baked at generation" in header and estimator.parameters.fixed[-1] in header
+
+
+def _with_entry(config, estimator: str, entry: str, value: float):
+    """``config`` with the calibration entry ``entry`` (a [vehicle] or [inputs] key, a setting,
+    ``<key>_<i>`` of a list or ``<key>_<i><j>`` of a symmetric matrix) set to ``value``."""
+    if entry in config.vehicle:
+        return replace(config, vehicle=MappingProxyType({**config.vehicle, entry: value}))
+    if entry in config.limits:
+        return replace(config, limits=MappingProxyType({**config.limits, entry: value}))
+    settings = dict(config.settings(estimator))
+    if entry in settings:
+        settings[entry] = value
+    else:
+        key, index = entry.rsplit("_", 1)
+        old = settings[key]
+        if isinstance(old[0], tuple):
+            i, j = int(index[0]) - 1, int(index[1]) - 1
+            rows = [list(row) for row in old]
+            rows[i][j] = rows[j][i] = value
+            settings[key] = tuple(tuple(row) for row in rows)
+        else:
+            settings[key] = tuple(value if k == int(index) - 1 else v for k, v in enumerate(old))
+    return replace(config, estimators=MappingProxyType({**config.estimators,
+                                                        estimator: MappingProxyType(settings)}))
+
+
+def _small(entry: str, names, values) -> float:
+    """A small non-zero value for a zero entry: 0.1 sqrt(P_ii P_jj) for a matrix's off-diagonal
+    entry (the matrix stays positive definite), else 0.01."""
+    key, _, index = entry.rpartition("_")
+    if len(index) == 2 and index.isdigit() and index[0] != index[1]:
+        diagonal = [values[names.index(f"{key}_{k}{k}")] for k in index]
+        return 0.1 * float(np.sqrt(diagonal[0] * diagonal[1]))
+    return 0.01
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "switching"])
+def test_each_calibration_field_changes_the_output_as_regeneration_does(config, name):
+    """Each calibration field changed alone (by 3 %) in the running C gives what the reference of
+    a vehicle file with that value gives: the field is read, and read as that setting."""
+    tuning = load_tuning_estimator(config, name)
+    names, values = tuning.estimator.parameters.names, calibration_values(
+        config, name, tuning.estimator.parameters.names)
+    inputs = Case.of("dlc", speed_kmh=100.0).simulate(config, 100.0).matrix(tuning.estimator.inputs.names)
+    changed = 0
+    for index, entry in enumerate(names):
+        new = values[index] * 1.03 if values[index] != 0.0 else _small(entry, names, values)
+        calibration = list(values)
+        calibration[index] = new
+        tuning.set_calibration(calibration)
+        c_out, _ = tuning.run(inputs)
+        ref_out, _ = run_reference(REFERENCES[name], _with_entry(config, name, entry, new), inputs)
+        for i, signal in enumerate(tuning.estimator.outputs.names):
+            assert difference(signal, c_out[:, i], ref_out[:, i], TOLERANCES["double"],
+                              integer=signal in ("status", "mode")).ok, (entry, signal)
+        base, _ = run_reference(REFERENCES[name], config, inputs)
+        changed += not np.array_equal(ref_out, base)
+    assert changed >= len(names) // 2

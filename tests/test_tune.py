@@ -21,7 +21,7 @@ from harness.paths import VEHICLES
 from harness.scenarios import Case
 from harness.tuning import dimensions, tune
 from harness.vehicles import load_vehicle
-from model.calibration import parameters
+from model.calibration import calibration_values
 from model.params import parse_vehicle
 
 TRAINING = (Case.of("sine_steer"), Case.of("dlc", speed_kmh=60.0))
@@ -81,7 +81,7 @@ def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_compu
     log = logs["train"][0][0]
     estimator, regenerated = compile_estimator(tuned, "switching", "double", "calibratable")
     tuning = load_tuning_estimator(config, "switching")
-    tuning.set_calibration(parameters(tuned, "switching", "calibratable").values)
+    tuning.set_calibration(calibration_values(tuned, "switching", estimator.parameters.names))
     inputs = log.matrix(estimator.inputs.names)
     assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
 

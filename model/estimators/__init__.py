@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from model.calibration import parameters
+from model.calibration import calibratable, parameters
 from model.estimator import Definition, Estimator
 from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
 from model.schema import EstimatorSchema, shown
@@ -22,8 +22,16 @@ SCHEMAS: dict[str, EstimatorSchema] = {name: d.schema for name, d in DEFINITIONS
 
 def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
     """Build estimator ``name`` for ``config`` with parameters ``params`` ("baked" or
-    "calibratable"); KeyError if no such estimator exists."""
-    return DEFINITIONS[name].build(parameters(config, name, params))
+    "calibratable"); KeyError if no such estimator exists. A calibratable estimator's calibration
+    holds only what its code reads at run time: values read only at generation (structural) or not
+    at all are baked and listed in ``parameters.fixed``."""
+    definition = DEFINITIONS[name]
+    estimator = definition.build(parameters(config, name, params))
+    if params == "calibratable":
+        read = estimator.read_parameters()
+        if len(read) < len(estimator.parameters.names):
+            estimator = definition.build(calibratable(config, name, read))
+    return estimator
 
 
 def underived_warning(config: VehicleConfig, name: str) -> str | None:

@@ -19,19 +19,12 @@ const vse_kf2dof_calibration_t vse_kf2dof_calibration = {
     1964.4f, /* yaw_inertia */
     1.015f, /* cg_to_front_axle */
     1.895f, /* cg_to_rear_axle */
-    2.91f, /* wheelbase */
     149900.0f, /* cornering_stiffness_front */
     96970.0f, /* cornering_stiffness_rear */
-    0.325f, /* wheel_radius */
-    1.55f, /* track_width */
-    0.54f, /* cg_height */
     1.0f, /* delta_max */
     90.0f, /* vx_max */
-    30.0f, /* ax_max */
     30.0f, /* ay_max */
     3.0f, /* r_max */
-    400.0f, /* omega_max */
-    20000.0f, /* mz_max */
     0.25f, /* process_noise_11 */
     0.0f, /* process_noise_12 */
     0.01f, /* process_noise_22 */

@@ -16,27 +16,13 @@
 /* The generated calibration (the vehicle file's values). Change values here, or flash other
  * values at this object's address, without regenerating the code. */
 const vse_pf_improved_calibration_t vse_pf_improved_calibration = {
-    1412.0f, /* mass */
-    1964.4f, /* yaw_inertia */
-    1.015f, /* cg_to_front_axle */
-    1.895f, /* cg_to_rear_axle */
-    2.91f, /* wheelbase */
-    149900.0f, /* cornering_stiffness_front */
-    96970.0f, /* cornering_stiffness_rear */
-    0.325f, /* wheel_radius */
-    1.55f, /* track_width */
-    0.54f, /* cg_height */
-    1.0f, /* delta_max */
     90.0f, /* vx_max */
     30.0f, /* ax_max */
     30.0f, /* ay_max */
     3.0f, /* r_max */
-    400.0f, /* omega_max */
-    20000.0f, /* mz_max */
     0.3f, /* measurement_noise_1 */
     0.3f, /* measurement_noise_2 */
     0.01745f, /* measurement_noise_3 */
-    0.1f, /* wheel_speed_noise */
     0.1f, /* initial_spread_1 */
     0.05f, /* initial_spread_2 */
     0.2f, /* process_noise_1 */

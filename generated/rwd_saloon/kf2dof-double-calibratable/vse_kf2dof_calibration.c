@@ -19,19 +19,12 @@ const vse_kf2dof_calibration_t vse_kf2dof_calibration = {
     3050.0, /* yaw_inertia */
     1.3, /* cg_to_front_axle */
     1.65, /* cg_to_rear_axle */
-    2.95, /* wheelbase */
     127500.0, /* cornering_stiffness_front */
     115200.0, /* cornering_stiffness_rear */
-    0.335, /* wheel_radius */
-    1.6, /* track_width */
-    0.56, /* cg_height */
     1.0, /* delta_max */
     90.0, /* vx_max */
-    30.0, /* ax_max */
     30.0, /* ay_max */
     3.0, /* r_max */
-    400.0, /* omega_max */
-    20000.0, /* mz_max */
     0.25, /* process_noise_11 */
     0.0, /* process_noise_12 */
     0.01, /* process_noise_22 */

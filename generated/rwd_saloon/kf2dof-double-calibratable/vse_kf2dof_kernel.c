@@ -96,7 +96,7 @@ static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 
-/* vse_kf2dof_kernel_init:(input[4],params[34])->(state[10]) */
+/* vse_kf2dof_kernel_init:(input[4],params[27])->(state[10]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7;
@@ -104,29 +104,29 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][0]=a0;
   a1=arg[0][3];
   a2=casadi_fabs(a1);
-  a3=arg[1][14];
+  a3=arg[1][9];
   a2=(a2<=a3);
   a1=(a2?a1:0);
   res[0][1]=a1;
-  a1=arg[1][23];
+  a1=arg[1][16];
   res[0][2]=a1;
-  a1=arg[1][24];
+  a1=arg[1][17];
   res[0][3]=a1;
-  a1=arg[1][25];
+  a1=arg[1][18];
   res[0][4]=a1;
   a1=arg[0][0];
   a3=casadi_fabs(a1);
-  a4=arg[1][10];
+  a4=arg[1][6];
   a3=(a3<=a4);
   a1=(a3?a1:0);
   res[0][5]=a1;
   a1=arg[0][1];
   a4=casadi_fabs(a1);
-  a5=arg[1][11];
+  a5=arg[1][7];
   a4=(a4<=a5);
   a5=(a4?a1:0);
   a6=(!a4);
-  a7=arg[1][26];
+  a7=arg[1][19];
   a6=(a6?a7:0);
   a5=(a5+a6);
   res[0][6]=a5;
@@ -135,11 +135,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a3=(a3&&a4);
   a0=arg[0][2];
   a0=casadi_fabs(a0);
-  a5=arg[1][13];
+  a5=arg[1][8];
   a0=(a0<=a5);
   a3=(a3&&a0);
   a3=(a3&&a2);
-  a2=arg[1][27];
+  a2=arg[1][20];
   a0=(a1<a2);
   a5=1.;
   a1=(a1<a2);
@@ -157,13 +157,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 /*
  * vse_kf2dof_kernel_init: 51 operations (CasADi SX instructions)
  * arg[0] input[4]: delta, vx, ay, r
- * arg[1] params[34]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, process_noise_11,
- *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
- *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
- *     vx_min, vx_resume, residual_window, residual_limit, residual_hold, sensor_noise_1,
- *     sensor_noise_2, linear_range
+ * arg[1] params[27]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle,
+ *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
+ *     process_noise_11, process_noise_12, process_noise_22, measurement_noise_11,
+ *     measurement_noise_12, measurement_noise_22, initial_covariance_11, initial_covariance_12,
+ *     initial_covariance_22, vx_min, vx_resume, residual_window, residual_limit, residual_hold,
+ *     sensor_noise_1, sensor_noise_2, linear_range
  * res[0] state[10]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, holding
  */
@@ -171,7 +170,7 @@ CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_step:(state[10],input[4],params[34])->(state_next[10],output[4]) */
+/* vse_kf2dof_kernel_step:(state[10],input[4],params[27])->(state_next[10],output[4]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -180,27 +179,27 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
-  a02=arg[2][10];
+  a02=arg[2][6];
   a01=(a01<=a02);
   a02=arg[1][1];
   a03=casadi_fabs(a02);
-  a04=arg[2][11];
+  a04=arg[2][7];
   a03=(a03<=a04);
   a05=(a01&&a03);
   a06=arg[1][2];
   a07=casadi_fabs(a06);
-  a08=arg[2][13];
+  a08=arg[2][8];
   a07=(a07<=a08);
   a05=(a05&&a07);
   a08=arg[1][3];
   a09=casadi_fabs(a08);
-  a10=arg[2][14];
+  a10=arg[2][9];
   a09=(a09<=a10);
   a05=(a05&&a09);
-  a10=arg[2][26];
+  a10=arg[2][19];
   a11=(a02<a10);
   a12=arg[0][9];
-  a13=arg[2][27];
+  a13=arg[2][20];
   a13=(a02<a13);
   a12=(a12&&a13);
   a11=(a11||a12);
@@ -210,10 +209,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=1.;
   a14=1.2500000000000000e-03;
   a15=arg[2][3];
-  a16=arg[2][6];
+  a16=arg[2][5];
   a17=(a15*a16);
   a18=arg[2][2];
-  a19=arg[2][5];
+  a19=arg[2][4];
   a20=(a18*a19);
   a17=(a17-a20);
   a20=arg[2][0];
@@ -580,7 +579,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a29=(a27*a33);
   a14=(a14+a29);
   a29=1.0000000000000000e-02;
-  a25=arg[2][18];
+  a25=arg[2][11];
   a30=(a29*a25);
   a14=(a14+a30);
   a15=(a15*a16);
@@ -598,7 +597,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a34=(a34*a32);
   a27=(a27*a38);
   a34=(a34+a27);
-  a27=arg[2][17];
+  a27=arg[2][10];
   a27=(a29*a27);
   a34=(a34+a27);
   a16=(a19+a16);
@@ -615,10 +614,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40+a41);
   a41=(a40*a33);
   a30=(a30+a41);
-  a41=arg[2][19];
+  a41=arg[2][12];
   a41=(a29*a41);
   a30=(a30+a41);
-  a41=arg[2][22];
+  a41=arg[2][15];
   a27=(a30+a41);
   a45=(a15*a30);
   a23=(a16*a14);
@@ -634,10 +633,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25-a40);
   a25=(a25*a16);
   a23=(a23-a25);
-  a25=arg[2][20];
+  a25=arg[2][13];
   a23=(a23+a25);
   a40=(a23*a27);
-  a38=arg[2][21];
+  a38=arg[2][14];
   a45=(a45+a38);
   a32=(a30*a15);
   a26=(a28*a16);
@@ -724,7 +723,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a45=(a45+a44);
   a45=(a12?a45:0);
   a44=(!a12);
-  a20=arg[2][23];
+  a20=arg[2][16];
   a20=(a44?a20:0);
   a45=(a45+a20);
   res[0][2]=a45;
@@ -740,7 +739,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=(a08+a26);
   a17=(a17+a08);
   a17=(a12?a17:0);
-  a08=arg[2][24];
+  a08=arg[2][17];
   a08=(a44?a08:0);
   a17=(a17+a08);
   res[0][3]=a17;
@@ -764,7 +763,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25+a27);
   a34=(a34+a25);
   a34=(a12?a34:0);
-  a25=arg[2][25];
+  a25=arg[2][18];
   a44=(a44?a25:0);
   a34=(a34+a44);
   res[0][4]=a34;
@@ -779,20 +778,20 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=(a02+a03);
   res[0][6]=a02;
   a02=-1.0000000000000000e-02;
-  a03=arg[2][28];
+  a03=arg[2][21];
   a02=(a02/a03);
   a02=exp(a02);
   a03=arg[0][7];
   a21=(a02*a03);
   a02=(a13-a02);
   a07=casadi_sq(a07);
-  a00=arg[2][31];
+  a00=arg[2][24];
   a00=casadi_sq(a00);
   a07=(a07/a00);
   a00=100.;
   a07=casadi_fmin(a07,a00);
   a09=casadi_sq(a09);
-  a01=arg[2][32];
+  a01=arg[2][25];
   a01=casadi_sq(a01);
   a09=(a09/a01);
   a09=casadi_fmin(a09,a00);
@@ -806,9 +805,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a07=(a07?a03:0);
   a02=(a02+a07);
   res[0][7]=a02;
-  a02=arg[2][29];
+  a02=arg[2][22];
   a02=(a02<a21);
-  a21=arg[2][30];
+  a21=arg[2][23];
   a21=(a21/a29);
   a21=(a21+a24);
   a21=floor(a21);
@@ -839,7 +838,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=(a05?a09:0);
   a11=(a11?a13:0);
   a05=(a05+a11);
-  a11=arg[2][33];
+  a11=arg[2][26];
   a13=(a03<a11);
   a06=casadi_fabs(a06);
   a11=(a11<a06);
@@ -863,13 +862,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] state[10]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, holding
  * arg[1] input[4]: delta, vx, ay, r
- * arg[2] params[34]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, process_noise_11,
- *     process_noise_12, process_noise_22, measurement_noise_11, measurement_noise_12,
- *     measurement_noise_22, initial_covariance_11, initial_covariance_12, initial_covariance_22,
- *     vx_min, vx_resume, residual_window, residual_limit, residual_hold, sensor_noise_1,
- *     sensor_noise_2, linear_range
+ * arg[2] params[27]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle,
+ *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
+ *     process_noise_11, process_noise_12, process_noise_22, measurement_noise_11,
+ *     measurement_noise_12, measurement_noise_22, initial_covariance_11, initial_covariance_12,
+ *     initial_covariance_22, vx_min, vx_resume, residual_window, residual_limit, residual_hold,
+ *     sensor_noise_1, sensor_noise_2, linear_range
  * res[0] state_next[10]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, holding
  * res[1] output[4]: beta, vy, r, status

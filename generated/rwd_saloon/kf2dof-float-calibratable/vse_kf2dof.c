@@ -21,42 +21,35 @@ static void pack_input(const vse_kf2dof_input *in, casadi_real u[4])
     u[3] = in->r;
 }
 
-static void read_calibration(casadi_real p[34])
+static void read_calibration(casadi_real p[27])
 {
     p[0] = vse_kf2dof_calibration.mass;
     p[1] = vse_kf2dof_calibration.yaw_inertia;
     p[2] = vse_kf2dof_calibration.cg_to_front_axle;
     p[3] = vse_kf2dof_calibration.cg_to_rear_axle;
-    p[4] = vse_kf2dof_calibration.wheelbase;
-    p[5] = vse_kf2dof_calibration.cornering_stiffness_front;
-    p[6] = vse_kf2dof_calibration.cornering_stiffness_rear;
-    p[7] = vse_kf2dof_calibration.wheel_radius;
-    p[8] = vse_kf2dof_calibration.track_width;
-    p[9] = vse_kf2dof_calibration.cg_height;
-    p[10] = vse_kf2dof_calibration.delta_max;
-    p[11] = vse_kf2dof_calibration.vx_max;
-    p[12] = vse_kf2dof_calibration.ax_max;
-    p[13] = vse_kf2dof_calibration.ay_max;
-    p[14] = vse_kf2dof_calibration.r_max;
-    p[15] = vse_kf2dof_calibration.omega_max;
-    p[16] = vse_kf2dof_calibration.mz_max;
-    p[17] = vse_kf2dof_calibration.process_noise_11;
-    p[18] = vse_kf2dof_calibration.process_noise_12;
-    p[19] = vse_kf2dof_calibration.process_noise_22;
-    p[20] = vse_kf2dof_calibration.measurement_noise_11;
-    p[21] = vse_kf2dof_calibration.measurement_noise_12;
-    p[22] = vse_kf2dof_calibration.measurement_noise_22;
-    p[23] = vse_kf2dof_calibration.initial_covariance_11;
-    p[24] = vse_kf2dof_calibration.initial_covariance_12;
-    p[25] = vse_kf2dof_calibration.initial_covariance_22;
-    p[26] = vse_kf2dof_calibration.vx_min;
-    p[27] = vse_kf2dof_calibration.vx_resume;
-    p[28] = vse_kf2dof_calibration.residual_window;
-    p[29] = vse_kf2dof_calibration.residual_limit;
-    p[30] = vse_kf2dof_calibration.residual_hold;
-    p[31] = vse_kf2dof_calibration.sensor_noise_1;
-    p[32] = vse_kf2dof_calibration.sensor_noise_2;
-    p[33] = vse_kf2dof_calibration.linear_range;
+    p[4] = vse_kf2dof_calibration.cornering_stiffness_front;
+    p[5] = vse_kf2dof_calibration.cornering_stiffness_rear;
+    p[6] = vse_kf2dof_calibration.delta_max;
+    p[7] = vse_kf2dof_calibration.vx_max;
+    p[8] = vse_kf2dof_calibration.ay_max;
+    p[9] = vse_kf2dof_calibration.r_max;
+    p[10] = vse_kf2dof_calibration.process_noise_11;
+    p[11] = vse_kf2dof_calibration.process_noise_12;
+    p[12] = vse_kf2dof_calibration.process_noise_22;
+    p[13] = vse_kf2dof_calibration.measurement_noise_11;
+    p[14] = vse_kf2dof_calibration.measurement_noise_12;
+    p[15] = vse_kf2dof_calibration.measurement_noise_22;
+    p[16] = vse_kf2dof_calibration.initial_covariance_11;
+    p[17] = vse_kf2dof_calibration.initial_covariance_12;
+    p[18] = vse_kf2dof_calibration.initial_covariance_22;
+    p[19] = vse_kf2dof_calibration.vx_min;
+    p[20] = vse_kf2dof_calibration.vx_resume;
+    p[21] = vse_kf2dof_calibration.residual_window;
+    p[22] = vse_kf2dof_calibration.residual_limit;
+    p[23] = vse_kf2dof_calibration.residual_hold;
+    p[24] = vse_kf2dof_calibration.sensor_noise_1;
+    p[25] = vse_kf2dof_calibration.sensor_noise_2;
+    p[26] = vse_kf2dof_calibration.linear_range;
 }
 
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
@@ -64,7 +57,7 @@ void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
     casadi_real u[4];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0f;
-    casadi_real p[34];
+    casadi_real p[27];
     const casadi_real *arg[2];
     casadi_real *res[1];
     pack_input(first, u);
@@ -82,7 +75,7 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
     casadi_real y[4];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0f;
-    casadi_real p[34];
+    casadi_real p[27];
     const casadi_real *arg[3];
     casadi_real *res[2];
     pack_input(in, u);

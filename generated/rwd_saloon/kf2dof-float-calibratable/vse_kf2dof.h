@@ -70,25 +70,21 @@ typedef struct {
 
 /** Calibration: every parameter the estimator reads at run time (SI units, the vehicle file's
  *  names; a matrix entry <key>_<row><column>). The one instance is vse_kf2dof_calibration in
- *  vse_kf2dof_calibration.c, which an ECU linker script can place in calibration memory. */
+ *  vse_kf2dof_calibration.c, which an ECU linker script can place in calibration memory.
+ *  Baked at generation, not calibratable (structural, or not read by this configuration):
+ *  wheelbase, wheel_radius, track_width, cg_height, ax_max, omega_max, mz_max.
+ */
 typedef struct {
     vse_kf2dof_real mass;
     vse_kf2dof_real yaw_inertia;
     vse_kf2dof_real cg_to_front_axle;
     vse_kf2dof_real cg_to_rear_axle;
-    vse_kf2dof_real wheelbase;
     vse_kf2dof_real cornering_stiffness_front;
     vse_kf2dof_real cornering_stiffness_rear;
-    vse_kf2dof_real wheel_radius;
-    vse_kf2dof_real track_width;
-    vse_kf2dof_real cg_height;
     vse_kf2dof_real delta_max;
     vse_kf2dof_real vx_max;
-    vse_kf2dof_real ax_max;
     vse_kf2dof_real ay_max;
     vse_kf2dof_real r_max;
-    vse_kf2dof_real omega_max;
-    vse_kf2dof_real mz_max;
     vse_kf2dof_real process_noise_11;
     vse_kf2dof_real process_noise_12;
     vse_kf2dof_real process_noise_22;

@@ -89,29 +89,20 @@ typedef struct {
 
 /** Calibration: every parameter the estimator reads at run time (SI units, the vehicle file's
  *  names; a matrix entry <key>_<row><column>). The one instance is vse_pf_improved_calibration in
- *  vse_pf_improved_calibration.c, which an ECU linker script can place in calibration memory. */
+ *  vse_pf_improved_calibration.c, which an ECU linker script can place in calibration memory.
+ *  Baked at generation, not calibratable (structural, or not read by this configuration):
+ *  mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase, cornering_stiffness_front,
+ *  cornering_stiffness_rear, wheel_radius, track_width, cg_height, delta_max, omega_max,
+ *  mz_max, wheel_speed_noise.
+ */
 typedef struct {
-    vse_pf_improved_real mass;
-    vse_pf_improved_real yaw_inertia;
-    vse_pf_improved_real cg_to_front_axle;
-    vse_pf_improved_real cg_to_rear_axle;
-    vse_pf_improved_real wheelbase;
-    vse_pf_improved_real cornering_stiffness_front;
-    vse_pf_improved_real cornering_stiffness_rear;
-    vse_pf_improved_real wheel_radius;
-    vse_pf_improved_real track_width;
-    vse_pf_improved_real cg_height;
-    vse_pf_improved_real delta_max;
     vse_pf_improved_real vx_max;
     vse_pf_improved_real ax_max;
     vse_pf_improved_real ay_max;
     vse_pf_improved_real r_max;
-    vse_pf_improved_real omega_max;
-    vse_pf_improved_real mz_max;
     vse_pf_improved_real measurement_noise_1;
     vse_pf_improved_real measurement_noise_2;
     vse_pf_improved_real measurement_noise_3;
-    vse_pf_improved_real wheel_speed_noise;
     vse_pf_improved_real initial_spread_1;
     vse_pf_improved_real initial_spread_2;
     vse_pf_improved_real process_noise_1;

@@ -16,27 +16,13 @@
 /* The generated calibration (the vehicle file's values). Change values here, or flash other
  * values at this object's address, without regenerating the code. */
 const vse_pf_improved_calibration_t vse_pf_improved_calibration = {
-    1780.0, /* mass */
-    3050.0, /* yaw_inertia */
-    1.3, /* cg_to_front_axle */
-    1.65, /* cg_to_rear_axle */
-    2.95, /* wheelbase */
-    127500.0, /* cornering_stiffness_front */
-    115200.0, /* cornering_stiffness_rear */
-    0.335, /* wheel_radius */
-    1.6, /* track_width */
-    0.56, /* cg_height */
-    1.0, /* delta_max */
     90.0, /* vx_max */
     30.0, /* ax_max */
     30.0, /* ay_max */
     3.0, /* r_max */
-    400.0, /* omega_max */
-    20000.0, /* mz_max */
     0.299, /* measurement_noise_1 */
     0.2994, /* measurement_noise_2 */
     0.01751, /* measurement_noise_3 */
-    0.1, /* wheel_speed_noise */
     0.1, /* initial_spread_1 */
     0.05, /* initial_spread_2 */
     0.2, /* process_noise_1 */

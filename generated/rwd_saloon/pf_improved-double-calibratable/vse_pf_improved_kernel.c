@@ -100,17 +100,17 @@ static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 
-/* vse_pf_improved_kernel_init:(input[4],params[39])->(head[6],shared[12]) */
+/* vse_pf_improved_kernel_init:(input[4],params[25])->(head[6],shared[12]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   a00=arg[0][0];
   a01=casadi_fabs(a00);
-  a02=arg[1][11];
+  a02=arg[1][0];
   a01=(a01<=a02);
   a03=(a01?a00:0);
   a04=(!a01);
-  a05=arg[1][34];
+  a05=arg[1][20];
   a04=(a04?a05:0);
   a03=(a03+a04);
   a03=casadi_fmax(a03,a05);
@@ -120,17 +120,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][1]=a02;
   a05=arg[0][1];
   a04=casadi_fabs(a05);
-  a06=arg[1][12];
+  a06=arg[1][1];
   a04=(a04<=a06);
   a05=(a04?a05:0);
   res[0][2]=a05;
   a06=arg[0][2];
   a07=casadi_fabs(a06);
-  a08=arg[1][13];
+  a08=arg[1][2];
   a07=(a07<=a08);
   a08=1.;
   a09=9.8100000000000005e+00;
-  a10=arg[1][33];
+  a10=arg[1][19];
   a09=(a09*a10);
   a09=(a08+a09);
   a06=(a06/a09);
@@ -138,14 +138,14 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][3]=a06;
   a09=arg[0][3];
   a10=casadi_fabs(a09);
-  a11=arg[1][14];
+  a11=arg[1][3];
   a10=(a10<=a11);
   a09=(a10?a09:0);
   res[0][4]=a09;
   a04=(a01&&a04);
   a04=(a04&&a07);
   a04=(a04&&a10);
-  a10=arg[1][35];
+  a10=arg[1][21];
   a00=(a00<a10);
   a10=(a08&&a00);
   a10=(a00||a10);
@@ -161,20 +161,20 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][2]=a05;
   res[1][3]=a06;
   res[1][4]=a09;
-  a09=arg[1][29];
+  a09=arg[1][15];
   a06=1.0000000000000000e-02;
-  a05=arg[1][23];
+  a05=arg[1][9];
   a03=(a06*a05);
   a09=(a09+a03);
   res[1][5]=a09;
-  a09=arg[1][30];
-  a03=arg[1][24];
+  a09=arg[1][16];
+  a03=arg[1][10];
   a06=(a06*a03);
   a09=(a09+a06);
   res[1][6]=a09;
   res[1][7]=a05;
   res[1][8]=a03;
-  a03=arg[1][25];
+  a03=arg[1][11];
   res[1][9]=a03;
   res[1][10]=a02;
   a08=(a08&&a00);
@@ -191,14 +191,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 /*
  * vse_pf_improved_kernel_init: 81 operations (CasADi SX instructions)
  * arg[0] input[4]: vx, ax, ay, r
- * arg[1] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
- *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
- *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
- *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
- *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
- *     correction_gain_1, correction_gain_2, correction_gain_3
+ * arg[1] params[25]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
+ *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
+ *     process_noise_3, process_noise_max_1, process_noise_max_2, process_noise_max_3,
+ *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
+ *     roll_gradient, vx_min, vx_resume, correction_gain_1, correction_gain_2, correction_gain_3
  * res[0] head[6]: vx, vy, ax, ay, r, holding
  * res[1] shared[12]: 12 entries
  */
@@ -206,36 +203,36 @@ CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, ca
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_pf_improved_kernel_prepare:(head[6],input[4],params[39])->(shared[12]) */
+/* vse_pf_improved_kernel_prepare:(head[6],input[4],params[25])->(shared[12]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
-  a02=arg[2][11];
+  a02=arg[2][0];
   a01=(a01<=a02);
   a02=arg[1][1];
   a03=casadi_fabs(a02);
-  a04=arg[2][12];
+  a04=arg[2][1];
   a03=(a03<=a04);
   a03=(a01&&a03);
   a04=arg[1][2];
   a05=casadi_fabs(a04);
-  a06=arg[2][13];
+  a06=arg[2][2];
   a05=(a05<=a06);
   a03=(a03&&a05);
   a05=arg[1][3];
   a06=casadi_fabs(a05);
-  a07=arg[2][14];
+  a07=arg[2][3];
   a06=(a06<=a07);
   a03=(a03&&a06);
-  a06=arg[2][34];
+  a06=arg[2][20];
   a06=(a00<a06);
   a07=5.0000000000000000e-01;
   a08=arg[0][5];
   a07=(a07<a08);
-  a09=arg[2][35];
+  a09=arg[2][21];
   a09=(a00<a09);
   a07=(a07&&a09);
   a06=(a06||a07);
@@ -264,7 +261,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=(a02+a09);
   res[0][2]=a02;
   a09=9.8100000000000005e+00;
-  a13=arg[2][33];
+  a13=arg[2][19];
   a09=(a09*a13);
   a09=(a12+a09);
   a04=(a04/a09);
@@ -278,42 +275,42 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a11?a05:0);
   a07=(a07+a13);
   res[0][4]=a07;
-  a13=arg[2][29];
+  a13=arg[2][15];
   a14=1.0000000000000000e-02;
-  a15=arg[2][23];
-  a16=arg[2][31];
+  a15=arg[2][9];
+  a16=arg[2][17];
   a02=(a02-a00);
   a02=casadi_fabs(a02);
   a02=(a16*a02);
   a02=(a15+a02);
   a02=casadi_fmax(a02,a15);
-  a15=arg[2][26];
+  a15=arg[2][12];
   a02=casadi_fmin(a02,a15);
   a15=(a14*a02);
   a13=(a13+a15);
   res[0][5]=a13;
-  a13=arg[2][30];
-  a15=arg[2][24];
+  a13=arg[2][16];
+  a15=arg[2][10];
   a04=(a04-a09);
   a04=casadi_fabs(a04);
   a16=(a16*a04);
   a16=(a15+a16);
   a16=casadi_fmax(a16,a15);
-  a15=arg[2][27];
+  a15=arg[2][13];
   a16=casadi_fmin(a16,a15);
   a14=(a14*a16);
   a13=(a13+a14);
   res[0][6]=a13;
   res[0][7]=a02;
   res[0][8]=a16;
-  a16=arg[2][25];
-  a02=arg[2][32];
+  a16=arg[2][11];
+  a02=arg[2][18];
   a07=(a07-a05);
   a07=casadi_fabs(a07);
   a02=(a02*a07);
   a02=(a16+a02);
   a02=casadi_fmax(a02,a16);
-  a16=arg[2][28];
+  a16=arg[2][14];
   a02=casadi_fmin(a02,a16);
   res[0][9]=a02;
   a03=(!a03);
@@ -334,48 +331,45 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_pf_improved_kernel_prepare: 116 operations (CasADi SX instructions)
  * arg[0] head[6]: vx, vy, ax, ay, r, holding
  * arg[1] input[4]: vx, ax, ay, r
- * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
- *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
- *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
- *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
- *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
- *     correction_gain_1, correction_gain_2, correction_gain_3
+ * arg[2] params[25]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
+ *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
+ *     process_noise_3, process_noise_max_1, process_noise_max_2, process_noise_max_3,
+ *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
+ *     roll_gradient, vx_min, vx_resume, correction_gain_1, correction_gain_2, correction_gain_3
  * res[0] shared[12]: 12 entries
  */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_prepare(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_pf_improved_kernel_spawn:(shared[12],normals[5],params[39])->(particle[6]) */
+/* vse_pf_improved_kernel_spawn:(shared[12],normals[5],params[25])->(particle[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2;
   a0=arg[0][1];
-  a1=arg[2][21];
+  a1=arg[2][7];
   a2=arg[1][0];
   a1=(a1*a2);
   a0=(a0+a1);
   res[0][0]=a0;
-  a0=arg[2][22];
+  a0=arg[2][8];
   a1=arg[1][1];
   a0=(a0*a1);
   res[0][1]=a0;
   a0=arg[0][2];
-  a1=arg[2][17];
+  a1=arg[2][4];
   a2=arg[1][2];
   a1=(a1*a2);
   a0=(a0+a1);
   res[0][2]=a0;
   a0=arg[0][3];
-  a1=arg[2][18];
+  a1=arg[2][5];
   a2=arg[1][3];
   a1=(a1*a2);
   a0=(a0+a1);
   res[0][3]=a0;
   a0=arg[0][4];
-  a1=arg[2][19];
+  a1=arg[2][6];
   a2=arg[1][4];
   a1=(a1*a2);
   a0=(a0+a1);
@@ -389,21 +383,18 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_pf_improved_kernel_spawn: 30 operations (CasADi SX instructions)
  * arg[0] shared[12]: 12 entries
  * arg[1] normals[5]: 5 entries
- * arg[2] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
- *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
- *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
- *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
- *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
- *     correction_gain_1, correction_gain_2, correction_gain_3
+ * arg[2] params[25]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
+ *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
+ *     process_noise_3, process_noise_max_1, process_noise_max_2, process_noise_max_3,
+ *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
+ *     roll_gradient, vx_min, vx_resume, correction_gain_1, correction_gain_2, correction_gain_3
  * res[0] particle[6]: vx, vy, ax, ay, r, weight
  */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_spawn(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_pf_improved_kernel_propagate:(shared[12],particle[6],normals[5],params[39])->(particle_next[6]) */
+/* vse_pf_improved_kernel_propagate:(shared[12],particle[6],normals[5],params[25])->(particle_next[6]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -411,7 +402,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a00=arg[1][0];
   a01=1.0000000000000000e-02;
   a02=arg[1][2];
-  a03=arg[3][36];
+  a03=arg[3][22];
   a04=arg[0][2];
   a05=(a04-a02);
   a03=(a03*a05);
@@ -424,7 +415,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=2.;
   a02=(a02/a05);
   a06=arg[1][4];
-  a07=arg[3][38];
+  a07=arg[3][24];
   a08=arg[0][4];
   a09=(a08-a06);
   a07=(a07*a09);
@@ -446,7 +437,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=(a02+a10);
   res[0][0]=a02;
   a02=arg[1][3];
-  a10=arg[3][37];
+  a10=arg[3][23];
   a11=arg[0][3];
   a12=(a11-a02);
   a10=(a10*a12);
@@ -471,16 +462,16 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][4]=a07;
   a09=-5.0000000000000000e-01;
   a04=(a04-a03);
-  a03=arg[3][17];
+  a03=arg[3][4];
   a04=(a04/a03);
   a04=casadi_sq(a04);
   a11=(a11-a10);
-  a10=arg[3][18];
+  a10=arg[3][5];
   a11=(a11/a10);
   a11=casadi_sq(a11);
   a04=(a04+a11);
   a08=(a08-a07);
-  a07=arg[3][19];
+  a07=arg[3][6];
   a08=(a08/a07);
   a08=casadi_sq(a08);
   a04=(a04+a08);
@@ -494,21 +485,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] shared[12]: 12 entries
  * arg[1] particle[6]: vx, vy, ax, ay, r, weight
  * arg[2] normals[5]: 5 entries
- * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
- *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
- *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
- *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
- *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
- *     correction_gain_1, correction_gain_2, correction_gain_3
+ * arg[3] params[25]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
+ *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
+ *     process_noise_3, process_noise_max_1, process_noise_max_2, process_noise_max_3,
+ *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
+ *     roll_gradient, vx_min, vx_resume, correction_gain_1, correction_gain_2, correction_gain_3
  * res[0] particle_next[6]: vx, vy, ax, ay, r, weight
  */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_propagate(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_pf_improved_kernel_finish:(head[6],shared[12],summary[6],params[39])->(head_next[6],output[8]) */
+/* vse_pf_improved_kernel_finish:(head[6],shared[12],summary[6],params[25])->(head_next[6],output[8]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6;
@@ -548,7 +536,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][4]=a5;
   a5=arg[1][11];
   res[0][5]=a5;
-  a5=arg[3][34];
+  a5=arg[3][20];
   a5=(a1<a5);
   a5=(a0&&a5);
   a6=(!a5);
@@ -581,14 +569,11 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] head[6]: vx, vy, ax, ay, r, holding
  * arg[1] shared[12]: 12 entries
  * arg[2] summary[6]: 6 entries
- * arg[3] params[39]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
- *     cornering_stiffness_front, cornering_stiffness_rear, wheel_radius, track_width, cg_height,
- *     delta_max, vx_max, ax_max, ay_max, r_max, omega_max, mz_max, measurement_noise_1,
- *     measurement_noise_2, measurement_noise_3, wheel_speed_noise, initial_spread_1,
- *     initial_spread_2, process_noise_1, process_noise_2, process_noise_3, process_noise_max_1,
- *     process_noise_max_2, process_noise_max_3, speed_noise_1, speed_noise_2,
- *     adaptation_gain_acceleration, adaptation_gain_yaw_rate, roll_gradient, vx_min, vx_resume,
- *     correction_gain_1, correction_gain_2, correction_gain_3
+ * arg[3] params[25]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
+ *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
+ *     process_noise_3, process_noise_max_1, process_noise_max_2, process_noise_max_3,
+ *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
+ *     roll_gradient, vx_min, vx_resume, correction_gain_1, correction_gain_2, correction_gain_3
  * res[0] head_next[6]: vx, vy, ax, ay, r, holding
  * res[1] output[8]: beta, vx, vy, n_eff, sigma_ax, sigma_ay, sigma_r, status
  */

@@ -24,47 +24,33 @@ static void pack_input(const vse_pf_improved_input *in, casadi_real u[4])
     u[3] = in->r;
 }
 
-static void read_calibration(casadi_real p[39])
+static void read_calibration(casadi_real p[25])
 {
-    p[0] = vse_pf_improved_calibration.mass;
-    p[1] = vse_pf_improved_calibration.yaw_inertia;
-    p[2] = vse_pf_improved_calibration.cg_to_front_axle;
-    p[3] = vse_pf_improved_calibration.cg_to_rear_axle;
-    p[4] = vse_pf_improved_calibration.wheelbase;
-    p[5] = vse_pf_improved_calibration.cornering_stiffness_front;
-    p[6] = vse_pf_improved_calibration.cornering_stiffness_rear;
-    p[7] = vse_pf_improved_calibration.wheel_radius;
-    p[8] = vse_pf_improved_calibration.track_width;
-    p[9] = vse_pf_improved_calibration.cg_height;
-    p[10] = vse_pf_improved_calibration.delta_max;
-    p[11] = vse_pf_improved_calibration.vx_max;
-    p[12] = vse_pf_improved_calibration.ax_max;
-    p[13] = vse_pf_improved_calibration.ay_max;
-    p[14] = vse_pf_improved_calibration.r_max;
-    p[15] = vse_pf_improved_calibration.omega_max;
-    p[16] = vse_pf_improved_calibration.mz_max;
-    p[17] = vse_pf_improved_calibration.measurement_noise_1;
-    p[18] = vse_pf_improved_calibration.measurement_noise_2;
-    p[19] = vse_pf_improved_calibration.measurement_noise_3;
-    p[20] = vse_pf_improved_calibration.wheel_speed_noise;
-    p[21] = vse_pf_improved_calibration.initial_spread_1;
-    p[22] = vse_pf_improved_calibration.initial_spread_2;
-    p[23] = vse_pf_improved_calibration.process_noise_1;
-    p[24] = vse_pf_improved_calibration.process_noise_2;
-    p[25] = vse_pf_improved_calibration.process_noise_3;
-    p[26] = vse_pf_improved_calibration.process_noise_max_1;
-    p[27] = vse_pf_improved_calibration.process_noise_max_2;
-    p[28] = vse_pf_improved_calibration.process_noise_max_3;
-    p[29] = vse_pf_improved_calibration.speed_noise_1;
-    p[30] = vse_pf_improved_calibration.speed_noise_2;
-    p[31] = vse_pf_improved_calibration.adaptation_gain_acceleration;
-    p[32] = vse_pf_improved_calibration.adaptation_gain_yaw_rate;
-    p[33] = vse_pf_improved_calibration.roll_gradient;
-    p[34] = vse_pf_improved_calibration.vx_min;
-    p[35] = vse_pf_improved_calibration.vx_resume;
-    p[36] = vse_pf_improved_calibration.correction_gain_1;
-    p[37] = vse_pf_improved_calibration.correction_gain_2;
-    p[38] = vse_pf_improved_calibration.correction_gain_3;
+    p[0] = vse_pf_improved_calibration.vx_max;
+    p[1] = vse_pf_improved_calibration.ax_max;
+    p[2] = vse_pf_improved_calibration.ay_max;
+    p[3] = vse_pf_improved_calibration.r_max;
+    p[4] = vse_pf_improved_calibration.measurement_noise_1;
+    p[5] = vse_pf_improved_calibration.measurement_noise_2;
+    p[6] = vse_pf_improved_calibration.measurement_noise_3;
+    p[7] = vse_pf_improved_calibration.initial_spread_1;
+    p[8] = vse_pf_improved_calibration.initial_spread_2;
+    p[9] = vse_pf_improved_calibration.process_noise_1;
+    p[10] = vse_pf_improved_calibration.process_noise_2;
+    p[11] = vse_pf_improved_calibration.process_noise_3;
+    p[12] = vse_pf_improved_calibration.process_noise_max_1;
+    p[13] = vse_pf_improved_calibration.process_noise_max_2;
+    p[14] = vse_pf_improved_calibration.process_noise_max_3;
+    p[15] = vse_pf_improved_calibration.speed_noise_1;
+    p[16] = vse_pf_improved_calibration.speed_noise_2;
+    p[17] = vse_pf_improved_calibration.adaptation_gain_acceleration;
+    p[18] = vse_pf_improved_calibration.adaptation_gain_yaw_rate;
+    p[19] = vse_pf_improved_calibration.roll_gradient;
+    p[20] = vse_pf_improved_calibration.vx_min;
+    p[21] = vse_pf_improved_calibration.vx_resume;
+    p[22] = vse_pf_improved_calibration.correction_gain_1;
+    p[23] = vse_pf_improved_calibration.correction_gain_2;
+    p[24] = vse_pf_improved_calibration.correction_gain_3;
 }
 
 /* ---- the particle filter's generic part (model.estimator.Particles) ----------------------------
@@ -266,7 +252,7 @@ void vse_pf_improved_init(vse_pf_improved_state *state, const vse_pf_improved_in
     unsigned long long stream = 0U;
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0f;
-    casadi_real p[39];
+    casadi_real p[25];
     const casadi_real *arg[2];
     casadi_real *res[2];
     pack_input(first, u);
@@ -296,7 +282,7 @@ void vse_pf_improved_step(vse_pf_improved_state *state, const vse_pf_improved_in
     unsigned long long stream = read_stream(&state->x[STREAM_AT]);
     casadi_int iw = 0;    /* the SX kernels use no work vectors; valid pointers, never read */
     casadi_real w = 0.0f;
-    casadi_real p[39];
+    casadi_real p[25];
     const casadi_real *arg[4];
     casadi_real *res[2];
     int i;
