@@ -17,11 +17,13 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
+from codegen.checks import condition
 from codegen.kernel import generate_kernel
 from codegen.precision import literal
 from model import status
+from model.calibration_checks import calibration_checks
 from model.estimator import RNG_WORDS
-from model.estimators import DEFINITIONS, build
+from model.estimators import DEFINITIONS, SCHEMAS, build
 from model.params import VehicleConfig
 from model.schema import REALS
 
@@ -93,7 +95,13 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
         "ops": estimator.operation_counts,
-        "status_bits": {bit: status.STATUS_BITS[bit] for bit in DEFINITIONS[name].status_bits},
+        "status_bits": {bit: status.STATUS_BITS[bit] for bit in (
+            *DEFINITIONS[name].status_bits,
+            *(("INVALID_CALIBRATION",) if estimator.parameters.calibratable else ()))},
+        "calibration_checks": [(condition(c, real), c.says) for c in
+                               calibration_checks(SCHEMAS[name], estimator.parameters.names)],
+        "invalid_calibration": literal(float(status.INVALID_CALIBRATION), real),
+        "status_index": estimator.outputs.index("status"),
         "kernel": kernel,
         "rng_words": RNG_WORDS,
         "f": "f" if real == "float" else "",

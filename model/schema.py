@@ -33,6 +33,11 @@ class Field:
     doc: str = ""
     default: Any = None
     """Value used when the key is absent; None makes the key required."""
+    bounds: tuple[tuple[str, float], ...] = ()
+    """What ``check`` asks of every number of the value, as (operator, bound) pairs, e.g.
+    ((">", 0.0),): the calibration checks the generated C repeats at run time."""
+    positive_definite: bool = False
+    """A symmetric matrix that must be positive definite (also checked at run time)."""
 
 
 @dataclass(frozen=True)
@@ -41,6 +46,9 @@ class Rule:
 
     key: str
     check: Callable[[Mapping[str, Any]], str]
+    relation: tuple[str, str, str | float] | None = None
+    """(key, operator, other key or number) when the rule compares numbers, entry by entry for
+    lists (checked at run time too)."""
 
 
 @dataclass(frozen=True)
@@ -59,8 +67,8 @@ def _number(value: Any) -> float:
 
 
 def number_field(key: str, expected: str, accept: Callable[[float], bool], doc: str,
-                  default: float | None = None) -> Field:
-    """A finite number for which ``accept`` holds."""
+                  default: float | None = None, bounds: tuple[tuple[str, float], ...] = ()) -> Field:
+    """A finite number for which ``accept`` holds (``bounds``: the same as operator pairs)."""
 
     def check(value: Any) -> float:
         try:
@@ -71,23 +79,25 @@ def number_field(key: str, expected: str, accept: Callable[[float], bool], doc: 
             raise Invalid(expected)
         return number
 
-    return Field(key, expected, check, doc, default)
+    return Field(key, expected, check, doc, default, bounds)
 
 
 def positive(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
     """A finite number > 0 in ``unit`` (optional when ``default`` is given)."""
-    return number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc, default)
+    return number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc, default,
+                        ((">", 0.0),))
 
 
 def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
     """A finite number >= 0 in ``unit`` (optional when ``default`` is given)."""
-    return number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default)
+    return number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default,
+                        ((">=", 0.0),))
 
 
 def fraction(key: str, doc: str = "", default: float | None = None) -> Field:
     """A number strictly between 0 and 1 (optional when ``default`` is given)."""
     return number_field(key, "a number between 0 and 1 (exclusive)", lambda x: 0.0 < x < 1.0, doc,
-                         default)
+                        default, ((">", 0.0), ("<", 1.0)))
 
 
 def choice(key: str, options: tuple[str, ...], doc: str = "", default: str | None = None) -> Field:
@@ -126,7 +136,7 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
             raise Invalid(expected + " (it is not positive definite)")
         return tuple(tuple(float(v) for v in row) for row in matrix)
 
-    return Field(key, expected, check, doc)
+    return Field(key, expected, check, doc, positive_definite=True)
 
 
 def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
@@ -147,7 +157,7 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
             raise Invalid(expected)
         return entries
 
-    return Field(key, expected, check, doc, default)
+    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0),))
 
 
 def vector(key: str, size: int, unit: str, doc: str = "",
@@ -182,7 +192,7 @@ def integer(key: str, low: int, high: int, doc: str = "") -> Field:
 def between(key: str, low: float, high: float, doc: str = "", default: float | None = None) -> Field:
     """A number strictly between ``low`` and ``high``."""
     return number_field(key, f"a number between {low:g} and {high:g} (exclusive)",
-                         lambda x: low < x < high, doc, default)
+                        lambda x: low < x < high, doc, default, ((">", low), ("<", high)))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -283,7 +293,7 @@ def above(key: str, lower: str, what: str, unit: str = "") -> Rule:
             return (f"{key} = {settings[key]!r}: expected {what} above "
                     f"{lower} = {settings[lower]!r}{' ' + unit if unit else ''}")
         return ""
-    return Rule(key, check)
+    return Rule(key, check, (key, ">", lower))
 
 
 def below(key: str, upper: str, what: str, unit: str = "") -> Rule:
@@ -293,7 +303,7 @@ def below(key: str, upper: str, what: str, unit: str = "") -> Rule:
             return (f"{key} = {settings[key]!r}: expected {what} below "
                     f"{upper} = {settings[upper]!r}{' ' + unit if unit else ''}")
         return ""
-    return Rule(key, check)
+    return Rule(key, check, (key, "<", upper))
 
 
 LOW_SPEED_FIELDS: tuple[Field, ...] = (
@@ -327,7 +337,7 @@ def _caps_above_floors(table: Mapping[str, Any]) -> str:
             f"above its process_noise entry {list(table['process_noise'])!r}")
 
 
-CAPS_ABOVE_FLOORS = Rule("process_noise_max", _caps_above_floors)
+CAPS_ABOVE_FLOORS = Rule("process_noise_max", _caps_above_floors, ("process_noise_max", ">", "process_noise"))
 """An adaptive noise's ceilings lie above its floors, entry by entry (aukf, the particle filters)."""
 
 

@@ -14,6 +14,7 @@ FILTER_RESTARTED = 32
 KINEMATIC_DWELL_LIMITED = 64
 MODEL_INCONSISTENT = 128
 BEYOND_LINEAR_RANGE = 256
+INVALID_CALIBRATION = 512
 
 STATUS_BITS = {
     "LOW_SPEED": (LOW_SPEED, "vx below the low-speed limit (or not yet back above the resume speed): "
@@ -39,5 +40,8 @@ STATUS_BITS = {
     "BEYOND_LINEAR_RANGE": (BEYOND_LINEAR_RANGE, "the lateral acceleration is beyond linear_range, where "
                                                  "the estimator's linear tyre model no longer holds: the "
                                                  "estimate is suspect"),
+    "INVALID_CALIBRATION": (INVALID_CALIBRATION, "the calibration struct breaks a check of the vehicle-file "
+                                                 "schema (e.g. a mass <= 0): the estimator holds, outputs 0 "
+                                                 "(calibratable builds)"),
 }
 """Every status bit by name: (value, meaning)."""

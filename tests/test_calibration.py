@@ -18,8 +18,10 @@ from harness.reference.run import run_reference
 from harness.scenarios import Case
 from harness.vehicles import load_vehicle
 from model.calibration import calibratable, calibration_values
-from model.estimators import build
+from model.calibration_checks import unchecked_rules
+from model.estimators import SCHEMAS, build
 from model.params import parse_vehicle
+from model.status import INVALID_CALIBRATION
 
 
 def test_calibration_file_and_struct(config):
@@ -71,6 +73,12 @@ def test_every_calibration_field_is_read_at_run_time(vehicle):
         if estimator.parameters.fixed:
             header = render(config, name, params="calibratable")[f"vse_{name}.h"]
             assert "Baked at generation" in header and estimator.parameters.fixed[-1] in header
+
+
+def test_every_schema_rule_is_repeated_in_the_generated_checks():
+    """Each rule of every estimator's schema is a comparison the generated C can repeat."""
+    assert {name: unchecked_rules(schema) for name, schema in SCHEMAS.items()
+            if unchecked_rules(schema)} == {}
 
 
 def _with_entry(config, estimator: str, entry: str, value: float):
@@ -129,3 +137,44 @@ def test_each_calibration_field_changes_the_output_as_regeneration_does(config, 
         base, _ = run_reference(REFERENCES[name], config, inputs)
         changed += not np.array_equal(ref_out, base)
     assert changed >= len(names) // 2
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "switching", "pf_improved"])
+def test_an_invalid_calibration_holds_with_its_status(config, name):
+    """The generated C repeats the schema's checks on the calibration: a mass <= 0, a zero
+    cornering stiffness, a NaN, a resume speed below the hold speed or (for the 2x2 matrices) a
+    covariance that is not positive definite hold the estimator with status INVALID_CALIBRATION
+    and outputs 0, its state untouched; the generated calibration runs as before."""
+    tuning = load_tuning_estimator(config, name)
+    names = tuning.estimator.parameters.names
+    values = calibration_values(config, name, names)
+    inputs = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0).matrix(tuning.estimator.inputs.names)
+    status_index = tuning.estimator.outputs.index("status")
+    tuning.set_calibration(values)
+    good, _ = tuning.run(inputs)
+    assert not np.any(good[:, status_index].astype(int) & INVALID_CALIBRATION)
+    breaks = {"mass": -1412.0, "cornering_stiffness_front": 0.0, "yaw_inertia": float("nan"),
+              "vx_resume": 0.5 * values[names.index("vx_min")]}
+    if "measurement_noise_12" in names:
+        r11, r22 = values[names.index("measurement_noise_11")], values[names.index("measurement_noise_22")]
+        breaks["measurement_noise_12"] = 1.5 * float(np.sqrt(r11 * r22))
+    for entry, value in breaks.items():
+        if entry not in names:
+            continue
+        calibration = list(values)
+        calibration[names.index(entry)] = value
+        tuning.set_calibration(calibration)
+        outputs, states = tuning.run(inputs)
+        assert np.all(outputs[:, status_index].astype(int) == INVALID_CALIBRATION), entry
+        others = [i for i in range(outputs.shape[1]) if i != status_index]
+        assert not np.any(outputs[:, others]), entry
+        assert np.array_equal(states[1:], np.repeat(states[:1], len(inputs), axis=0)), entry
+
+
+def test_the_header_exposes_the_parameter_hash(config, variant):
+    """The parameter set's SHA-256 is a constant the firmware can report; it changes with a value."""
+    header = render(config, "kf2dof")["vse_kf2dof.h"]
+    assert f'#define VSE_KF2DOF_PARAMETER_HASH "{config.parameter_hash("kf2dof")}"' in header
+    heavier = variant("vehicle", mass=1500.0)
+    assert heavier.parameter_hash("kf2dof") != config.parameter_hash("kf2dof")
+    assert heavier.parameter_hash("kf2dof") in render(heavier, "kf2dof")["vse_kf2dof.h"]

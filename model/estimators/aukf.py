@@ -71,7 +71,7 @@ UKF_FIELDS: tuple[Field, ...] = (
                 "paper)"),
     positive("slip_speed_floor", "m/s", "eps_v: slip ratios divide by max(r omega, eps_v)"),
     number_field("ut_alpha", "a number in (0, 1]", lambda x: 0.0 < x <= 1.0,
-                  "UT spread alpha"),
+                 "UT spread alpha", bounds=((">", 0.0), ("<=", 1.0))),
     nonnegative("ut_beta", "-", "UT prior-distribution factor beta (2 for Gaussian)"),
     nonnegative("ut_kappa", "-", "UT secondary scaling kappa"),
     diagonal("initial_covariance", 6, "[u, v, gamma, Gamma, a_x, a_y]: SI units squared", "P_0",

@@ -95,7 +95,7 @@ IMPROVED_SCHEMA = EstimatorSchema(
                    "weights (D3) or the exact importance ratio of the corrected proposal")),
     rules=(*PF_RULES, Rule("correction_gain", lambda t: "" if max(t["correction_gain"]) <= 1.0
                            else f"correction_gain = {list(t['correction_gain'])!r}: expected "
-                                "every entry from 0 to 1")))
+                                "every entry from 0 to 1", ("correction_gain", "<=", 1.0))))
 KINEMATIC = (("vx", "m/s", "longitudinal speed"), ("vy", "m/s", "lateral speed"),
              ("ax", "m/s^2", "longitudinal acceleration"), ("ay", "m/s^2", "lateral acceleration"),
              ("r", "rad/s", "yaw rate"))

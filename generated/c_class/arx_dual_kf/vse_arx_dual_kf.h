@@ -23,6 +23,10 @@ typedef double vse_arx_dual_kf_real;
 /** Sample time the estimator was generated for, in s. Call vse_arx_dual_kf_step once per sample. */
 #define VSE_ARX_DUAL_KF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.arx_dual_kf]), for the firmware to report. */
+#define VSE_ARX_DUAL_KF_PARAMETER_HASH "82d8a3c83cff6eeaf7744142521f7d08799e8511b3e28485710801f8ba16e433"
+
 /** Status bits of vse_arx_dual_kf_output.status (OR-ed). */
 #define VSE_ARX_DUAL_KF_STATUS_OK (0)
 #define VSE_ARX_DUAL_KF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -23,6 +23,10 @@ typedef double vse_aukf_real;
 /** Sample time the estimator was generated for, in s. Call vse_aukf_step once per sample. */
 #define VSE_AUKF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.aukf]), for the firmware to report. */
+#define VSE_AUKF_PARAMETER_HASH "1cf8a21b2054ad510bc886877436149d45004a095f94784a66c215d19bbc636e"
+
 /** Status bits of vse_aukf_output.status (OR-ed). */
 #define VSE_AUKF_STATUS_OK (0)
 #define VSE_AUKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -25,6 +25,10 @@ typedef double vse_ekf_rls_real;
 /** Sample time the estimator was generated for, in s. Call vse_ekf_rls_step once per sample. */
 #define VSE_EKF_RLS_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.ekf_rls]), for the firmware to report. */
+#define VSE_EKF_RLS_PARAMETER_HASH "dffabe0c40022a320824a729a5751502cac42a1006930cb37b3b7259946c6712"
+
 /** Status bits of vse_ekf_rls_output.status (OR-ed). */
 #define VSE_EKF_RLS_STATUS_OK (0)
 #define VSE_EKF_RLS_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

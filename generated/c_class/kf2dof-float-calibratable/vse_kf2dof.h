@@ -23,12 +23,18 @@ typedef float vse_kf2dof_real;
 /** Sample time the estimator was generated for, in s. Call vse_kf2dof_step once per sample. */
 #define VSE_KF2DOF_SAMPLE_TIME (0.01f)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.kf2dof]), for the firmware to report;
+ *  a calibration flashed later is not covered by it. */
+#define VSE_KF2DOF_PARAMETER_HASH "0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779"
+
 /** Status bits of vse_kf2dof_output.status (OR-ed). */
 #define VSE_KF2DOF_STATUS_OK (0)
 #define VSE_KF2DOF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
 #define VSE_KF2DOF_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 #define VSE_KF2DOF_STATUS_MODEL_INCONSISTENT (128) /**< the measurements disagree with the model's predictions (mean squared innovation above residual_limit sensor variances over residual_window): the estimate is suspect */
 #define VSE_KF2DOF_STATUS_BEYOND_LINEAR_RANGE (256) /**< the lateral acceleration is beyond linear_range, where the estimator's linear tyre model no longer holds: the estimate is suspect */
+#define VSE_KF2DOF_STATUS_INVALID_CALIBRATION (512) /**< the calibration struct breaks a check of the vehicle-file schema (e.g. a mass <= 0): the estimator holds, outputs 0 (calibratable builds) */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {

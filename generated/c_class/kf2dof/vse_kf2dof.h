@@ -23,6 +23,10 @@ typedef double vse_kf2dof_real;
 /** Sample time the estimator was generated for, in s. Call vse_kf2dof_step once per sample. */
 #define VSE_KF2DOF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.kf2dof]), for the firmware to report. */
+#define VSE_KF2DOF_PARAMETER_HASH "0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779"
+
 /** Status bits of vse_kf2dof_output.status (OR-ed). */
 #define VSE_KF2DOF_STATUS_OK (0)
 #define VSE_KF2DOF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

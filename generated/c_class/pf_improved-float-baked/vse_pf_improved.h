@@ -24,6 +24,10 @@ typedef float vse_pf_improved_real;
 /** Sample time the estimator was generated for, in s. Call vse_pf_improved_step once per sample. */
 #define VSE_PF_IMPROVED_SAMPLE_TIME (0.01f)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.pf_improved]), for the firmware to report. */
+#define VSE_PF_IMPROVED_PARAMETER_HASH "9223231a7d3cb0c96c1c091e2f22510c2fa1cadcc2f9a0f4d996b0181ab11f07"
+
 /** Status bits of vse_pf_improved_output.status (OR-ed). */
 #define VSE_PF_IMPROVED_STATUS_OK (0)
 #define VSE_PF_IMPROVED_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

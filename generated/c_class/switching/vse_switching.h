@@ -25,6 +25,10 @@ typedef double vse_switching_real;
 /** Sample time the estimator was generated for, in s. Call vse_switching_step once per sample. */
 #define VSE_SWITCHING_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.switching]), for the firmware to report. */
+#define VSE_SWITCHING_PARAMETER_HASH "9564fb7c3df0ad3fd0fd2e03df25608f796a7032bb3751b51363af5a2eec7e1e"
+
 /** Status bits of vse_switching_output.status (OR-ed). */
 #define VSE_SWITCHING_STATUS_OK (0)
 #define VSE_SWITCHING_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -23,6 +23,10 @@ typedef double vse_ukf_real;
 /** Sample time the estimator was generated for, in s. Call vse_ukf_step once per sample. */
 #define VSE_UKF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.ukf]), for the firmware to report. */
+#define VSE_UKF_PARAMETER_HASH "a939e13c340b0f2ca28cbc2a1e388e3578bdf69b3a72c107135bb6fb30973a01"
+
 /** Status bits of vse_ukf_output.status (OR-ed). */
 #define VSE_UKF_STATUS_OK (0)
 #define VSE_UKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -23,6 +23,10 @@ typedef double vse_ukf_real;
 /** Sample time the estimator was generated for, in s. Call vse_ukf_step once per sample. */
 #define VSE_UKF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.ukf]), for the firmware to report. */
+#define VSE_UKF_PARAMETER_HASH "77aaf84e54c8ee37810050339155f1fb58c3b40cf43af6b4359ce22cf1ff0faf"
+
 /** Status bits of vse_ukf_output.status (OR-ed). */
 #define VSE_UKF_STATUS_OK (0)
 #define VSE_UKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -23,6 +23,10 @@ typedef double vse_aukf_real;
 /** Sample time the estimator was generated for, in s. Call vse_aukf_step once per sample. */
 #define VSE_AUKF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.aukf]), for the firmware to report. */
+#define VSE_AUKF_PARAMETER_HASH "cb322d7589c8d51bdf0450c8b63ad03abb9e0f3fbdffe1f4958d7237f0f5a521"
+
 /** Status bits of vse_aukf_output.status (OR-ed). */
 #define VSE_AUKF_STATUS_OK (0)
 #define VSE_AUKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

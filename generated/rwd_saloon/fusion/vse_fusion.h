@@ -25,6 +25,10 @@ typedef double vse_fusion_real;
 /** Sample time the estimator was generated for, in s. Call vse_fusion_step once per sample. */
 #define VSE_FUSION_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.fusion]), for the firmware to report. */
+#define VSE_FUSION_PARAMETER_HASH "67ed317fee3289cf0ce748a790ca3f23a8e5c119b123a275da9251dd57c0dcdf"
+
 /** Status bits of vse_fusion_output.status (OR-ed). */
 #define VSE_FUSION_STATUS_OK (0)
 #define VSE_FUSION_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

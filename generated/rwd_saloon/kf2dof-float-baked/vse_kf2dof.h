@@ -23,6 +23,10 @@ typedef float vse_kf2dof_real;
 /** Sample time the estimator was generated for, in s. Call vse_kf2dof_step once per sample. */
 #define VSE_KF2DOF_SAMPLE_TIME (0.01f)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.kf2dof]), for the firmware to report. */
+#define VSE_KF2DOF_PARAMETER_HASH "50fb1b07db1a9935e81c33a8a87be4e5340e241b31e3bb00ba6d66d7cf4ff7ec"
+
 /** Status bits of vse_kf2dof_output.status (OR-ed). */
 #define VSE_KF2DOF_STATUS_OK (0)
 #define VSE_KF2DOF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

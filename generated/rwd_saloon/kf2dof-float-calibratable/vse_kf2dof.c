@@ -52,6 +52,89 @@ static void read_calibration(casadi_real p[27])
     p[26] = vse_kf2dof_calibration.linear_range;
 }
 
+/* 1 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
+ * every one), else 0: a step with a failing calibration holds with status INVALID_CALIBRATION. */
+static int calibration_valid(const casadi_real p[27])
+{
+    int valid = 1;
+    if (!(p[0] > 0.0f)) {    /* mass > 0 */
+        valid = 0;
+    }
+    if (!(p[1] > 0.0f)) {    /* yaw_inertia > 0 */
+        valid = 0;
+    }
+    if (!(p[2] > 0.0f)) {    /* cg_to_front_axle > 0 */
+        valid = 0;
+    }
+    if (!(p[3] > 0.0f)) {    /* cg_to_rear_axle > 0 */
+        valid = 0;
+    }
+    if (!(p[4] > 0.0f)) {    /* cornering_stiffness_front > 0 */
+        valid = 0;
+    }
+    if (!(p[5] > 0.0f)) {    /* cornering_stiffness_rear > 0 */
+        valid = 0;
+    }
+    if (!(p[6] > 0.0f)) {    /* delta_max > 0 */
+        valid = 0;
+    }
+    if (!(p[7] > 0.0f)) {    /* vx_max > 0 */
+        valid = 0;
+    }
+    if (!(p[8] > 0.0f)) {    /* ay_max > 0 */
+        valid = 0;
+    }
+    if (!(p[9] > 0.0f)) {    /* r_max > 0 */
+        valid = 0;
+    }
+    if (!(p[10] > 0.0f)) {    /* process_noise: leading 1x1 minor > 0 */
+        valid = 0;
+    }
+    if (!(((p[10] * p[12]) - (p[11] * p[11])) > 0.0f)) {    /* process_noise: leading 2x2 minor > 0 */
+        valid = 0;
+    }
+    if (!(p[13] > 0.0f)) {    /* measurement_noise: leading 1x1 minor > 0 */
+        valid = 0;
+    }
+    if (!(((p[13] * p[15]) - (p[14] * p[14])) > 0.0f)) {    /* measurement_noise: leading 2x2 minor > 0 */
+        valid = 0;
+    }
+    if (!(p[16] > 0.0f)) {    /* initial_covariance: leading 1x1 minor > 0 */
+        valid = 0;
+    }
+    if (!(((p[16] * p[18]) - (p[17] * p[17])) > 0.0f)) {    /* initial_covariance: leading 2x2 minor > 0 */
+        valid = 0;
+    }
+    if (!(p[19] > 0.0f)) {    /* vx_min > 0 */
+        valid = 0;
+    }
+    if (!(p[20] > 0.0f)) {    /* vx_resume > 0 */
+        valid = 0;
+    }
+    if (!(p[21] >= 0.0f)) {    /* residual_window >= 0 */
+        valid = 0;
+    }
+    if (!(p[22] > 0.0f)) {    /* residual_limit > 0 */
+        valid = 0;
+    }
+    if (!(p[23] >= 0.0f)) {    /* residual_hold >= 0 */
+        valid = 0;
+    }
+    if (!(p[24] > 0.0f)) {    /* sensor_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[25] > 0.0f)) {    /* sensor_noise_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[26] >= 0.0f)) {    /* linear_range >= 0 */
+        valid = 0;
+    }
+    if (!(p[20] > p[19])) {    /* vx_resume > vx_min */
+        valid = 0;
+    }
+    return valid;
+}
+
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
 {
     casadi_real u[4];
@@ -97,12 +180,17 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
     y[2] = 0.0f;
     y[3] = 0.0f;
     read_calibration(p);
+    if (calibration_valid(p) == 0) {
+        /* the calibration breaks a schema check: hold (the state is kept), outputs 0 */
+        y[3] = 512.0f;
+    } else {
     arg[0] = current;
     arg[1] = u;
     arg[2] = p;
     res[0] = state->x;
     res[1] = y;
     (void)vse_kf2dof_kernel_step(arg, res, &iw, &w, 0);
+    }
     out->beta = y[0];
     out->vy = y[1];
     out->r = y[2];

@@ -24,6 +24,10 @@ typedef double vse_pf_adaptive_real;
 /** Sample time the estimator was generated for, in s. Call vse_pf_adaptive_step once per sample. */
 #define VSE_PF_ADAPTIVE_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.pf_adaptive]), for the firmware to report. */
+#define VSE_PF_ADAPTIVE_PARAMETER_HASH "e09aeffb6df1d6b251d881a3ff27f912cd4cef60a5939b596932c7ce884ee5b7"
+
 /** Status bits of vse_pf_adaptive_output.status (OR-ed). */
 #define VSE_PF_ADAPTIVE_STATUS_OK (0)
 #define VSE_PF_ADAPTIVE_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

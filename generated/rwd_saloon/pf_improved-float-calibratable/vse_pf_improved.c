@@ -53,6 +53,110 @@ static void read_calibration(casadi_real p[25])
     p[24] = vse_pf_improved_calibration.correction_gain_3;
 }
 
+/* 1 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
+ * every one), else 0: a step with a failing calibration holds with status INVALID_CALIBRATION. */
+static int calibration_valid(const casadi_real p[25])
+{
+    int valid = 1;
+    if (!(p[0] > 0.0f)) {    /* vx_max > 0 */
+        valid = 0;
+    }
+    if (!(p[1] > 0.0f)) {    /* ax_max > 0 */
+        valid = 0;
+    }
+    if (!(p[2] > 0.0f)) {    /* ay_max > 0 */
+        valid = 0;
+    }
+    if (!(p[3] > 0.0f)) {    /* r_max > 0 */
+        valid = 0;
+    }
+    if (!(p[4] > 0.0f)) {    /* measurement_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[5] > 0.0f)) {    /* measurement_noise_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[6] > 0.0f)) {    /* measurement_noise_3 > 0 */
+        valid = 0;
+    }
+    if (!(p[7] > 0.0f)) {    /* initial_spread_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[8] > 0.0f)) {    /* initial_spread_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[9] > 0.0f)) {    /* process_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[10] > 0.0f)) {    /* process_noise_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[11] > 0.0f)) {    /* process_noise_3 > 0 */
+        valid = 0;
+    }
+    if (!(p[12] > 0.0f)) {    /* process_noise_max_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[13] > 0.0f)) {    /* process_noise_max_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[14] > 0.0f)) {    /* process_noise_max_3 > 0 */
+        valid = 0;
+    }
+    if (!(p[15] > 0.0f)) {    /* speed_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[16] > 0.0f)) {    /* speed_noise_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[17] >= 0.0f)) {    /* adaptation_gain_acceleration >= 0 */
+        valid = 0;
+    }
+    if (!(p[18] >= 0.0f)) {    /* adaptation_gain_yaw_rate >= 0 */
+        valid = 0;
+    }
+    if (!(p[19] >= 0.0f)) {    /* roll_gradient >= 0 */
+        valid = 0;
+    }
+    if (!(p[20] > 0.0f)) {    /* vx_min > 0 */
+        valid = 0;
+    }
+    if (!(p[21] > 0.0f)) {    /* vx_resume > 0 */
+        valid = 0;
+    }
+    if (!(p[22] >= 0.0f)) {    /* correction_gain_1 >= 0 */
+        valid = 0;
+    }
+    if (!(p[23] >= 0.0f)) {    /* correction_gain_2 >= 0 */
+        valid = 0;
+    }
+    if (!(p[24] >= 0.0f)) {    /* correction_gain_3 >= 0 */
+        valid = 0;
+    }
+    if (!(p[21] > p[20])) {    /* vx_resume > vx_min */
+        valid = 0;
+    }
+    if (!(p[12] > p[9])) {    /* process_noise_max_1 > process_noise_1 */
+        valid = 0;
+    }
+    if (!(p[13] > p[10])) {    /* process_noise_max_2 > process_noise_2 */
+        valid = 0;
+    }
+    if (!(p[14] > p[11])) {    /* process_noise_max_3 > process_noise_3 */
+        valid = 0;
+    }
+    if (!(p[22] <= 1.0f)) {    /* correction_gain_1 <= 1 */
+        valid = 0;
+    }
+    if (!(p[23] <= 1.0f)) {    /* correction_gain_2 <= 1 */
+        valid = 0;
+    }
+    if (!(p[24] <= 1.0f)) {    /* correction_gain_3 <= 1 */
+        valid = 0;
+    }
+    return valid;
+}
+
 /* ---- the particle filter's generic part (model.estimator.Particles) ----------------------------
  * State: the head (6 entries), the random stream (4 words), then
  * 200 particles of 6 entries; a particle's last entry is its weight. */
@@ -313,6 +417,10 @@ void vse_pf_improved_step(vse_pf_improved_state *state, const vse_pf_improved_in
     y[5] = 0.0f;
     y[6] = 0.0f;
     y[7] = 0.0f;
+    if (calibration_valid(p) == 0) {
+        /* the calibration breaks a schema check: hold (the state is kept), outputs 0 */
+        y[7] = 512.0f;
+    } else {
     /* the sample's mode (0 hold, 1 propagate, 2 spawn), measurement and adapted noise */
     arg[0] = head;
     arg[1] = u;
@@ -335,6 +443,7 @@ void vse_pf_improved_step(vse_pf_improved_state *state, const vse_pf_improved_in
         resample(particles, &stream);
     }
     write_stream(stream, &state->x[STREAM_AT]);
+    }
     out->beta = y[0];
     out->vx = y[1];
     out->vy = y[2];

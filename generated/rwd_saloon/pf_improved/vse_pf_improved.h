@@ -24,6 +24,10 @@ typedef double vse_pf_improved_real;
 /** Sample time the estimator was generated for, in s. Call vse_pf_improved_step once per sample. */
 #define VSE_PF_IMPROVED_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.pf_improved]), for the firmware to report. */
+#define VSE_PF_IMPROVED_PARAMETER_HASH "c39fd88f16bd1509667c578a98a592efbfbcf4d95485413d7b46ba6b2f0c11da"
+
 /** Status bits of vse_pf_improved_output.status (OR-ed). */
 #define VSE_PF_IMPROVED_STATUS_OK (0)
 #define VSE_PF_IMPROVED_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */

@@ -23,6 +23,10 @@ typedef double vse_ukf_real;
 /** Sample time the estimator was generated for, in s. Call vse_ukf_step once per sample. */
 #define VSE_UKF_SAMPLE_TIME (0.01)
 
+/** SHA-256 of the parameter set the code was generated from (the vehicle file's [vehicle],
+ *  [inputs], sample time and [estimator.ukf]), for the firmware to report. */
+#define VSE_UKF_PARAMETER_HASH "d0c289bb8e4ff2446946e345f082c10a72e0ccfdd70b29034a2edb11f06d80a5"
+
 /** Status bits of vse_ukf_output.status (OR-ed). */
 #define VSE_UKF_STATUS_OK (0)
 #define VSE_UKF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
