@@ -105,6 +105,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "kernel": kernel,
         "rng_words": RNG_WORDS,
         "f": "f" if real == "float" else "",
+        "arm_flags": ARM_FLAGS[real],
     }
     env = template_environment()
     files = {}
@@ -131,8 +132,13 @@ TEMPLATE_FILES = (  # template, file name, comment style
     ("example_main.c.j2", EXAMPLE, "c"),
     ("CMakeLists.txt.j2", "CMakeLists.txt", "hash"),
     ("Makefile.j2", "Makefile", "hash"),
+    ("toolchain-arm-none-eabi.cmake.j2", "toolchain-arm-none-eabi.cmake", "hash"),
     ("README.md.j2", "README.md", "markdown"),
 )
+ARM_FLAGS = {"float": "-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16",
+             "double": "-mcpu=cortex-m7 -mthumb -mfloat-abi=hard -mfpu=fpv5-d16"}
+"""The toolchain file's default core: a Cortex-M4F for float code (single-precision FPU), a
+Cortex-M7 with a double-precision FPU for double code."""
 
 
 CALIBRATION_FILE = (("calibration.c.j2", "{p}_calibration.c", "c"),)

@@ -20,6 +20,13 @@ extern "C" {
 /** Real type of every signal and state entry. */
 typedef double vse_aukf_real;
 
+/* Double-precision code on an Arm core whose FPU has no double precision (e.g. a Cortex-M4F)
+ * runs every operation in software emulation: regenerate with --real float, or define
+ * VSE_ALLOW_SOFT_DOUBLE to build it anyway. */
+#if defined(__ARM_FP) && ((__ARM_FP & 8) == 0) && !defined(VSE_ALLOW_SOFT_DOUBLE)
+#error "double-precision estimator for an FPU without double precision: generate with --real float or define VSE_ALLOW_SOFT_DOUBLE"
+#endif
+
 /** Sample time the estimator was generated for, in s. Call vse_aukf_step once per sample. */
 #define VSE_AUKF_SAMPLE_TIME (0.01)
 

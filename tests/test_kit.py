@@ -1,0 +1,65 @@
+"""The generated integration kit outside Python: Makefile flags, the CMake cross-build with the
+kit's toolchain file, and the guard against double-precision code on a single-precision FPU."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from codegen.generate import render, write
+
+ARM = shutil.which("arm-none-eabi-gcc")
+
+
+def _kit(config, tmp_path: Path, real: str = "double") -> Path:
+    folder = tmp_path / f"kf2dof-{real}"
+    write(render(config, "kf2dof", real), folder)
+    return folder
+
+
+def test_command_line_cflags_keep_the_kit_flags(config, tmp_path):
+    """make CFLAGS=... (how a cross-build is usually asked for) still compiles as C99 with the
+    warnings on: the Makefile appends them with override."""
+    folder = _kit(config, tmp_path)
+    result = subprocess.run(["make", "-n", "CFLAGS=-O1", "libvse_kf2dof.a"], cwd=folder,
+                            capture_output=True, text=True, check=True)
+    compiles = [line for line in result.stdout.splitlines() if " -c " in line]
+    assert compiles and all("-O1" in line and "-std=c99 -Wall -Wextra -pedantic" in line
+                            for line in compiles)
+
+
+@pytest.mark.skipif(ARM is None or shutil.which("cmake") is None, reason="needs cmake and arm-none-eabi-gcc")
+def test_cmake_cross_build_with_the_kit_toolchain(config, tmp_path):
+    """The kit's toolchain file configures a Cortex-M build that makes the static library without
+    startup code or syscalls (the stdio example is off when cross-compiling)."""
+    folder = _kit(config, tmp_path, "float")
+    build = tmp_path / "build"
+    subprocess.run(["cmake", "-S", str(folder), "-B", str(build),
+                    "-DCMAKE_TOOLCHAIN_FILE=toolchain-arm-none-eabi.cmake"],
+                   check=True, capture_output=True, text=True)
+    subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True, text=True)
+    assert (build / "libvse_kf2dof.a").is_file() and not (build / "vse_kf2dof_example").exists()
+
+
+@pytest.mark.skipif(ARM is None, reason="needs arm-none-eabi-gcc")
+def test_double_code_for_a_single_precision_fpu_is_refused_with_a_way_out(config, tmp_path):
+    """Double code built for a Cortex-M4F (no double-precision FPU) stops with one #error naming
+    --real float and VSE_ALLOW_SOFT_DOUBLE; float code, a double-precision FPU (Cortex-M7) and the
+    explicit opt-in build."""
+    m4f = ["-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16"]
+    m7 = ["-mcpu=cortex-m7", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv5-d16"]
+
+    def compile_api(real: str, flags: list[str]) -> subprocess.CompletedProcess:
+        folder = _kit(config, tmp_path, real)
+        return subprocess.run([ARM, *flags, "-std=c99", "-c", "vse_kf2dof.c", "-o", "/dev/null"],
+                              cwd=folder, capture_output=True, text=True)
+
+    refused = compile_api("double", m4f)
+    assert refused.returncode != 0
+    assert "generate with --real float or define VSE_ALLOW_SOFT_DOUBLE" in refused.stderr
+    assert compile_api("float", m4f).returncode == 0
+    assert compile_api("double", m7).returncode == 0
+    assert compile_api("double", [*m4f, "-DVSE_ALLOW_SOFT_DOUBLE"]).returncode == 0
