@@ -28,9 +28,8 @@ from harness.fuzz import fuzz_estimator
 from harness.paths import DEFAULT_VEHICLE, REPO
 from harness.reference import REFERENCES
 from harness.scenarios import Case
-from harness.vehicles import with_settings
 from harness.targets import TARGETS, available, build_for_target
-from harness.vehicles import load_vehicle
+from harness.vehicles import load_vehicle, with_settings
 from model.estimator import Particles
 from model.estimators import build
 from model.params import parse_vehicle
