@@ -92,6 +92,15 @@ def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
     return codegen.forms_to_write(name, chosen)
 
 
+def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
+    """Folders ``out/<vehicle>/<form>`` that no generation produced (e.g. of a removed estimator
+    or vehicle file)."""
+    if not out.is_dir():
+        return []
+    return sorted(folder for vehicle in out.iterdir() if vehicle.is_dir()
+                  for folder in vehicle.iterdir() if folder.is_dir() and folder.resolve() not in expected)
+
+
 def _up_to_date(files: dict[str, str], folder: Path) -> bool:
     """Whether ``folder`` holds exactly ``files``; prints the diffs if not."""
     diffs = codegen.check(files, folder, _display(folder))
@@ -163,19 +172,25 @@ def main() -> None:
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
              check_only: bool, real: str | None, params: str | None) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
-    stale = []
+    stale, expected = [], set()
     for path in vehicles or tuple(shipped_vehicles()):
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
             _warn_underived(config, name)
             for form_real, form_params, folder_name in _forms(config, name, out, real, params):
                 folder = out / config.name / folder_name
+                expected.add(folder.resolve())
                 files = codegen.render(config, name, form_real, form_params)
                 if check_only and not _up_to_date(files, folder):
                     stale.append(_display(folder))
                 elif not check_only:
                     codegen.write(files, folder)
                     console.print(f"generated   {_display(folder)}  ({', '.join(sorted(files))})")
+    if check_only and not vehicles and not estimators:   # the whole tree: no folder left over
+        for folder in _stray_folders(out, expected):
+            click.echo(f"vsegen: {_display(folder)}: no vehicle file or estimator generates this folder "
+                       f"(remove it)", err=True)
+            stale.append(_display(folder))
     if stale:
         click.echo(f"vsegen: generated code is stale in {', '.join(stale)}: run `vsegen generate`",
                    err=True)

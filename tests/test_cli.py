@@ -44,10 +44,12 @@ def test_generate_then_check_detects_an_edit(tmp_path):
     assert vsegen("generate", "--out", str(tmp_path)).returncode == 0
     target = tmp_path / "c_class" / "kf2dof" / "vse_kf2dof.h"
     target.write_text(target.read_text().replace("(0.01)", "(0.02)"))
+    (tmp_path / "c_class" / "removed_estimator").mkdir()       # left over from an older tree
     result = vsegen("generate", "--check", "--out", str(tmp_path))
     assert result.returncode == 1
     assert "-#define VSE_KF2DOF_SAMPLE_TIME (0.02)" in result.stdout
     assert "stale" in result.stderr
+    assert "removed_estimator: no vehicle file or estimator generates this folder" in result.stderr
 
 
 @pytest.mark.parametrize("args,fragment", [
