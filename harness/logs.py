@@ -144,12 +144,16 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
     if not rows or not any(cell.strip() for cell in rows[0]):
         raise LogError(f"{source}:1: empty file: expected a header row with columns {', '.join(required)}")
     logged = [cell.strip() for cell in rows[0]]
+    mapped_from = {column: channel for channel, (column, _) in (channels or {}).items()}
     channels = {c: mapped for c, mapped in (channels or {}).items() if c in logged}
     header = [channels[cell][0] if cell in channels else cell for cell in logged]
     for name in header:
         if header.count(name) > 1:
             raise LogError(f"{source}:1: column '{name}' appears twice: expected unique column names")
     for name in required:
+        if name not in header and mapped_from.get(name, name) != name:
+            raise LogError(f"{source}:1: missing channel '{mapped_from[name]}' for column '{name}' (channel "
+                           f"map): expected it among the logged columns {', '.join(logged)}")
         if name not in header:
             raise LogError(f"{source}:1: missing column '{name}': expected the columns "
                            f"{', '.join(required)} (found {', '.join(header)})")

@@ -3,7 +3,9 @@ causally onto the estimator's sample grid; estimates written as MDF4."""
 
 from __future__ import annotations
 
+import gc
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -16,16 +18,31 @@ from harness.logs import OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError, latest
 SUFFIXES = (".mf4", ".mdf")
 
 
+def _open(path: Path):
+    """The asammdf reader of ``path``, or LogError (one line). A half-built reader of a damaged
+    file fails again in its destructor; that noise (a traceback on stderr) is swallowed while it
+    is collected here."""
+    from asammdf import MDF
+
+    message = None
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda unraisable: None
+    try:
+        try:
+            return MDF(path)
+        except Exception as exc:  # asammdf raises many types for a bad file
+            message = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        gc.collect()
+    finally:
+        sys.unraisablehook = hook
+    raise LogError(f"{path}: not a readable MDF4 file: {message}")
+
+
 def read_mdf(path: Path, channels: ChannelMap, sample_time: float) -> Log:
     """The log columns of an MDF4 file on a uniform grid of ``sample_time`` s over the span every
     required channel covers: each tick takes each channel's latest sample at or before it (no
     look-ahead); a channel older than MAX_GAP at a tick gives NaN there (the estimators hold)."""
-    from asammdf import MDF
-
-    try:
-        mdf = MDF(path)
-    except Exception as exc:  # asammdf raises many types for a bad file
-        raise LogError(f"{path}: not a readable MDF4 file: {str(exc).splitlines()[0][:120]}") from None
+    mdf = _open(path)
     series = {}
     for name in (*REQUIRED[1:], *OPTIONAL_INPUTS, *TRUTH):
         column = channels.column(name)

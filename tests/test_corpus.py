@@ -60,3 +60,51 @@ def test_bad_logs(tmp_path, name):
     assert_one_clear_line(invoke(["plot", "--log", str(path), "--est", str(path), "--out", str(figure)]),
                           path, EXPECTED[name])
     assert not figure.exists()
+
+
+@pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("units/")))
+def test_unit_mistakes(tmp_path, name):
+    """Logs that pass every range check but whose physics says a unit is wrong (r in deg/s, the
+    steering-wheel angle as delta, a_y in g): run refuses in one line naming the column and the
+    likely cause, writes nothing, and runs with --no-unit-check."""
+    path = CORPUS / name
+    est = tmp_path / "est.csv"
+    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+                          path, EXPECTED[name])
+    assert list(tmp_path.iterdir()) == []
+    forced = invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est), "--no-unit-check"])
+    assert forced.exit_code == 0 and est.is_file()
+
+
+def _logger_log(folder: Path) -> Path:
+    """A log as a logger names and scales it (the corpus channel maps' names and units): steady
+    cornering, 2 s at 100 Hz."""
+    rows = ["t,SteerWhlAng,VehSpd,LongAcc,LatAcc,YawRate"]
+    rows += [f"{k / 100:.2f},15.5,72.0,0.0,0.102,2.865" for k in range(200)]
+    path = folder / "logger.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("channels/")))
+def test_bad_channel_maps(tmp_path, name):
+    """A channel map with a mistake: one line naming the map (or, for a channel the log lacks, the
+    log) and the key, exit 2, nothing written."""
+    path, log = CORPUS / name, _logger_log(tmp_path)
+    est = tmp_path / "est.csv"
+    result = invoke(["run", "--log", str(log), "--channels", str(path), "--estimator", "kf2dof",
+                     "--out", str(est)])
+    blamed = log if name.endswith("missing_channel.toml") else path
+    assert_one_clear_line(result, blamed, EXPECTED[name])
+    assert sorted(tmp_path.iterdir()) == [log]
+
+
+@pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("mdf/")))
+def test_bad_mdf4_files(tmp_path, name):
+    """An MDF4 file that is empty, not MDF, truncated or lacks a channel: one line, exit 2, nothing
+    written, no traceback (asammdf's own complaints included)."""
+    path = CORPUS / name
+    est = tmp_path / "est.csv"
+    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+                          path, EXPECTED[name])
+    assert list(tmp_path.iterdir()) == []
