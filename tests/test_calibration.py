@@ -115,7 +115,7 @@ def _small(entry: str, names, values) -> float:
     return 0.01
 
 
-@pytest.mark.parametrize("name", ["kf2dof", "switching"])
+@pytest.mark.parametrize("name", ["kf2dof", pytest.param("switching", marks=pytest.mark.slow)])
 def test_each_calibration_field_changes_the_output_as_regeneration_does(config, name):
     """Each calibration field changed alone (by 3 %) in the running C gives what the reference of
     a vehicle file with that value gives: the field is read, and read as that setting."""
