@@ -268,6 +268,7 @@ def test_bad_settings_give_one_clear_line(vehicle_text, tmp_path, old, new, frag
 
 # ---- equivalence ------------------------------------------------------------------------------
 
+@pytest.mark.slow   # the default suite checks the double C on every scenario in test_equivalence
 @pytest.mark.parametrize("name", NAMES)
 def test_double_c_equals_the_reference_every_step_and_trajectory(config, name):
     results = verify_estimator(config, name, real="double")
@@ -276,6 +277,7 @@ def test_double_c_equals_the_reference_every_step_and_trajectory(config, name):
         assert result.ok and result.flips == 0, result
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 def test_float_c_equals_the_reference_every_step_flips_explained(config, name):
     results = verify_estimator(config, name, real="float")
