@@ -139,7 +139,8 @@ def test_each_calibration_field_changes_the_output_as_regeneration_does(config, 
     assert changed >= len(names) // 2
 
 
-@pytest.mark.parametrize("name", ["kf2dof", "switching", "pf_improved"])
+@pytest.mark.parametrize("name", ["kf2dof", pytest.param("switching", marks=pytest.mark.slow),
+                                  pytest.param("pf_improved", marks=pytest.mark.slow)])
 def test_an_invalid_calibration_holds_with_its_status(config, name):
     """The generated C repeats the schema's checks on the calibration: a mass <= 0, a zero
     cornering stiffness, a NaN, a resume speed below the hold speed or (for the 2x2 matrices) a

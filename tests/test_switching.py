@@ -143,8 +143,9 @@ def with_hysteresis(vehicle_text, value):
 @pytest.mark.parametrize("params", ["baked", "calibratable"])
 @pytest.mark.parametrize("table, key, value", [
     ("switching", "hysteresis", 0.2), ("switching", "adaptive_memory", 5.0),
-    ("switching", "yaw_rate_check", "reference"), ("fusion", "yaw_rate_check", "yaw_acceleration"),
-    ("switching", "offset_memory", 2.0)])
+    pytest.param("switching", "yaw_rate_check", "reference", marks=pytest.mark.slow),
+    pytest.param("fusion", "yaw_rate_check", "yaw_acceleration", marks=pytest.mark.slow),
+    pytest.param("switching", "offset_memory", 2.0, marks=pytest.mark.slow)])
 def test_options_are_equivalent_to_the_reference(vehicle_text, params, table, key, value):
     """A7/A10 beyond the paper, and the yaw-rate check the shipped file does not use: the C matches
     the reference step by step and in the mode sequence, on the HIL-like scenario, the continuous
