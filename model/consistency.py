@@ -84,6 +84,11 @@ STATES = (
 """The monitor's state entries (when it is on), 0 at init."""
 
 
+def initial_entries(monitored: bool) -> dict[str, ca.SX]:
+    """The monitor's state entries at init (0), or none when it is off."""
+    return {entry.name: ca.SX(0) for entry in STATES} if monitored else {}
+
+
 @dataclass(frozen=True)
 class Monitored:
     """One step of the monitor: the new state entries, whether the estimate is suspect (status

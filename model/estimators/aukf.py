@@ -251,7 +251,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
-        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
+        **consistency.initial_entries(monitored),
         "holding": 2 * holding,
     })
     # the first sample after a low-speed hold (holding = 2) restarts the filter from itself

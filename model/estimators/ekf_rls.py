@@ -397,7 +397,7 @@ def build(params: Parameters) -> Estimator:
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
-        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
+        **consistency.initial_entries(monitored),
     })
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                 next_state, output, params)

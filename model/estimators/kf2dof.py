@@ -185,7 +185,7 @@ def build(params: Parameters) -> Estimator:
         **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
-        **({entry.name: ca.SX(0) for entry in consistency.STATES} if monitored else {}),
+        **consistency.initial_entries(monitored),
         "holding": holding,
     })
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
