@@ -21,18 +21,17 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import feedback, seed003
+from bench import DEFAULT_VEHICLE, REPO, feedback, seed003
 from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
-from codegen.generate import render
-from harness.fuzz import fuzz_estimator
-from harness.paths import DEFAULT_VEHICLE, REPO
-from harness.reference import REFERENCES
-from harness.scenarios import Case
-from harness.targets import TARGETS, available, build_for_target
-from harness.vehicles import load_vehicle, with_settings
-from model.estimator import Particles
-from model.estimators import build
-from model.params import parse_vehicle
+from vsegen.codegen.generate import render
+from vsegen.harness.fuzz import fuzz_estimator
+from vsegen.harness.reference import REFERENCES
+from vsegen.harness.scenarios import Case
+from vsegen.harness.targets import TARGETS, available, build_for_target
+from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.model.estimator import Particles
+from vsegen.model.estimators import build
+from vsegen.model.params import parse_vehicle
 
 LOG_CASE = Case.of("continuous_dlc")
 TARGET_RATIO = 1.10

@@ -21,15 +21,14 @@ import numpy as np
 from rich.console import Console
 from rich.progress import Progress
 
-from bench import seed001, seed002, seed003, table3, transfer, tuning, yaw_rate
-from harness.cluster import Cluster
-from harness.paths import DEFAULT_VEHICLE, REPO
-from harness.plot import plot
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.score import score_case
-from harness.vehicles import load_vehicle
-from model.estimators import build
+from bench import DEFAULT_VEHICLE, REPO, seed001, seed002, seed003, table3, transfer, tuning, yaw_rate
+from vsegen.harness.cluster import Cluster
+from vsegen.harness.plot import plot
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.score import score_case
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import build
 
 SCORING_SET: tuple[Case, ...] = (
     *(Case.of("dlc", speed_kmh=v, mu=mu) for v in (80.0, 120.0) for mu in (1.0, 0.85, 0.5, 0.35)),

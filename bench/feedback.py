@@ -17,8 +17,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from harness.parallel import worker_count
-from harness.paths import REPO
+from bench import REPO
+from vsegen.harness.parallel import worker_count
 
 SECTION = "## Feedback times"
 DOCUMENT = REPO / "docs" / "benchmarks.md"

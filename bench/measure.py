@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.generate import library_sources, template_environment
-from harness.targets import link_to_api
-from model.bicycle import state_matrix_norm_bound
-from model.discretize import plan_zoh
-from model.estimator import Estimator
-from model.params import VehicleConfig
+from vsegen.codegen.generate import library_sources, template_environment
+from vsegen.harness.targets import link_to_api
+from vsegen.model.bicycle import state_matrix_norm_bound
+from vsegen.model.discretize import plan_zoh
+from vsegen.model.estimator import Estimator
+from vsegen.model.params import VehicleConfig
 
 HERE = Path(__file__).parent
 CC = "gcc"

@@ -16,11 +16,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from bench.figures import save_figure
-from harness.logs import Log
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.vehicles import with_settings
-from model.params import VehicleConfig, parse_vehicle
+from vsegen.harness.logs import Log
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.params import VehicleConfig, parse_vehicle
 
 NAME = "ekf_rls"
 RATE_HZ = 1000.0

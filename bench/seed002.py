@@ -18,13 +18,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from bench import REPO
 from bench.figures import save_figure
-from harness.paths import REPO
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.scenarios.manoeuvres import GRAVITY
-from harness.vehicles import with_settings
-from model.params import VehicleConfig, parse_vehicle
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.scenarios.manoeuvres import GRAVITY
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.params import VehicleConfig, parse_vehicle
 
 VEHICLE = REPO / "vehicles" / "ev_seed002.toml"
 ESTIMATORS = ("ukf", "aukf")

@@ -18,13 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from bench.measure import generated_driver, write_inputs
-from codegen.generate import render
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.targets import TARGETS, available, build_for_target
-from harness.vehicles import with_settings
-from model.estimators import build, pf
-from model.params import VehicleConfig, parse_vehicle
+from vsegen.codegen.generate import render
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.targets import TARGETS, available, build_for_target
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.estimators import build, pf
+from vsegen.model.params import VehicleConfig, parse_vehicle
 
 FILTERS = (pf.ADAPTIVE, pf.IMPROVED)
 STEERING_WHEEL_RATIO = 16.0

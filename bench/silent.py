@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import argparse
 
-from harness.cluster import Cluster
-from harness.paths import REPO
-from harness.run import run_estimator
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.score import SILENT_DURATION, silent_error_time
-from harness.vehicles import load_vehicle
-from model.estimators import DEFINITIONS
+from bench import REPO
+from vsegen.harness.cluster import Cluster
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.score import SILENT_DURATION, silent_error_time
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import DEFINITIONS
 
 CARS = ("c_class", "rwd_saloon")
 SEED = 1

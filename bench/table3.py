@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.cluster import Cluster
-from harness.paths import REPO
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.score import score
-from harness.vehicles import with_settings
-from model.params import parse_vehicle
+from bench import REPO
+from vsegen.harness.cluster import Cluster
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.score import score
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.params import parse_vehicle
 
 PAPER = {"switching": (0.274, 0.059, 0.086), "fusion": (0.462, 0.076, 0.124)}
 """Seed 000 Table 3 (deg): this paper's switching method and the comparison method [14]."""

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import argparse
 
+from bench import VEHICLES
 from bench.tuning import CARS, HOLDOUT, HOLDOUT_SEEDS, SEED, TRAINING, TRIALS
-from harness.paths import VEHICLES
-from harness.tuning import DEGREES, objective_value, settings_text, tune
-from harness.vehicles import load_vehicle
-from model.estimators import build
-from model.params import parse_vehicle
+from vsegen.harness.tuning import DEGREES, objective_value, settings_text, tune
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import build
+from vsegen.model.params import parse_vehicle
 
 
 def sideslip_estimators(config) -> list[str]:

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import argparse
 
-from harness.paths import VEHICLES
-from harness.scenarios import Case
-from harness.tuning import DEGREES, objective_value, tune
-from harness.vehicles import load_vehicle, with_settings
-from model.params import parse_vehicle
+from bench import VEHICLES
+from vsegen.harness.scenarios import Case
+from vsegen.harness.tuning import DEGREES, objective_value, tune
+from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.model.params import parse_vehicle
 
 CARS = ("c_class", "rwd_saloon")
 ESTIMATORS = ("switching", "kf2dof", "ekf_rls")

@@ -15,10 +15,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from bench.figures import save_figure
-from harness.run import run_estimator
-from harness.scenarios import Case
-from harness.vehicles import with_settings
-from model.params import parse_vehicle
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.params import parse_vehicle
 
 NAME = "arx_dual_kf"
 CASES = (Case.of("dlc", speed_kmh=80.0, yaw_moment=1000.0),

@@ -5,8 +5,8 @@ so the generated code tests ``!(condition)`` to find a broken calibration."""
 
 from __future__ import annotations
 
-from codegen.precision import literal
-from model.calibration_checks import Bound, Check, PositiveDefinite, Relation
+from vsegen.codegen.precision import literal
+from vsegen.model.calibration_checks import Bound, Check, PositiveDefinite, Relation
 
 
 def condition(check: Check, real: str) -> str:

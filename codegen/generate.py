@@ -17,15 +17,16 @@ from pathlib import Path
 import casadi as ca
 import jinja2
 
-from codegen.checks import condition
-from codegen.kernel import generate_kernel
-from codegen.precision import literal
-from model import status
-from model.calibration_checks import calibration_checks
-from model.estimator import RNG_WORDS
-from model.estimators import DEFINITIONS, SCHEMAS, build
-from model.params import VehicleConfig
-from model.schema import REALS
+from vsegen.codegen import a2l
+from vsegen.codegen.checks import condition
+from vsegen.codegen.kernel import generate_kernel
+from vsegen.codegen.precision import literal
+from vsegen.model import status
+from vsegen.model.calibration_checks import calibration_checks
+from vsegen.model.estimator import RNG_WORDS
+from vsegen.model.estimators import DEFINITIONS, SCHEMAS, build
+from vsegen.model.params import VehicleConfig
+from vsegen.model.schema import REALS
 
 TEMPLATES = Path(__file__).parent / "templates"
 EXAMPLE = "example_main.c"
@@ -107,9 +108,12 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "f": "f" if real == "float" else "",
         "arm_flags": ARM_FLAGS[real],
     }
+    if estimator.parameters.calibratable:
+        context.update(a2l=a2l.describe(estimator, real, prefix), a2l_datatype=a2l.DATATYPES[real][0],
+                       a2l_text=a2l.text)
     env = template_environment()
     files = {}
-    templates = TEMPLATE_FILES + (CALIBRATION_FILE if estimator.parameters.calibratable else ())
+    templates = TEMPLATE_FILES + (CALIBRATION_FILES if estimator.parameters.calibratable else ())
     context["library_sources"] = sorted(
         [kernel.c_name] + [file.format(p=prefix) for _, file, _ in templates
                            if file.endswith(".c") and file != EXAMPLE])
@@ -141,7 +145,8 @@ ARM_FLAGS = {"float": "-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d1
 Cortex-M7 with a double-precision FPU for double code."""
 
 
-CALIBRATION_FILE = (("calibration.c.j2", "{p}_calibration.c", "c"),)
+CALIBRATION_FILES = (("calibration.c.j2", "{p}_calibration.c", "c"), ("a2l.j2", "{p}.a2l", "c"))
+"""Files of a calibratable build only: the calibration struct's instance and its ASAP2 description."""
 
 
 def library_sources(files: dict[str, str]) -> list[str]:

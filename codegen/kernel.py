@@ -22,8 +22,8 @@ from pathlib import Path
 
 import casadi as ca
 
-from codegen.precision import to_single
-from model.estimator import Estimator
+from vsegen.codegen.precision import to_single
+from vsegen.model.estimator import Estimator
 
 
 @dataclass(frozen=True)

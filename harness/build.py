@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.generate import library_sources, render, template_environment
-from harness.paths import cache_dir
-from model.estimator import Estimator
-from model.estimators import build
-from model.params import VehicleConfig
+from vsegen.codegen.generate import library_sources, render, template_environment
+from vsegen.harness.paths import cache_dir
+from vsegen.model.estimator import Estimator
+from vsegen.model.estimators import build
+from vsegen.model.params import VehicleConfig
 
 WARNING_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror")
 """The generated code must compile cleanly with these (design.md, "Generated C")."""

@@ -19,9 +19,9 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from harness.files import read_user_text
-from harness.logs import TRUTH, LogError
-from model import signals
+from vsegen.harness.files import read_user_text
+from vsegen.harness.logs import TRUTH, LogError
+from vsegen.model import signals
 
 UNITS: dict[str, tuple[str, float]] = {
     "rad": ("angle", 1.0), "deg": ("angle", math.pi / 180.0),

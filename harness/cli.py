@@ -18,15 +18,15 @@ from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
-from codegen import generate as codegen
-from harness.files import write_text_atomic
-from harness.logs import TRUTH, LogError, read_estimates, read_log, write_log
-from harness.paths import DEFAULT_VEHICLE, GENERATED, REPORTS
-from harness.progress import RunProgress
-from harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
-from harness.vehicles import load_vehicle, shipped_vehicles
-from model.estimators import DEFINITIONS, underived_warning
-from model.params import ParameterError, VehicleConfig
+from vsegen.codegen import generate as codegen
+from vsegen.harness.files import write_text_atomic
+from vsegen.harness.logs import TRUTH, LogError, read_estimates, read_log, write_log
+from vsegen.harness.paths import ProjectError, project, shipped_vehicle_names
+from vsegen.harness.progress import RunProgress
+from vsegen.harness.scenarios import SCENARIOS, VERIFICATION_SET, Case, ScenarioError, parse_option
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import DEFINITIONS, underived_warning
+from vsegen.model.params import ParameterError, VehicleConfig
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
 
@@ -47,7 +47,7 @@ def user_errors(command):
     def wrapper(*args, **kwargs):
         try:
             return command(*args, **kwargs)
-        except (ParameterError, LogError, ScenarioError) as exc:
+        except (ParameterError, LogError, ScenarioError, ProjectError) as exc:
             raise UserError(str(exc)) from None
 
     return wrapper
@@ -69,8 +69,14 @@ CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), de
 UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=True,
                                  help="Skip the physics check of the log's units (a_y against r v_x, "
                                       "delta against l r / v_x).")
-VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=DEFAULT_VEHICLE,
-                              show_default="vehicles/c_class.toml", help="Vehicle TOML.")
+VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=None,
+                              help="Vehicle TOML. Default: the project's only vehicle file, else its "
+                                   "vehicles/c_class.toml.")
+
+
+def _vehicle(path: Path | None) -> VehicleConfig:
+    """The vehicle ``--vehicle`` names, else the project's default one."""
+    return load_vehicle(path or project().default_vehicle())
 
 
 def _estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str]:
@@ -87,9 +93,18 @@ def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
     """(real, params, folder name) to generate: the one asked for, or the vehicle file's default
     and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS)."""
     chosen = (real or config.codegen["real"], params or config.codegen["params"])
-    if real or params or out.resolve() != GENERATED.resolve():
+    if real or params or out.resolve() != project().generated:
         return [(*chosen, name)]
     return codegen.forms_to_write(name, chosen)
+
+
+def _project_vehicles() -> list[Path]:
+    """The project's vehicle files; ProjectError (one line) when it has none."""
+    files = project().vehicle_files()
+    if not files:
+        raise ProjectError(f"no vehicle file in {project().vehicles}: expected --vehicle FILE, or a project "
+                           f"made by `vsegen init DIR`")
+    return files
 
 
 def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
@@ -119,9 +134,9 @@ def _read_log(path: Path, channels: Path | None, sample_time: float | Callable[[
     channels: at ``sample_time``, a number or a function giving it, called only for MDF4) and where
     it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the signals' physics is
     checked for wrong units (``harness.unit_sanity``)."""
-    from harness.channels import read_channel_map
-    from harness.mdf import SUFFIXES, read_mdf
-    from harness.unit_sanity import check_units
+    from vsegen.harness.channels import read_channel_map
+    from vsegen.harness.mdf import SUFFIXES, read_mdf
+    from vsegen.harness.unit_sanity import check_units
 
     mapping = read_channel_map(channels)
     if path.suffix.lower() in SUFFIXES:
@@ -159,21 +174,22 @@ def main() -> None:
 
 @main.command()
 @click.option("--vehicle", "vehicles", multiple=True, type=click.Path(path_type=Path),
-              help="Vehicle TOML (repeatable). Default: every file in vehicles/.")
+              help="Vehicle TOML (repeatable). Default: every file in the project's vehicles/.")
 @click.option("--estimator", "estimators", multiple=True,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
-@click.option("--out", type=click.Path(path_type=Path), default=GENERATED, show_default=True,
-              help="Folder that receives <vehicle>/<estimator>/.")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="Folder that receives <vehicle>/<estimator>/. Default: the project's generated/.")
 @click.option("--check", "check_only", is_flag=True,
               help="Do not write: compare with --out and print a unified diff of what would change.")
 @REAL_OPTION
 @PARAMS_OPTION
 @user_errors
-def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
+def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path | None,
              check_only: bool, real: str | None, params: str | None) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
     stale, expected = [], set()
-    for path in vehicles or tuple(shipped_vehicles()):
+    out = out or project().generated
+    for path in vehicles or _project_vehicles():
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
             _warn_underived(config, name)
@@ -205,14 +221,14 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path,
 @REAL_OPTION
 @PARAMS_OPTION
 @user_errors
-def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | None,
+def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
            params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
-    from harness.compare import PEAK_FRACTION, TOLERANCES
-    from harness.verify import FLIP_MARGIN
-    from harness.verify import verify as verify_all
+    from vsegen.harness.compare import PEAK_FRACTION, TOLERANCES
+    from vsegen.harness.verify import FLIP_MARGIN
+    from vsegen.harness.verify import verify as verify_all
 
-    config = load_vehicle(vehicle)
+    config = _vehicle(vehicle)
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
     names = _estimators(config, estimators)
@@ -265,14 +281,14 @@ def verify(vehicle: Path, estimators: tuple[str, ...], seed: int, real: str | No
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="Log CSV to write.")
 @click.option("--no-truth", is_flag=True, help="Leave out the ground-truth columns (a logger's view).")
 @user_errors
-def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, rate: float,
+def simulate(scenario: str, vehicle: Path | None, options: tuple[str, ...], seed: int, rate: float,
              out: Path, no_truth: bool) -> None:
     """Simulate SCENARIO on the truth plant and write its log (design.md format)."""
     if scenario not in SCENARIOS:
         raise UserError(f"unknown scenario '{scenario}': expected one of {', '.join(SCENARIOS)}")
     if not rate > 0:
         raise UserError(f"--rate {rate}: expected a rate in Hz > 0")
-    config = load_vehicle(vehicle)
+    config = _vehicle(vehicle)
     case = Case.of(scenario, **dict(parse_option(scenario, o) for o in options))
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task(f"simulating {case.label} at {rate:g} Hz", total=1.0)
@@ -299,8 +315,8 @@ def simulate(scenario: str, vehicle: Path, options: tuple[str, ...], seed: int, 
 def identify(log_paths: tuple[Path, ...], vehicle: Path, out: Path, report_path: Path | None,
              channels: Path | None, no_unit_check: bool) -> None:
     """Identify the car's parameters and car-specific settings from driving logs."""
-    from harness.identify import identify as identify_logs
-    from harness.identify.vehicle_file import identified_vehicle_file, report
+    from vsegen.harness.identify import identify as identify_logs
+    from vsegen.harness.identify.vehicle_file import identified_vehicle_file, report
 
     config = load_vehicle(vehicle)
     checked = None if no_unit_check else config
@@ -348,10 +364,10 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
          trials: int, objective: str, seed: int, batch: int, scheduler: str | None, plot_path: Path | None,
          channels: Path | None, no_unit_check: bool) -> None:
     """Tune an estimator's numeric settings on logs with ground truth, running its generated C."""
-    from harness.cluster import ClusterError
-    from harness.plot import tuning_plot
-    from harness.tuning import DEGREES, TuneError, scored_output
-    from harness.tuning import tune as tune_settings
+    from vsegen.harness.cluster import ClusterError
+    from vsegen.harness.plot import tuning_plot
+    from vsegen.harness.tuning import DEGREES, TuneError, scored_output
+    from vsegen.harness.tuning import tune as tune_settings
 
     config = load_vehicle(vehicle)
     _estimators(config, (estimator,))
@@ -404,12 +420,12 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
 @UNIT_CHECK_OPTION
 @window_options
 @user_errors
-def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, channels: Path | None,
+def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out: Path, channels: Path | None,
         no_unit_check: bool, start: float | None, stop: float | None) -> None:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
-    from harness.run import run_estimator
+    from vsegen.harness.run import run_estimator
 
-    config = load_vehicle(vehicle)
+    config = _vehicle(vehicle)
     _estimators(config, (estimator,))
     _warn_underived(config, estimator)
     log = _read_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
@@ -420,7 +436,7 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, 
     with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
         estimates = run_estimator(config, estimator, log, backend)
     if out.suffix.lower() == ".mf4":
-        from harness.mdf import write_mdf
+        from vsegen.harness.mdf import write_mdf
 
         write_mdf(estimates, out)
     else:
@@ -440,7 +456,7 @@ def run(log_path: Path, estimator: str, vehicle: Path, backend: str, out: Path, 
 @user_errors
 def score(log_path: Path, est_path: Path, channels: Path | None, start: float | None, stop: float | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
-    from harness.score import score as compute
+    from vsegen.harness.score import score as compute
 
     log = _read_log(log_path, channels, lambda: read_estimates(est_path).sample_time, (start, stop))
     scores = compute(log, read_estimates(est_path))
@@ -470,7 +486,7 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path 
          stop: float | None) -> None:
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style); without a
     reference in the log, the estimates and their status."""
-    from harness.plot import plot as draw
+    from vsegen.harness.plot import plot as draw
 
     log = _read_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time, (start, stop))
     estimates = {}
@@ -488,12 +504,12 @@ def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path 
 @click.option("--estimator", "estimators", multiple=True,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
 @user_errors
-def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
+def size(vehicle: Path | None, estimators: tuple[str, ...]) -> None:
     """Cross-build every estimator for Cortex-M4F (float) and Cortex-M7 (double); print the
     resource budget: .text/.data/.bss and worst-case stack (bytes)."""
-    from harness.targets import TARGETS, TargetError, available, build_for_target
+    from vsegen.harness.targets import TARGETS, TargetError, available, build_for_target
 
-    config = load_vehicle(vehicle)
+    config = _vehicle(vehicle)
     table = Table(title=f"resource budget, vehicle {config.name} (arm-none-eabi-gcc -O2, linked "
                         f"with --gc-sections to the public API; .text includes .rodata)")
     for column in ("estimator", "target", "real", "params", ".text", ".data", ".bss",
@@ -523,18 +539,23 @@ def size(vehicle: Path, estimators: tuple[str, ...]) -> None:
 
 @main.command()
 @click.option("--update-baseline", is_flag=True, help="Write the current counts as the new baseline.")
-@click.option("--out", type=click.Path(path_type=Path), default=REPORTS / "misra.md",
-              show_default="docs/misra.md", help="Deviation report to write.")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="Deviation report to write. Default: the project's docs/misra.md.")
 @user_errors
-def misra(update_baseline: bool, out: Path) -> None:
+def misra(update_baseline: bool, out: Path | None) -> None:
     """Run cppcheck's MISRA C:2012 addon on every distinct generated estimator of the shipped
     vehicles (each estimator and set of options once); write the deviation report; fail if a
     rule's count grew past the baseline."""
-    from harness import misra as checks
-    from harness.files import write_text_atomic
+    from vsegen.harness import misra as checks
+    from vsegen.harness.files import write_text_atomic
+
+    if update_baseline and not checks.in_source_checkout():
+        raise UserError(f"--update-baseline: {checks.BASELINE} is vsegen's own baseline: expected a vsegen "
+                        f"source checkout, not an installed vsegen")
 
     sections, total = [], Counter()
-    configs = [load_vehicle(path) for path in shipped_vehicles()]
+    configs = [load_vehicle(path) for path in _project_vehicles()]
+    out = out or project().reports / "misra.md"
     estimators = checks.distinct_code([(config, name) for config in configs for name in _estimators(config, ())])
     for (config, name), forms in zip(estimators, checks.all_findings(estimators)):
         for form, counts in forms:
@@ -553,6 +574,49 @@ def misra(update_baseline: bool, out: Path) -> None:
         sys.exit(1)
 
 
+@main.command()
+@click.option("--elf", "elf_path", type=click.Path(path_type=Path), required=True,
+              help="The linked firmware (ELF with its symbol table).")
+@click.option("--a2l", "a2l_path", type=click.Path(path_type=Path), required=True,
+              help="The A2L file of a calibratable kit (generated/<vehicle>/<estimator>/vse_<name>.a2l).")
+@click.option("--state", default=None, help="The firmware's state variable. Default: the kit example's.")
+@click.option("--output", default=None, help="The firmware's output variable. Default: the kit example's.")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="A2L file to write, addresses filled.")
+@user_errors
+def a2l(elf_path: Path, a2l_path: Path, state: str | None, output: str | None, out: Path) -> None:
+    """Fill the addresses of a generated A2L file from the linked firmware, for INCA / CANape."""
+    from vsegen.harness.a2l_link import A2LError, elf_symbols, link
+    from vsegen.harness.files import read_user_text
+
+    try:
+        text = read_user_text(a2l_path, A2LError, "A2L file")
+        linked = link(text, str(a2l_path), elf_symbols(elf_path), str(elf_path), state, output)
+    except A2LError as exc:
+        raise UserError(str(exc)) from None
+    write_text_atomic(out, linked)
+    console.print(f"wrote {_display(out)}: {linked.count('/begin CHARACTERISTIC')} characteristics, "
+                  f"{linked.count('/begin MEASUREMENT')} measurements, addresses from {_display(elf_path)}")
+
+
+@main.command()
+@click.argument("folder", type=click.Path(path_type=Path))
+@click.option("--like", default="c_class", show_default=True,
+              help="Shipped vehicle whose values the starter vehicle file begins with.")
+@user_errors
+def init(folder: Path, like: str) -> None:
+    """Start a project in FOLDER for your own car: vehicles/car.toml (commented, to edit),
+    channels.toml (a channel-map example) and a README with the next commands."""
+    from vsegen.harness.starter import StarterError, init_project
+
+    try:
+        written = init_project(folder, like)
+    except StarterError as exc:
+        raise UserError(str(exc)) from None
+    for path in written:
+        console.print(f"wrote {_display(path)}")
+    console.print(f"next: cd {_display(folder)} && vsegen generate")
+
+
 @main.command(name="list")
 def list_() -> None:
     """List the estimators, scenarios and vehicles vsegen knows."""
@@ -562,7 +626,12 @@ def list_() -> None:
         options = " ".join(f"{k}={v}" for k, v in s.defaults.items())
         console.print(f"  {s.name}: {s.description}" + (f"  [options: {options}]" if options else ""),
                       markup=False)  # the brackets are text, not rich markup
-    console.print("vehicles:   " + ", ".join(_display(p) for p in shipped_vehicles()))
+    files = project().vehicle_files()
+    if files:
+        console.print("vehicles:   " + ", ".join(_display(p) for p in files))
+    else:
+        console.print(f"vehicles:   none in this project ({_display(project().vehicles)}); shipped with vsegen: "
+                      f"{', '.join(shipped_vehicle_names())} (`vsegen init DIR` starts a project)")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -20,7 +20,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from harness.parallel import worker_count
+from vsegen.harness.parallel import worker_count
 
 SCHEDULER_VARIABLE = "VSEGEN_SCHEDULER"
 _ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}

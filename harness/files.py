@@ -9,7 +9,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from codegen.generate import publish
+from vsegen.codegen.generate import publish
 
 DECOMPRESSORS = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress}
 """Compressed files are read by their suffix (e.g. drive.csv.gz)."""

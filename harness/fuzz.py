@@ -13,11 +13,11 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from codegen.generate import library_sources, render, template_environment
-from model import signals
-from model.estimators import build
-from model.guard import LIMIT_KEYS
-from model.params import VehicleConfig
+from vsegen.codegen.generate import library_sources, render, template_environment
+from vsegen.model import signals
+from vsegen.model.estimators import build
+from vsegen.model.guard import LIMIT_KEYS
+from vsegen.model.params import VehicleConfig
 
 SANITIZE = ("-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer")
 

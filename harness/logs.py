@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from harness.files import read_user_text, write_text_atomic
-from model import signals
+from vsegen.harness.files import read_user_text, write_text_atomic
+from vsegen.model import signals
 
 REQUIRED = (signals.TIME.name, *signals.REQUIRED_INPUTS)
 """Required columns: time and the required inputs (model.signals)."""

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from codegen.generate import publish
-from harness.channels import ChannelMap
-from harness.logs import OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError, latest_samples
+from vsegen.codegen.generate import publish
+from vsegen.harness.channels import ChannelMap
+from vsegen.harness.logs import OPTIONAL_INPUTS, REQUIRED, TRUTH, Log, LogError, latest_samples
 
 SUFFIXES = (".mf4", ".mdf")
 

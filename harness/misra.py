@@ -17,7 +17,7 @@ import tempfile
 from collections import Counter
 from pathlib import Path
 
-from codegen.generate import EXAMPLE
+from vsegen.codegen.generate import EXAMPLE
 
 BASELINE = Path(__file__).resolve().parents[1] / "codegen" / "misra_baseline.json"
 
@@ -65,7 +65,7 @@ def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
     form, and the template files (with the kernel's header) of the others. The kernel sources of
     the other forms differ only in literal types and the parameter vector, and cppcheck needs
     about a minute for each of the unscented filters' kernels."""
-    from codegen.generate import render
+    from vsegen.codegen.generate import render
 
     results = []
     for index, (real, params) in enumerate(VARIANTS):
@@ -93,7 +93,7 @@ def distinct_code(estimators: list[tuple]) -> list[tuple]:
 def all_findings(estimators: list[tuple]) -> list[list[tuple[str, Counter]]]:
     """:func:`estimator_findings` of every (config, name) pair, spread over worker processes
     (cppcheck runs one process per folder)."""
-    from harness.parallel import Workers
+    from vsegen.harness.parallel import Workers
 
     with Workers() as workers:
         return workers.map(estimator_findings, estimators)
@@ -105,6 +105,11 @@ def by_rule(counts: Counter) -> dict[str, int]:
     for (_, rule), count in counts.items():
         totals[rule] += count
     return dict(sorted(totals.items()))
+
+
+def in_source_checkout() -> bool:
+    """Whether the baseline belongs to a vsegen source checkout (it may be updated there only)."""
+    return (BASELINE.parents[1] / "pyproject.toml").is_file()
 
 
 def load_baseline() -> dict[str, int]:

@@ -18,7 +18,7 @@ from typing import Any
 
 MIN_PARALLEL_JOBS = 4
 """Fewer jobs than this run in-process: starting the workers costs about a second."""
-_PRELOAD = ["harness.verify"]
+_PRELOAD = ["vsegen.harness.verify"]
 _ONE_THREAD = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 """Workers run their linear algebra single-threaded: the matrices are tiny, and a BLAS thread
 that spins while another worker holds the core made scipy's expm 9x slower (measured)."""

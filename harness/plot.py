@@ -11,7 +11,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from harness.logs import Log, LogError, runs
+from vsegen.harness.logs import Log, LogError, runs
 
 DYNAMIC = 0
 

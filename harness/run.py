@@ -3,13 +3,13 @@ the NumPy reference."""
 
 from __future__ import annotations
 
-from codegen.generate import render
-from harness.build import load_estimator
-from harness.logs import Log, LogError
-from harness.reference import REFERENCES
-from harness.reference.run import run_reference
-from model.estimators import build
-from model.params import VehicleConfig
+from vsegen.codegen.generate import render
+from vsegen.harness.build import load_estimator
+from vsegen.harness.logs import Log, LogError
+from vsegen.harness.reference import REFERENCES
+from vsegen.harness.reference.run import run_reference
+from vsegen.model.estimators import build
+from vsegen.model.params import VehicleConfig
 
 BACKENDS = ("c", "reference")
 SAMPLE_TIME_DIGITS = 9

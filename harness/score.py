@@ -10,9 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.logs import Log, LogError
-from harness.run import run_estimator
-from harness.scenarios.simulate import SPIN_BETA as SPIN_SIDESLIP
+from vsegen.harness.logs import Log, LogError
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios.simulate import SPIN_BETA as SPIN_SIDESLIP
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
     ("beta", "beta_ref", "deg", 180.0 / np.pi),

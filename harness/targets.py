@@ -23,7 +23,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from codegen.generate import library_sources
+from vsegen.codegen.generate import library_sources
 
 COMMON_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-Wvla", "-O2",
                 "-ffunction-sections", "-fdata-sections", "-fstack-usage", "-fcallgraph-info=su")

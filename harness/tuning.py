@@ -15,16 +15,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.build import CEstimator, load_tuning_estimator
-from harness.cluster import Cluster
-from harness.logs import Log
-from harness.run import config_at, estimator_inputs
-from harness.vehicles import with_settings
-from model.calibration import calibration_values
-from model.estimator import Tunable
-from model.estimators import DEFINITIONS, build
-from model.params import ParameterError, VehicleConfig, parse_vehicle
-from model.schema import rounded, shown
+from vsegen.harness.build import CEstimator, load_tuning_estimator
+from vsegen.harness.cluster import Cluster
+from vsegen.harness.logs import Log
+from vsegen.harness.run import config_at, estimator_inputs
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.calibration import calibration_values
+from vsegen.model.estimator import Tunable
+from vsegen.model.estimators import DEFINITIONS, build
+from vsegen.model.params import ParameterError, VehicleConfig, parse_vehicle
+from vsegen.model.schema import rounded, shown
 
 OBJECTIVES = ("rmse", "max", "mean")
 """Per log: RMSE, largest |error| or mean |error|; averaged over the logs."""

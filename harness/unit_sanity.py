@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from harness.identify.segments import SLOPE_WINDOW, derivative, smoothed
-from harness.logs import Log, LogError
+from vsegen.harness.identify.segments import SLOPE_WINDOW, derivative, smoothed
+from vsegen.harness.logs import Log, LogError
 
 MIN_SAMPLES = 100
 """Quasi-steady samples needed before judging (about a second at 100 Hz)."""

@@ -5,9 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from harness.files import read_user_text
-from harness.paths import VEHICLES
-from model.params import ParameterError, VehicleConfig, parse_vehicle
+from vsegen.harness.files import read_user_text
+from vsegen.model.params import ParameterError, VehicleConfig, parse_vehicle
 
 
 def load_vehicle(path: Path | str) -> VehicleConfig:
@@ -15,11 +14,6 @@ def load_vehicle(path: Path | str) -> VehicleConfig:
     path = Path(path)
     text = read_user_text(path, ParameterError, "vehicle file (TOML)")
     return parse_vehicle(text, str(path), path.stem)
-
-
-def shipped_vehicles() -> list[Path]:
-    """The vehicle files in the repository's vehicles/ folder."""
-    return sorted(VEHICLES.glob("*.toml"))
 
 
 def with_settings(text: str, section: str, comments: dict[str, str] | None = None,

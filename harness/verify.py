@@ -8,15 +8,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.build import compile_estimator
-from harness.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
-from harness.parallel import Workers
-from harness.reference import LONG_DOUBLE, REFERENCES
-from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET, Case
-from model.estimator import Particles
-from model.estimators import build
-from model.params import VehicleConfig
+from vsegen.harness.build import compile_estimator
+from vsegen.harness.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
+from vsegen.harness.parallel import Workers
+from vsegen.harness.reference import LONG_DOUBLE, REFERENCES
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.model.estimator import Particles
+from vsegen.model.estimators import build
+from vsegen.model.params import VehicleConfig
 
 
 class LayoutMismatch(RuntimeError):

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 
 if TYPE_CHECKING:    # annotations only: model.params imports the estimators, which import this
-    from model.params import VehicleConfig
+    from vsegen.model.params import VehicleConfig
 
 
 CALIBRATION_MARGIN = 2.0

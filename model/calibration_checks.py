@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from model.schema import INPUT_LIMITS, VEHICLE, EstimatorSchema, Field
+from vsegen.model.schema import INPUT_LIMITS, VEHICLE, EstimatorSchema, Field
 
 
 @dataclass(frozen=True)
@@ -64,6 +64,13 @@ def calibration_checks(schema: EstimatorSchema, names: tuple[str, ...]) -> tuple
         if rule.relation is not None:
             checks += _relation(*rule.relation, index)
     return tuple(checks)
+
+
+def entry_fields(schema: EstimatorSchema, names: tuple[str, ...]) -> dict[str, Field]:
+    """The schema field each calibration entry of ``names`` comes from (its unit and meaning)."""
+    index = {name: i for i, name in enumerate(names)}
+    fields = {f.key: f for f in (*VEHICLE, *INPUT_LIMITS, *schema.fields)}
+    return {name: field for key, field in fields.items() for name in _entries(key, index)}
 
 
 def _relation(left: str, op: str, right: str | float, index: dict[str, int]) -> list[Check]:

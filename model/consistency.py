@@ -25,9 +25,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model.estimator import Derived
-from model.schema import Field, diagonal, nonnegative, positive
-from model.signals import Signal
+from vsegen.model.estimator import Derived
+from vsegen.model.schema import Field, diagonal, nonnegative, positive
+from vsegen.model.signals import Signal
 
 OUTLIER_CAP = 100.0
 """Most one channel's squared innovation counts, in sensor variances (a 10-sigma outlier)."""

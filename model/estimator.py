@@ -33,9 +33,9 @@ from typing import Any
 
 import casadi as ca
 
-from model.calibration import Parameters
-from model.layout import Layout
-from model.schema import EstimatorSchema
+from vsegen.model.calibration import Parameters
+from vsegen.model.layout import Layout
+from vsegen.model.schema import EstimatorSchema
 
 
 class _ComposedStep:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model import signals, status
+from vsegen.model import signals, status
 
 LIMIT_KEYS = {entry.name: entry.limit_key for entry in signals.INPUTS}
 """Which ``[inputs]`` limit bounds which log column (model.signals)."""

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model.kalman import packed_names
-from model.signals import Signal
+from vsegen.model.kalman import packed_names
+from vsegen.model.signals import Signal
 
 
 def unit_product(a: str, b: str) -> str:

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any
 
-from model.estimators import SCHEMAS
-from model.schema import (
+from vsegen.model.estimators import SCHEMAS
+from vsegen.model.schema import (
     CODEGEN,
     INPUT_LIMITS,
     PLANT,

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from model import signals
+from vsegen.model import signals
 
 
 class Invalid(ValueError):
@@ -38,6 +38,9 @@ class Field:
     ((">", 0.0),): the calibration checks the generated C repeats at run time."""
     positive_definite: bool = False
     """A symmetric matrix that must be positive definite (also checked at run time)."""
+    unit: str = ""
+    """The value's unit, as the vehicle file reference writes it (e.g. "kg", "(m/s)^2"); "-" for a
+    ratio, "" where the key is not a number (e.g. a choice)."""
 
 
 @dataclass(frozen=True)
@@ -67,8 +70,10 @@ def _number(value: Any) -> float:
 
 
 def number_field(key: str, expected: str, accept: Callable[[float], bool], doc: str,
-                  default: float | None = None, bounds: tuple[tuple[str, float], ...] = ()) -> Field:
-    """A finite number for which ``accept`` holds (``bounds``: the same as operator pairs)."""
+                  default: float | None = None, bounds: tuple[tuple[str, float], ...] = (),
+                  unit: str = "-") -> Field:
+    """A finite number in ``unit`` for which ``accept`` holds (``bounds``: the same as operator
+    pairs)."""
 
     def check(value: Any) -> float:
         try:
@@ -79,19 +84,19 @@ def number_field(key: str, expected: str, accept: Callable[[float], bool], doc: 
             raise Invalid(expected)
         return number
 
-    return Field(key, expected, check, doc, default, bounds)
+    return Field(key, expected, check, doc, default, bounds, unit=unit)
 
 
 def positive(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
     """A finite number > 0 in ``unit`` (optional when ``default`` is given)."""
     return number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc, default,
-                        ((">", 0.0),))
+                        ((">", 0.0),), unit)
 
 
 def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
     """A finite number >= 0 in ``unit`` (optional when ``default`` is given)."""
     return number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default,
-                        ((">=", 0.0),))
+                        ((">=", 0.0),), unit)
 
 
 def fraction(key: str, doc: str = "", default: float | None = None) -> Field:
@@ -136,7 +141,7 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
             raise Invalid(expected + " (it is not positive definite)")
         return tuple(tuple(float(v) for v in row) for row in matrix)
 
-    return Field(key, expected, check, doc, positive_definite=True)
+    return Field(key, expected, check, doc, positive_definite=True, unit=unit)
 
 
 def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
@@ -157,7 +162,7 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
             raise Invalid(expected)
         return entries
 
-    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0),))
+    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0),), unit=unit)
 
 
 def vector(key: str, size: int, unit: str, doc: str = "",
@@ -173,7 +178,7 @@ def vector(key: str, size: int, unit: str, doc: str = "",
         except Invalid:
             raise Invalid(expected) from None
 
-    return Field(key, expected, check, doc, default)
+    return Field(key, expected, check, doc, default, unit=unit)
 
 
 def integer(key: str, low: int, high: int, doc: str = "") -> Field:
@@ -186,7 +191,7 @@ def integer(key: str, low: int, high: int, doc: str = "") -> Field:
             raise Invalid(expected)
         return value
 
-    return Field(key, expected, check, doc)
+    return Field(key, expected, check, doc, unit="-")
 
 
 def between(key: str, low: float, high: float, doc: str = "", default: float | None = None) -> Field:

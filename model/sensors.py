@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from model.bicycle import GRAVITY
+from vsegen.model.bicycle import GRAVITY
 
 
 def roll_corrected(ay_measured, roll_gradient):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from model.status import STATUS_BITS
+from vsegen.model.status import STATUS_BITS
 
 
 @dataclass(frozen=True)

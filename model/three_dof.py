@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model import increments
-from model.bicycle import GRAVITY
-from model.increments import Value
+from vsegen.model import increments
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.increments import Value
 
 AIR_DENSITY = 1.2
 """kg/m^3, for the drag F_w = rho C_dA u^2 / 2 (§3)."""

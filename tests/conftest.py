@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from locations import DEFAULT_VEHICLE
 
-from harness.paths import DEFAULT_VEHICLE
-from harness.vehicles import load_vehicle, with_settings
-from model.params import VehicleConfig, parse_vehicle
+from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.model.params import VehicleConfig, parse_vehicle
 
 
 @pytest.fixture(scope="session")

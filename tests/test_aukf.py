@@ -9,18 +9,18 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.build import compile_estimator
-from harness.compare import as_seen_by
-from harness.reference import REFERENCES
-from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.verify import verify_estimator
-from model import status, unscented
-from model.bicycle import GRAVITY
-from model.calibration import baked
-from model.estimators import aukf
-from model.increments import Pair, fmax, lift, sqrt
-from model.params import ParameterError
+from vsegen.harness.build import compile_estimator
+from vsegen.harness.compare import as_seen_by
+from vsegen.harness.reference import REFERENCES
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.verify import verify_estimator
+from vsegen.model import status, unscented
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.calibration import baked
+from vsegen.model.estimators import aukf
+from vsegen.model.increments import Pair, fmax, lift, sqrt
+from vsegen.model.params import ParameterError
 
 
 def pair_function(f):

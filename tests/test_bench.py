@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from bench.measure import HERE, hand_raw_parameters
-from harness.build import build_library
-from harness.compare import TOLERANCES, difference
-from harness.reference import kf2dof as reference
-from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET
-from harness.vehicles import with_settings
-from model.params import parse_vehicle
+from vsegen.harness.build import build_library
+from vsegen.harness.compare import TOLERANCES, difference
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import VERIFICATION_SET
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.params import parse_vehicle
 
 WRAPPER = """
 #include "kf2dof_hand.h"

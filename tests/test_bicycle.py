@@ -6,8 +6,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.reference import blocks
-from model.bicycle import bicycle_matrices, stability_factor, state_matrix_norm_bound
+from vsegen.harness.reference import blocks
+from vsegen.model.bicycle import bicycle_matrices, stability_factor, state_matrix_norm_bound
 
 EXAMPLE = {  # placeholder stiffnesses of the spec's worked example
     "mass": 1412.0, "yaw_inertia": 1964.4, "cg_to_front_axle": 1.015, "cg_to_rear_axle": 1.895,

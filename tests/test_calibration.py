@@ -7,21 +7,21 @@ from types import MappingProxyType
 
 import numpy as np
 import pytest
+from locations import VEHICLES
 
-from codegen.generate import render
-from harness.build import load_estimator, load_tuning_estimator
-from harness.compare import TOLERANCES, difference
-from harness.paths import VEHICLES
-from harness.reference import REFERENCES
-from harness.reference import kf2dof as reference
-from harness.reference.run import run_reference
-from harness.scenarios import Case
-from harness.vehicles import load_vehicle
-from model.calibration import calibratable, calibration_values
-from model.calibration_checks import unchecked_rules
-from model.estimators import SCHEMAS, build
-from model.params import parse_vehicle
-from model.status import INVALID_CALIBRATION
+from vsegen.codegen.generate import render
+from vsegen.harness.build import load_estimator, load_tuning_estimator
+from vsegen.harness.compare import TOLERANCES, difference
+from vsegen.harness.reference import REFERENCES
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import Case
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.calibration import calibratable, calibration_values
+from vsegen.model.calibration_checks import unchecked_rules
+from vsegen.model.estimators import SCHEMAS, build
+from vsegen.model.params import parse_vehicle
+from vsegen.model.status import INVALID_CALIBRATION
 
 
 def test_calibration_file_and_struct(config):

@@ -7,12 +7,11 @@ import sys
 from pathlib import Path
 
 import pytest
-
-from harness.paths import REPO
+from locations import DEFAULT_VEHICLE, REPO
 
 
 def vsegen(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "harness.cli", *args], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "vsegen.harness.cli", *args], cwd=cwd,
                           capture_output=True, text=True)
 
 
@@ -107,8 +106,12 @@ def test_run_at_another_rate_generates_for_it(tmp_path):
 
 @pytest.mark.parametrize("args,fragment", [
     (["simulate", "nope", "--out", "x.csv"], "unknown scenario 'nope'"),
-    (["simulate", "dlc", "--set", "mu=slippery", "--out", "x.csv"], "mu = 'slippery': expected a float"),
-    (["run", "--log", "missing.csv", "--estimator", "kf2dof", "--out", "x.csv"], "missing.csv: cannot read"),
+    (["simulate", "dlc", "--set", "mu=slippery", "--out", "x.csv", "--vehicle", str(DEFAULT_VEHICLE)],
+     "mu = 'slippery': expected a float"),
+    (["run", "--log", "missing.csv", "--estimator", "kf2dof", "--out", "x.csv", "--vehicle", str(DEFAULT_VEHICLE)],
+     "missing.csv: cannot read"),
+    (["verify", "--estimator", "kf2dof"], "no vehicle file in"),
+    (["generate"], "no vehicle file in"),
     (["score", "--log", "missing.csv", "--est", "e.csv"], "missing.csv: cannot read"),
 ])
 def test_more_user_errors(tmp_path, args, fragment):
@@ -147,10 +150,10 @@ def test_yaw_rate_estimator_from_a_yaw_moment_log_is_scored_and_plotted(tmp_path
 def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
     from click.testing import CliRunner
 
-    from harness.cli import main
-    from harness.logs import write_log
-    from harness.scenarios import Case
-    from harness.vehicles import load_vehicle
+    from vsegen.harness.cli import main
+    from vsegen.harness.logs import write_log
+    from vsegen.harness.scenarios import Case
+    from vsegen.harness.vehicles import load_vehicle
 
     config = load_vehicle(REPO / "vehicles" / "c_class.toml")
     write_log(Case.of("sine_steer").simulate(config, 200.0, 1), tmp_path / "fast.csv")
@@ -164,7 +167,7 @@ def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
 def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path):
     from click.testing import CliRunner
 
-    from harness.cli import main
+    from vsegen.harness.cli import main
 
     runner = CliRunner()
     for arguments in (["simulate", "sine_steer", "--no-truth", "--out", str(tmp_path / "road.csv")],
@@ -180,8 +183,8 @@ def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path):
 def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path):
     from click.testing import CliRunner
 
-    from harness.cli import main
-    from harness.logs import read_estimates
+    from vsegen.harness.cli import main
+    from vsegen.harness.logs import read_estimates
 
     runner = CliRunner()
     log, est = str(tmp_path / "dlc.csv"), str(tmp_path / "est.csv")

@@ -11,12 +11,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
+from locations import GENERATED
 
-from codegen.generate import check, render, write
-from harness.build import WARNING_FLAGS
-from harness.paths import GENERATED
-from harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
-from model.estimators import DEFINITIONS, build
+from vsegen.codegen.generate import check, render, write
+from vsegen.harness.build import WARNING_FLAGS
+from vsegen.harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
+from vsegen.model.estimators import DEFINITIONS, build
 
 COMPILERS = ["gcc", "clang"]
 STRICT_TEMPLATE_FLAGS = ("-Wconversion", "-Wshadow", "-Wcast-qual", "-Wstrict-prototypes",
@@ -174,10 +174,10 @@ def test_check_reports_a_stale_file_with_a_diff(tmp_path, files):
 def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, files):
     """make and cmake build the library and example; the example's output on a log equals the
     harness's run of the same C (so a user can check the C without Python)."""
-    from harness.build import load_estimator
-    from harness.logs import write_log
-    from harness.scenarios import Case
-    from model.estimators import build
+    from vsegen.harness.build import load_estimator
+    from vsegen.harness.logs import write_log
+    from vsegen.harness.scenarios import Case
+    from vsegen.model.estimators import build
 
     _require("make")
     write(files, tmp_path)
@@ -202,7 +202,7 @@ def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, fil
 
 
 def test_reviewed_forms_follow_the_default_without_repeating_it():
-    from codegen.generate import forms_to_write
+    from vsegen.codegen.generate import forms_to_write
     assert forms_to_write("kf2dof", ("double", "baked")) == [
         ("double", "baked", "kf2dof"), ("float", "baked", "kf2dof-float-baked"),
         ("double", "calibratable", "kf2dof-double-calibratable"),
@@ -215,7 +215,7 @@ def test_reviewed_forms_follow_the_default_without_repeating_it():
 def test_only_the_entry_points_of_casadis_exports_are_kept_and_a_new_export_fails(tmp_path):
     import casadi as ca
 
-    from codegen.kernel import _drop_metadata, kernel_options
+    from vsegen.codegen.kernel import _drop_metadata, kernel_options
     x = ca.SX.sym("x", 2)
     generator = ca.CodeGenerator("vse_t_kernel.c", kernel_options("double", "vse_t_kernel_"))
     generator.add(ca.Function("vse_t_kernel_init", [x], [2 * x]))

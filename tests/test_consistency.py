@@ -8,13 +8,13 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.logs import Log
-from harness.run import run_estimator
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.score import SILENT_DURATION, silent_error_time
-from harness.vehicles import load_vehicle
-from model import consistency
-from model.status import MODEL_INCONSISTENT
+from vsegen.harness.logs import Log
+from vsegen.harness.run import run_estimator
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.score import SILENT_DURATION, silent_error_time
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model import consistency
+from vsegen.model.status import MODEL_INCONSISTENT
 
 SETTINGS = {"residual_window": 0.2, "residual_limit": 6.0, "sensor_noise": (0.3, 0.3, 0.0175)}
 

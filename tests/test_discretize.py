@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from model import discretize
-from model.bicycle import bicycle_matrices, state_matrix_norm_bound
+from vsegen.model import discretize
+from vsegen.model.bicycle import bicycle_matrices, state_matrix_norm_bound
 
 SPEEDS = [5.0, 10.0, 20.0, 33.3, 50.0]
 SAMPLE_TIMES = [0.01, 0.001]

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from harness.build import compile_estimator
-from harness.scenarios import Case
-from model import filters, status
-from model.bicycle import GRAVITY
-from model.estimators import ekf_rls
-from model.params import parse_vehicle
+from vsegen.harness.build import compile_estimator
+from vsegen.harness.scenarios import Case
+from vsegen.model import filters, status
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.estimators import ekf_rls
+from vsegen.model.params import parse_vehicle
 
 NAME = "ekf_rls"
 
@@ -118,7 +118,7 @@ def test_low_speed_holds_every_state(config):
     ("stiffness_max = 1.5", "stiffness_max = 0.1: expected a factor above stiffness_min = 0.3"),
 ])
 def test_inverted_bands_are_one_line_errors(vehicle_text, edit, message):
-    from model.params import ParameterError
+    from vsegen.model.params import ParameterError
 
     key = edit.split(" = ")[0]
     with pytest.raises(ParameterError, match=re.escape(message)):

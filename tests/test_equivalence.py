@@ -7,19 +7,19 @@ import sys
 
 import numpy as np
 import pytest
+from locations import DEFAULT_VEHICLE
 
-from codegen.generate import render
-from harness.build import compile_estimator, load_estimator
-from harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
-from harness.paths import DEFAULT_VEHICLE
-from harness.reference import kf2dof as reference
-from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.vehicles import load_vehicle
-from harness.verify import verify_estimator
-from model.estimators import DEFINITIONS, build
-from model.params import parse_vehicle
-from model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
+from vsegen.codegen.generate import render
+from vsegen.harness.build import compile_estimator, load_estimator
+from vsegen.harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.verify import verify_estimator
+from vsegen.model.estimators import DEFINITIONS, build
+from vsegen.model.params import parse_vehicle
+from vsegen.model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
 
 ESTIMATORS = tuple(load_vehicle(DEFAULT_VEHICLE).estimators)
 FORMS = [("float", "baked"), ("double", "calibratable"), ("float", "calibratable")]
@@ -127,8 +127,8 @@ def test_declared_rounding_gains_widen_only_the_double_tolerance():
 def test_ekf_rls_rounding_gain_follows_its_stiffness_rate(config):
     """ekf_rls declares the amplification of its stiffness rate: C_max / C_soft x
     (1 - exp(-T / tau_D)) / (T (D2 - D1)); about 1e2 on the default vehicle, and larger at 1 kHz."""
-    from model.bicycle import GRAVITY
-    from model.estimators.ekf_rls import nominal_c0
+    from vsegen.model.bicycle import GRAVITY
+    from vsegen.model.estimators.ekf_rls import nominal_c0
 
     s, v, T = config.settings("ekf_rls"), config.vehicle, config.sample_time
     c_max = s["stiffness_max"] * nominal_c0(v) * v["mass"] * GRAVITY

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from model import filters
+from vsegen.model import filters
 
 
 @pytest.mark.parametrize("T", [0.01, 0.001])

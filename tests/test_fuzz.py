@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from codegen.generate import render
-from harness.fuzz import fuzz_estimator
-from harness.reference import blocks
-from harness.reference import kf2dof as reference
-from model.estimators import DEFINITIONS
+from vsegen.codegen.generate import render
+from vsegen.harness.fuzz import fuzz_estimator
+from vsegen.harness.reference import blocks
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.model.estimators import DEFINITIONS
 
 STEPS = 1_000_000
 HEAVY = ("ukf", "aukf", "pf_adaptive", "pf_improved")

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from harness.build import compile_estimator
-from harness.reference import kf2dof as reference
-from model import status
+from vsegen.harness.build import compile_estimator
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.model import status
 
 NAN, INF = math.nan, math.inf
 GOOD = [0.02, 25.0, 1.5, 0.1]  # delta, vx, ay, r

@@ -9,18 +9,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from locations import VEHICLES
 from scipy.signal import lsim
 
-from harness.cli import main
-from harness.identify import identify
-from harness.identify.vehicle_file import identified_vehicle_file
-from harness.logs import TRUTH, Log, write_log
-from harness.paths import VEHICLES
-from harness.scenarios import Case
-from harness.vehicles import load_vehicle, with_settings
-from model.bicycle import GRAVITY
-from model.estimators import underived_warning
-from model.params import parse_vehicle
+from vsegen.harness.cli import main
+from vsegen.harness.identify import identify
+from vsegen.harness.identify.vehicle_file import identified_vehicle_file
+from vsegen.harness.logs import TRUTH, Log, write_log
+from vsegen.harness.scenarios import Case
+from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.estimators import underived_warning
+from vsegen.model.params import parse_vehicle
 
 ORDINARY_DRIVING = (
     Case.of("step_steer", delta=0.02, duration=8.0),

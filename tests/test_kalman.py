@@ -6,7 +6,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from model import kalman
+from vsegen.model import kalman
 
 RNG = np.random.default_rng(7)
 
@@ -60,9 +60,9 @@ def test_joseph_update_equals_textbook_optimal_update(n, m):
 
 def test_kf2dof_dynamic_update_is_a_named_function(config):
     """The 2-DOF KF step exists as a named Function and matches the reference's blocks."""
-    from harness.reference import blocks
-    from model.calibration import baked
-    from model.estimators.kf2dof import dynamic_update
+    from vsegen.harness.reference import blocks
+    from vsegen.model.calibration import baked
+    from vsegen.model.estimators.kf2dof import dynamic_update
 
     fn = dynamic_update(baked(config))
     assert fn.name_in() == ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from codegen.generate import render, write
+from vsegen.codegen.generate import render, write
 
 ARM = shutil.which("arm-none-eabi-gcc")
 

@@ -9,8 +9,8 @@ from collections import Counter
 
 import pytest
 
-from codegen.generate import render
-from harness import misra
+from vsegen.codegen.generate import render
+from vsegen.harness import misra
 
 
 @pytest.fixture(scope="module")

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from harness import parallel
-from harness.parallel import WorkerCountError, Workers, worker_count
-from harness.progress import RunProgress
-from harness.scenarios import Case, log_cache
-from harness.vehicles import load_vehicle
-from harness.verify import verify
+from vsegen.harness import parallel
+from vsegen.harness.parallel import WorkerCountError, Workers, worker_count
+from vsegen.harness.progress import RunProgress
+from vsegen.harness.scenarios import Case, log_cache
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.verify import verify
 
 CASE = Case.of("step_steer", duration=2.0)
 
@@ -21,14 +21,14 @@ CASE = Case.of("step_steer", duration=2.0)
 @pytest.fixture
 def empty_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("VSEGEN_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr("harness.scenarios._MEMO", {})
+    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
     return tmp_path / "cache" / "logs"
 
 
 def test_a_simulated_log_is_stored_once_and_read_back_exactly(config, empty_cache, monkeypatch):
     first = CASE.simulate(config, 100.0, seed=3)
     (entry,) = empty_cache.glob("*.npz")
-    monkeypatch.setattr("harness.scenarios._MEMO", {})
+    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
     monkeypatch.setattr(Case, "_simulate", lambda *args: pytest.fail("simulated again"))
     again = CASE.simulate(config, 100.0, seed=3)
     assert list(again.columns) == list(first.columns) and again.notes == first.notes
@@ -54,7 +54,7 @@ def test_a_damaged_entry_is_simulated_again(config, empty_cache, monkeypatch):
     first = CASE.simulate(config, 100.0, seed=4)
     (entry,) = empty_cache.glob("*.npz")
     entry.write_bytes(b"not a zip file")
-    monkeypatch.setattr("harness.scenarios._MEMO", {})
+    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
     again = CASE.simulate(config, 100.0, seed=4)
     np.testing.assert_array_equal(again["ay"], first["ay"])
     assert entry.read_bytes()[:2] == b"PK"

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from harness.vehicles import load_vehicle
-from model.params import ParameterError, parse_vehicle
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.params import ParameterError, parse_vehicle
 
 
 def test_default_vehicle_values(config):
@@ -92,7 +92,7 @@ def test_other_sample_time(config):
 
 
 def test_with_settings_edits_one_table_only(vehicle_text):
-    from harness.vehicles import with_settings
+    from vsegen.harness.vehicles import with_settings
 
     text = with_settings(vehicle_text, "estimator.switching", threshold=2.0, prefilter="bessel")
     config = parse_vehicle(text, "variant.toml", "c_class")

@@ -12,17 +12,17 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from harness.build import compile_estimator
-from harness.reference import REFERENCES
-from harness.reference.particle import _resample
-from harness.reference.pcg32 import MASK, MULTIPLIER, Stream
-from harness.reference.run import run_reference
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.vehicles import load_vehicle
-from harness.verify import verify_estimator
-from model import status
-from model.estimators import build, pf
-from model.params import ParameterError
+from vsegen.harness.build import compile_estimator
+from vsegen.harness.reference import REFERENCES
+from vsegen.harness.reference.particle import _resample
+from vsegen.harness.reference.pcg32 import MASK, MULTIPLIER, Stream
+from vsegen.harness.reference.run import run_reference
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.verify import verify_estimator
+from vsegen.model import status
+from vsegen.model.estimators import build, pf
+from vsegen.model.params import ParameterError
 
 NAMES = (pf.IMPROVED, pf.ADAPTIVE)
 TABLE = f"estimator.{pf.IMPROVED}"
@@ -315,8 +315,8 @@ def test_the_beta_output_and_the_speed_rule(config):
 
 def test_speeds_are_scored_against_the_truth(config):
     """``vsegen score`` reports v_x as well as v_y and beta for an estimator that gives them."""
-    from harness.run import run_estimator
-    from harness.score import score
+    from vsegen.harness.run import run_estimator
+    from vsegen.harness.score import score
 
     log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1)
     scores = {s.signal: s for s in score(log, run_estimator(config, pf.IMPROVED, log))}

@@ -8,11 +8,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from harness.plant import tyre
-from harness.plant.two_track import INPUT, STATE, build_plant, equations
-from harness.reference import blocks
-from harness.scenarios.driver import SpeedHold
-from harness.scenarios.simulate import simulate
+from vsegen.harness.plant import tyre
+from vsegen.harness.plant.two_track import INPUT, STATE, build_plant, equations
+from vsegen.harness.reference import blocks
+from vsegen.harness.scenarios.driver import SpeedHold
+from vsegen.harness.scenarios.simulate import simulate
 
 RATE = 100.0
 

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from locations import VEHICLES
 
-from harness.reference import LONG_DOUBLE, REFERENCES
-from harness.vehicles import load_vehicle, shipped_vehicles
-from model.estimators import DEFINITIONS, MODULES, SCHEMAS, build
+from vsegen.harness.reference import LONG_DOUBLE, REFERENCES
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import DEFINITIONS, MODULES, SCHEMAS, build
 
 
 def test_every_estimator_has_a_reference_and_nothing_else_has():
@@ -51,7 +52,7 @@ def test_tunable_settings_are_read_at_run_time_and_hold_the_shipped_values(confi
         assert tunable.low < tunable.high and (not tunable.log or tunable.low > 0)
         assert any(n == key or n.startswith(key + "_") for n in read), \
             f"{name}: the generated code never reads {key} at run time, so tuning it would change nothing"
-    for path in shipped_vehicles():
+    for path in sorted(VEHICLES.glob("*.toml")):
         vehicle = load_vehicle(path)
         if name not in vehicle.estimators:
             continue

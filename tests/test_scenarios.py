@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from harness.logs import REQUIRED, TRUTH
-from harness.plant.two_track import GRAVITY
-from harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option, sensors
+from vsegen.harness.logs import REQUIRED, TRUTH
+from vsegen.harness.plant.two_track import GRAVITY
+from vsegen.harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option, sensors
 
 STABLE_NAMES = {"dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook"}
 

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from harness.logs import LogError, read_log
-from model import signals
-from model.estimators import DEFINITIONS, build
-from model.guard import LIMIT_KEYS
-from model.schema import INPUT_LIMITS
+from vsegen.harness.logs import LogError, read_log
+from vsegen.model import signals
+from vsegen.model.estimators import DEFINITIONS, build
+from vsegen.model.guard import LIMIT_KEYS
+from vsegen.model.schema import INPUT_LIMITS
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "conventions.md"
 

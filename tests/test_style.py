@@ -7,8 +7,7 @@ import shutil
 import subprocess
 
 import pytest
-
-from harness.paths import REPO
+from locations import REPO
 
 
 def test_ruff_is_clean():

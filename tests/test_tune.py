@@ -13,16 +13,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from locations import VEHICLES
 
-from harness.build import compile_estimator, load_tuning_estimator
-from harness.cli import main
-from harness.logs import Log, write_log
-from harness.paths import VEHICLES
-from harness.scenarios import Case
-from harness.tuning import dimensions, tune
-from harness.vehicles import load_vehicle
-from model.calibration import calibration_values
-from model.params import parse_vehicle
+from vsegen.harness.build import compile_estimator, load_tuning_estimator
+from vsegen.harness.cli import main
+from vsegen.harness.logs import Log, write_log
+from vsegen.harness.scenarios import Case
+from vsegen.harness.tuning import dimensions, tune
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.calibration import calibration_values
+from vsegen.model.params import parse_vehicle
 
 TRAINING = (Case.of("sine_steer"), Case.of("dlc", speed_kmh=60.0))
 HOLDOUT = (Case.of("step_steer", delta=0.03),)

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import pytest
 from click.testing import CliRunner
+from locations import VEHICLES
 
-from harness.cli import main
-from harness.logs import Log, write_log
-from harness.paths import VEHICLES
-from harness.scenarios import VERIFICATION_SET, Case
-from harness.unit_sanity import check_units
-from harness.vehicles import load_vehicle
+from vsegen.harness.cli import main
+from vsegen.harness.logs import Log, write_log
+from vsegen.harness.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.unit_sanity import check_units
+from vsegen.harness.vehicles import load_vehicle
 
 MISTAKES = [
     ("r", 57.29578, "column 'r' looks like deg/s"),

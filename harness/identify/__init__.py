@@ -14,16 +14,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from harness.identify.bicycle_fit import cornering_stiffness
-from harness.identify.estimates import (
+from vsegen.harness.identify.bicycle_fit import cornering_stiffness
+from vsegen.harness.identify.estimates import (
     Estimate,
     Refusal,
     roll_gradient,
     sensor_offsets_and_noise,
     stability_factor,
 )
-from harness.logs import Log
-from model.params import VehicleConfig
+from vsegen.harness.logs import Log
+from vsegen.model.params import VehicleConfig
 
 FALLBACK_NOISE = {"gyro_noise": 0.017453, "ay_noise": 0.3, "ax_noise": 0.3}
 """Weights of the stiffness fit when the noise is not identified (seed 000 Table 2's sensors)."""

@@ -13,10 +13,10 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from harness.identify import segments
-from harness.identify.estimates import Z95, Estimate, Refusal, Selection, fit, interval, select
-from harness.logs import Log, runs
-from model.bicycle import GRAVITY, stability_factor
+from vsegen.harness.identify import segments
+from vsegen.harness.identify.estimates import Z95, Estimate, Refusal, Selection, fit, interval, select
+from vsegen.harness.logs import Log, runs
+from vsegen.model.bicycle import GRAVITY, stability_factor
 
 SETTLE = 0.5
 """s of each stretch not scored (the start-up of the simulated model)."""

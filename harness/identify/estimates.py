@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from harness.identify import segments
-from harness.logs import Log, runs
-from model.bicycle import GRAVITY
+from vsegen.harness.identify import segments
+from vsegen.harness.logs import Log, runs
+from vsegen.model.bicycle import GRAVITY
 
 Z95 = 1.96
 BLOCK = 0.5

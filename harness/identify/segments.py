@@ -11,7 +11,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
 
-from harness.logs import Log, runs
+from vsegen.harness.logs import Log, runs
 
 MIN_SPEED = 5.0
 """m/s: below this the wheel-speed v_x and the bicycle model are too coarse to identify from."""

@@ -7,12 +7,12 @@ comment saying what it was identified as (value, 95 % interval, supporting logs)
 
 from __future__ import annotations
 
-from harness.identify import Identification
-from harness.identify.estimates import Estimate
-from harness.vehicles import with_settings
-from model.estimators import DEFINITIONS
-from model.params import VehicleConfig, parse_vehicle
-from model.schema import rounded
+from vsegen.harness.identify import Identification
+from vsegen.harness.identify.estimates import Estimate
+from vsegen.harness.vehicles import with_settings
+from vsegen.model.estimators import DEFINITIONS
+from vsegen.model.params import VehicleConfig, parse_vehicle
+from vsegen.model.schema import rounded
 
 VEHICLE_KEYS = ("cornering_stiffness_front", "cornering_stiffness_rear")
 """[vehicle] keys identify may replace."""

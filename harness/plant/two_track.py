@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from harness.plant import tyre
+from vsegen.harness.plant import tyre
 
 GRAVITY = 9.81
 AIR_DENSITY = 1.2

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, particle, switching, unscented
+from vsegen.harness.reference import arx_dual_kf, ekf_rls, fusion, kf2dof, particle, switching, unscented
 
 REFERENCES: dict[str, ModuleType | unscented.Variant | particle.ParticleFilter] = {
     "kf2dof": kf2dof, "switching": switching, "fusion": fusion, "arx_dual_kf": arx_dual_kf,

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from harness.reference import blocks
+from vsegen.harness.reference import blocks
 
 TABLE = "arx_dual_kf"
 INPUTS = ("delta", "vx", "r", "mz")

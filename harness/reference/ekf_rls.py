@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from harness.reference import blocks
+from vsegen.harness.reference import blocks
 
 TABLE = "ekf_rls"
 GRAVITY = blocks.GRAVITY

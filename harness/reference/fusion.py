@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.reference import blocks, kinematic_dynamic
-from harness.reference.kinematic_dynamic import DYN, INPUTS
+from vsegen.harness.reference import blocks, kinematic_dynamic
+from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")

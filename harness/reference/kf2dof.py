@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from harness.reference import blocks
+from vsegen.harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
 OUTPUTS = ("beta", "vy", "r", "status")

@@ -9,7 +9,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.signal
 
-from harness.reference import blocks
+from vsegen.harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1

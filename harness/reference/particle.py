@@ -21,8 +21,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from harness.reference import blocks
-from harness.reference.pcg32 import WORDS, Stream, libm
+from vsegen.harness.reference import blocks
+from vsegen.harness.reference.pcg32 import WORDS, Stream, libm
 
 KINEMATIC = ("vx", "vy", "ax", "ay", "r")
 PARTICLE = (*KINEMATIC, "weight")

@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from harness.reference import kinematic_dynamic
-from harness.reference.kinematic_dynamic import DYN, INPUTS, KIN
+from vsegen.harness.reference import kinematic_dynamic
+from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS, KIN
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")

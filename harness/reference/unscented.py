@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.reference import blocks
+from vsegen.harness.reference import blocks
 
 LD = np.longdouble
 STATE = ("u", "v", "gamma", "moment", "ax", "ay")

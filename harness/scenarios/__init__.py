@@ -11,10 +11,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from harness.logs import Log
-from harness.scenarios import manoeuvres
-from harness.scenarios.log_cache import cached_log, log_key
-from model.params import ParameterError, VehicleConfig
+from vsegen.harness.logs import Log
+from vsegen.harness.scenarios import manoeuvres
+from vsegen.harness.scenarios.log_cache import cached_log, log_key
+from vsegen.model.params import ParameterError, VehicleConfig
 
 
 @dataclass(frozen=True)

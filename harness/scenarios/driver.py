@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from harness.plant.two_track import AIR_DENSITY, GRAVITY, static_wheel_loads
-from harness.plant.tyre import cornering_stiffness
+from vsegen.harness.plant.two_track import AIR_DENSITY, GRAVITY, static_wheel_loads
+from vsegen.harness.plant.tyre import cornering_stiffness
 
 BANDWIDTH = 2.0
 """Natural frequency of the driver's closed-loop lateral error (rad/s)."""

@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from harness.logs import Log
-from harness.paths import cache_dir
+from vsegen.harness.logs import Log
+from vsegen.harness.paths import cache_dir
 
 _SIMULATING_CODE = ("plant", "scenarios", "logs.py")
 """What a simulated log depends on, relative to the harness package."""

@@ -11,13 +11,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from harness.logs import Log
-from harness.plant.two_track import GRAVITY
-from harness.scenarios import course as courses
-from harness.scenarios import sensors
-from harness.scenarios.driver import PathFollower, SpeedHold, driver_view
-from harness.scenarios.simulate import SPIN_BETA, FrictionProfile, Run, simulate, substeps
-from model.params import VehicleConfig
+from vsegen.harness.logs import Log
+from vsegen.harness.plant.two_track import GRAVITY
+from vsegen.harness.scenarios import course as courses
+from vsegen.harness.scenarios import sensors
+from vsegen.harness.scenarios.driver import PathFollower, SpeedHold, driver_view
+from vsegen.harness.scenarios.simulate import SPIN_BETA, FrictionProfile, Run, simulate, substeps
+from vsegen.model.params import VehicleConfig
 
 LEAD_IN = 40.0
 """Straight road before a course (m)."""

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.plant.two_track import GRAVITY
-from harness.scenarios.simulate import Run
-from model.params import ParameterError, VehicleConfig
+from vsegen.harness.plant.two_track import GRAVITY
+from vsegen.harness.scenarios.simulate import Run
+from vsegen.model.params import ParameterError, VehicleConfig
 
 GYRO_OUTLIERS = ((2.0, 0.47), (7.0, 0.84))
 """Seed 000 Fig. 6b: (time s, value rad/s) of single-sample yaw-rate spikes."""

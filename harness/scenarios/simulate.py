@@ -9,8 +9,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from harness.plant.two_track import INPUT, STATE, TRUTH, Plant, build_plant
-from model.params import ParameterError, VehicleConfig
+from vsegen.harness.plant.two_track import INPUT, STATE, TRUTH, Plant, build_plant
+from vsegen.model.params import ParameterError, VehicleConfig
 
 PLANT_RATE = 1000.0
 """Minimum plant integration rate (Hz); the plant runs at an integer multiple of the log rate."""

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from model.calibration import calibratable, parameters
-from model.estimator import Definition, Estimator
-from model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
-from model.schema import EstimatorSchema, shown
+from vsegen.model.calibration import calibratable, parameters
+from vsegen.model.estimator import Definition, Estimator
+from vsegen.model.estimators import arx_dual_kf, aukf, ekf_rls, fusion, kf2dof, pf, switching
+from vsegen.model.schema import EstimatorSchema, shown
 
 if TYPE_CHECKING:
-    from model.params import VehicleConfig
+    from vsegen.model.params import VehicleConfig
 
 MODULES = (kf2dof, switching, fusion, arx_dual_kf, ekf_rls, aukf, pf)
 DEFINITIONS: dict[str, Definition] = {d.name: d for module in MODULES for d in module.DEFINITIONS}

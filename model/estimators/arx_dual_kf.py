@@ -29,15 +29,15 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import discretize, kalman, signals, status
-from model.bicycle import bicycle_matrices
-from model.calibration import Parameters
-from model.estimator import GYRO_VARIANCE, Definition, Estimator, SingleStep, Tunable, make_functions
-from model.estimators.kf2dof import zoh_plan
-from model.guard import first_sample, hold, input_guard
-from model.layout import Layout
-from model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
-from model.signals import Signal
+from vsegen.model import discretize, kalman, signals, status
+from vsegen.model.bicycle import bicycle_matrices
+from vsegen.model.calibration import Parameters
+from vsegen.model.estimator import GYRO_VARIANCE, Definition, Estimator, SingleStep, Tunable, make_functions
+from vsegen.model.estimators.kf2dof import zoh_plan
+from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.layout import Layout
+from vsegen.model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
+from vsegen.model.signals import Signal
 
 NAME = "arx_dual_kf"
 

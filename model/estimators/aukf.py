@@ -33,14 +33,14 @@ from dataclasses import replace
 
 import casadi as ca
 
-from model import consistency, kalman, signals, status, unscented
-from model.bicycle import GRAVITY
-from model.calibration import Parameters
-from model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
-from model.guard import first_sample, hold, input_guard
-from model.increments import Pair, lift
-from model.layout import Layout, covariance_signals
-from model.schema import (
+from vsegen.model import consistency, kalman, signals, status, unscented
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.calibration import Parameters
+from vsegen.model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
+from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.increments import Pair, lift
+from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
@@ -54,9 +54,9 @@ from model.schema import (
     number_field,
     positive,
 )
-from model.sensors import roll_corrected
-from model.signals import Signal
-from model.three_dof import ThreeDof
+from vsegen.model.sensors import roll_corrected
+from vsegen.model.signals import Signal
+from vsegen.model.three_dof import ThreeDof
 
 NAME = "aukf"
 PLAIN_NAME = "ukf"

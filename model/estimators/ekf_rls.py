@@ -38,13 +38,21 @@ import math
 
 import casadi as ca
 
-from model import consistency, filters, kalman, signals, status
-from model.bicycle import GRAVITY
-from model.calibration import Parameters, matrix
-from model.estimator import GYRO_VARIANCE, ROLL_GRADIENT, Definition, Estimator, SingleStep, Tunable, make_functions
-from model.guard import first_sample, hold, input_guard
-from model.layout import Layout, covariance_signals
-from model.schema import (
+from vsegen.model import consistency, filters, kalman, signals, status
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.calibration import Parameters, matrix
+from vsegen.model.estimator import (
+    GYRO_VARIANCE,
+    ROLL_GRADIENT,
+    Definition,
+    Estimator,
+    SingleStep,
+    Tunable,
+    make_functions,
+)
+from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.schema import (
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
     ROLL_CORRECTION,
@@ -56,8 +64,8 @@ from model.schema import (
     positive,
     spd_matrix,
 )
-from model.sensors import roll_corrected
-from model.signals import Signal
+from vsegen.model.sensors import roll_corrected
+from vsegen.model.signals import Signal
 
 NAME = "ekf_rls"
 

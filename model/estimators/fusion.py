@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import consistency, signals, status
-from model.calibration import Parameters
-from model.estimator import (
+from vsegen.model import consistency, signals, status
+from vsegen.model.calibration import Parameters
+from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
     ROLL_GRADIENT,
     Definition,
@@ -22,19 +22,19 @@ from model.estimator import (
     Tunable,
     make_functions,
 )
-from model.estimators import kf2dof
-from model.estimators.kinematic_dynamic import (
+from vsegen.model.estimators import kf2dof
+from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     INPUTS,
     KINEMATIC_DYNAMIC_FIELDS,
     YAW_RATE_CHECK_TUNABLES,
     KinematicDynamic,
 )
-from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
-from model.guard import hold
-from model.layout import Layout
-from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
-from model.signals import Signal
+from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
+from vsegen.model.guard import hold
+from vsegen.model.layout import Layout
+from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
+from vsegen.model.signals import Signal
 
 NAME = "fusion"
 

@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import consistency, discretize, kalman, signals, status
-from model.bicycle import bicycle_matrices, state_matrix_norm_bound
-from model.calibration import Parameters, matrix
-from model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, SingleStep, Tunable, make_functions
-from model.guard import first_sample, hold, input_guard, previous_inputs
-from model.layout import Layout, covariance_signals
-from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
-from model.signals import Signal
+from vsegen.model import consistency, discretize, kalman, signals, status
+from vsegen.model.bicycle import bicycle_matrices, state_matrix_norm_bound
+from vsegen.model.calibration import Parameters, matrix
+from vsegen.model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, SingleStep, Tunable, make_functions
+from vsegen.model.guard import first_sample, hold, input_guard, previous_inputs
+from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
+from vsegen.model.signals import Signal
 
 NAME = "kf2dof"
 

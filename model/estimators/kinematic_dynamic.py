@@ -11,16 +11,16 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from model import filters, kalman, signals, status
-from model.bicycle import stability_factor
-from model.calibration import Parameters, matrix
-from model.estimator import Tunable
-from model.estimators import kf2dof
-from model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
-from model.layout import Layout, covariance_signals
-from model.schema import ROLL_CORRECTION, Field, choice, positive
-from model.sensors import roll_corrected
-from model.signals import Signal
+from vsegen.model import filters, kalman, signals, status
+from vsegen.model.bicycle import stability_factor
+from vsegen.model.calibration import Parameters, matrix
+from vsegen.model.estimator import Tunable
+from vsegen.model.estimators import kf2dof
+from vsegen.model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
+from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
+from vsegen.model.sensors import roll_corrected
+from vsegen.model.signals import Signal
 
 INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))

@@ -31,12 +31,12 @@ from __future__ import annotations
 
 import casadi as ca
 
-from model import signals, status
-from model.calibration import Parameters
-from model.estimator import INERTIAL_SIGMAS, RNG_WORDS, ROLL_GRADIENT, Definition, Estimator, Particles, Tunable
-from model.guard import first_sample, hold, input_guard
-from model.layout import Layout
-from model.schema import (
+from vsegen.model import signals, status
+from vsegen.model.calibration import Parameters
+from vsegen.model.estimator import INERTIAL_SIGMAS, RNG_WORDS, ROLL_GRADIENT, Definition, Estimator, Particles, Tunable
+from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.layout import Layout
+from vsegen.model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
@@ -50,8 +50,8 @@ from model.schema import (
     nonnegative,
     positive,
 )
-from model.sensors import roll_corrected
-from model.signals import Signal
+from vsegen.model.sensors import roll_corrected
+from vsegen.model.signals import Signal
 
 IMPROVED = "pf_improved"
 ADAPTIVE = "pf_adaptive"

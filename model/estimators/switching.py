@@ -23,9 +23,9 @@ from dataclasses import replace
 
 import casadi as ca
 
-from model import signals
-from model.calibration import Parameters
-from model.estimator import (
+from vsegen.model import signals
+from vsegen.model.calibration import Parameters
+from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
     ROLL_GRADIENT,
     Definition,
@@ -34,8 +34,8 @@ from model.estimator import (
     make_functions,
     make_schemes,
 )
-from model.estimators import kf2dof
-from model.estimators.kinematic_dynamic import (
+from vsegen.model.estimators import kf2dof
+from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     DYN,
     INPUTS,
@@ -44,11 +44,11 @@ from model.estimators.kinematic_dynamic import (
     YAW_RATE_CHECK_TUNABLES,
     KinematicDynamic,
 )
-from model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
-from model.layout import Layout
-from model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
-from model.signals import Signal
-from model.status import KINEMATIC_DWELL_LIMITED
+from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
+from vsegen.model.layout import Layout
+from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
+from vsegen.model.signals import Signal
+from vsegen.model.status import KINEMATIC_DWELL_LIMITED
 
 NAME = "switching"
 

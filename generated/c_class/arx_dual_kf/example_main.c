@@ -12,7 +12,7 @@
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin
- * (design.md log format; columns in any order, extra columns ignored), runs the estimator over
+ * (vsegen's log format; columns in any order, extra columns ignored), runs the estimator over
  * every row and writes "t,r,a1,a2,b_mz,gain,status" on stdout.
  *     ./vse_arx_dual_kf_example < log.csv > estimates.csv                                              */
 #include <stdio.h>
@@ -45,15 +45,18 @@ static int split(char *line, char *cells[MAX_COLUMNS])
     return n;
 }
 
+/* State and outputs at file scope, so that they have addresses a calibration tool can read: in a
+ * calibratable build the A2L file's MEASUREMENTs link to these two symbols. */
+static vse_arx_dual_kf_state vse_arx_dual_kf_example_state;
+static vse_arx_dual_kf_output vse_arx_dual_kf_example_output;
+
 int main(void)
 {
     static char line[MAX_LINE];
     char *cells[MAX_COLUMNS];
     int index[5];
     int i, n, row = 1;
-    vse_arx_dual_kf_state state;
     vse_arx_dual_kf_input in;
-    vse_arx_dual_kf_output out;
     double value[5];
 
     if (fgets(line, sizeof line, stdin) == NULL) {
@@ -96,10 +99,10 @@ int main(void)
         in.r = (vse_arx_dual_kf_real)value[3];
         in.mz = (vse_arx_dual_kf_real)value[4];
         if (row == 2) {
-            vse_arx_dual_kf_init(&state, &in);
+            vse_arx_dual_kf_init(&vse_arx_dual_kf_example_state, &in);
         }
-        vse_arx_dual_kf_step(&state, &in, &out);
-        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)out.r, (double)out.a1, (double)out.a2, (double)out.b_mz, (double)out.gain, out.status);
+        vse_arx_dual_kf_step(&vse_arx_dual_kf_example_state, &in, &vse_arx_dual_kf_example_output);
+        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)vse_arx_dual_kf_example_output.r, (double)vse_arx_dual_kf_example_output.a1, (double)vse_arx_dual_kf_example_output.a2, (double)vse_arx_dual_kf_example_output.b_mz, (double)vse_arx_dual_kf_example_output.gain, vse_arx_dual_kf_example_output.status);
     }
     return 0;
 }

@@ -12,7 +12,7 @@
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin
- * (design.md log format; columns in any order, extra columns ignored), runs the estimator over
+ * (vsegen's log format; columns in any order, extra columns ignored), runs the estimator over
  * every row and writes "t,beta,vy,r,status" on stdout.
  *     ./vse_kf2dof_example < log.csv > estimates.csv                                              */
 #include <stdio.h>
@@ -45,15 +45,18 @@ static int split(char *line, char *cells[MAX_COLUMNS])
     return n;
 }
 
+/* State and outputs at file scope, so that they have addresses a calibration tool can read: in a
+ * calibratable build the A2L file's MEASUREMENTs link to these two symbols. */
+static vse_kf2dof_state vse_kf2dof_example_state;
+static vse_kf2dof_output vse_kf2dof_example_output;
+
 int main(void)
 {
     static char line[MAX_LINE];
     char *cells[MAX_COLUMNS];
     int index[5];
     int i, n, row = 1;
-    vse_kf2dof_state state;
     vse_kf2dof_input in;
-    vse_kf2dof_output out;
     double value[5];
 
     if (fgets(line, sizeof line, stdin) == NULL) {
@@ -96,10 +99,10 @@ int main(void)
         in.ay = (vse_kf2dof_real)value[3];
         in.r = (vse_kf2dof_real)value[4];
         if (row == 2) {
-            vse_kf2dof_init(&state, &in);
+            vse_kf2dof_init(&vse_kf2dof_example_state, &in);
         }
-        vse_kf2dof_step(&state, &in, &out);
-        printf("%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)out.beta, (double)out.vy, (double)out.r, out.status);
+        vse_kf2dof_step(&vse_kf2dof_example_state, &in, &vse_kf2dof_example_output);
+        printf("%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)vse_kf2dof_example_output.beta, (double)vse_kf2dof_example_output.vy, (double)vse_kf2dof_example_output.r, vse_kf2dof_example_output.status);
     }
     return 0;
 }

@@ -13,7 +13,7 @@
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin
- * (design.md log format; columns in any order, extra columns ignored), runs the estimator over
+ * (vsegen's log format; columns in any order, extra columns ignored), runs the estimator over
  * every row and writes "t,beta,vx,vy,n_eff,sigma_ax,sigma_ay,sigma_r,status" on stdout.
  *     ./vse_pf_improved_example < log.csv > estimates.csv                                              */
 #include <stdio.h>
@@ -46,15 +46,18 @@ static int split(char *line, char *cells[MAX_COLUMNS])
     return n;
 }
 
+/* State and outputs at file scope, so that they have addresses a calibration tool can read: in a
+ * calibratable build the A2L file's MEASUREMENTs link to these two symbols. */
+static vse_pf_improved_state vse_pf_improved_example_state;
+static vse_pf_improved_output vse_pf_improved_example_output;
+
 int main(void)
 {
     static char line[MAX_LINE];
     char *cells[MAX_COLUMNS];
     int index[5];
     int i, n, row = 1;
-    vse_pf_improved_state state;
     vse_pf_improved_input in;
-    vse_pf_improved_output out;
     double value[5];
 
     if (fgets(line, sizeof line, stdin) == NULL) {
@@ -97,10 +100,10 @@ int main(void)
         in.ay = (vse_pf_improved_real)value[3];
         in.r = (vse_pf_improved_real)value[4];
         if (row == 2) {
-            vse_pf_improved_init(&state, &in);
+            vse_pf_improved_init(&vse_pf_improved_example_state, &in);
         }
-        vse_pf_improved_step(&state, &in, &out);
-        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)out.beta, (double)out.vx, (double)out.vy, (double)out.n_eff, (double)out.sigma_ax, (double)out.sigma_ay, (double)out.sigma_r, out.status);
+        vse_pf_improved_step(&vse_pf_improved_example_state, &in, &vse_pf_improved_example_output);
+        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)vse_pf_improved_example_output.beta, (double)vse_pf_improved_example_output.vx, (double)vse_pf_improved_example_output.vy, (double)vse_pf_improved_example_output.n_eff, (double)vse_pf_improved_example_output.sigma_ax, (double)vse_pf_improved_example_output.sigma_ay, (double)vse_pf_improved_example_output.sigma_r, vse_pf_improved_example_output.status);
     }
     return 0;
 }

@@ -12,7 +12,7 @@
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin
- * (design.md log format; columns in any order, extra columns ignored), runs the estimator over
+ * (vsegen's log format; columns in any order, extra columns ignored), runs the estimator over
  * every row and writes "t,beta,vx,vy,r,yaw_moment,ax,ay,status" on stdout.
  *     ./vse_aukf_example < log.csv > estimates.csv                                              */
 #include <stdio.h>
@@ -45,15 +45,18 @@ static int split(char *line, char *cells[MAX_COLUMNS])
     return n;
 }
 
+/* State and outputs at file scope, so that they have addresses a calibration tool can read: in a
+ * calibratable build the A2L file's MEASUREMENTs link to these two symbols. */
+static vse_aukf_state vse_aukf_example_state;
+static vse_aukf_output vse_aukf_example_output;
+
 int main(void)
 {
     static char line[MAX_LINE];
     char *cells[MAX_COLUMNS];
     int index[10];
     int i, n, row = 1;
-    vse_aukf_state state;
     vse_aukf_input in;
-    vse_aukf_output out;
     double value[10];
 
     if (fgets(line, sizeof line, stdin) == NULL) {
@@ -101,10 +104,10 @@ int main(void)
         in.omega_rl = (vse_aukf_real)value[8];
         in.omega_rr = (vse_aukf_real)value[9];
         if (row == 2) {
-            vse_aukf_init(&state, &in);
+            vse_aukf_init(&vse_aukf_example_state, &in);
         }
-        vse_aukf_step(&state, &in, &out);
-        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)out.beta, (double)out.vx, (double)out.vy, (double)out.r, (double)out.yaw_moment, (double)out.ax, (double)out.ay, out.status);
+        vse_aukf_step(&vse_aukf_example_state, &in, &vse_aukf_example_output);
+        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)vse_aukf_example_output.beta, (double)vse_aukf_example_output.vx, (double)vse_aukf_example_output.vy, (double)vse_aukf_example_output.r, (double)vse_aukf_example_output.yaw_moment, (double)vse_aukf_example_output.ax, (double)vse_aukf_example_output.ay, vse_aukf_example_output.status);
     }
     return 0;
 }

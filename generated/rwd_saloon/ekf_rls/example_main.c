@@ -14,7 +14,7 @@
  */
 
 /* Host example (uses stdio; not part of the library): reads a log CSV with a header row on stdin
- * (design.md log format; columns in any order, extra columns ignored), runs the estimator over
+ * (vsegen's log format; columns in any order, extra columns ignored), runs the estimator over
  * every row and writes "t,beta,beta_ekf,beta_int,r,weight,c_front,c_rear,status" on stdout.
  *     ./vse_ekf_rls_example < log.csv > estimates.csv                                              */
 #include <stdio.h>
@@ -47,15 +47,18 @@ static int split(char *line, char *cells[MAX_COLUMNS])
     return n;
 }
 
+/* State and outputs at file scope, so that they have addresses a calibration tool can read: in a
+ * calibratable build the A2L file's MEASUREMENTs link to these two symbols. */
+static vse_ekf_rls_state vse_ekf_rls_example_state;
+static vse_ekf_rls_output vse_ekf_rls_example_output;
+
 int main(void)
 {
     static char line[MAX_LINE];
     char *cells[MAX_COLUMNS];
     int index[6];
     int i, n, row = 1;
-    vse_ekf_rls_state state;
     vse_ekf_rls_input in;
-    vse_ekf_rls_output out;
     double value[6];
 
     if (fgets(line, sizeof line, stdin) == NULL) {
@@ -99,10 +102,10 @@ int main(void)
         in.ay = (vse_ekf_rls_real)value[4];
         in.r = (vse_ekf_rls_real)value[5];
         if (row == 2) {
-            vse_ekf_rls_init(&state, &in);
+            vse_ekf_rls_init(&vse_ekf_rls_example_state, &in);
         }
-        vse_ekf_rls_step(&state, &in, &out);
-        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)out.beta, (double)out.beta_ekf, (double)out.beta_int, (double)out.r, (double)out.weight, (double)out.c_front, (double)out.c_rear, out.status);
+        vse_ekf_rls_step(&vse_ekf_rls_example_state, &in, &vse_ekf_rls_example_output);
+        printf("%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", value[0], (double)vse_ekf_rls_example_output.beta, (double)vse_ekf_rls_example_output.beta_ekf, (double)vse_ekf_rls_example_output.beta_int, (double)vse_ekf_rls_example_output.r, (double)vse_ekf_rls_example_output.weight, (double)vse_ekf_rls_example_output.c_front, (double)vse_ekf_rls_example_output.c_rear, vse_ekf_rls_example_output.status);
     }
     return 0;
 }

@@ -1,0 +1,9 @@
+"""The repository's folders, for the tests (the CLI finds its project from the current directory;
+the tests always use this checkout's)."""
+
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+VEHICLES = REPO / "vehicles"
+GENERATED = REPO / "generated"
+DEFAULT_VEHICLE = VEHICLES / "c_class.toml"

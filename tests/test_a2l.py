@@ -1,0 +1,137 @@
+"""A2L for calibratable builds: the generated file parses with an ASAP2 parser from PyPI
+(pya2ldb), describes every calibration value, state entry and output, and `vsegen a2l --elf`
+fills addresses at which the linked Cortex-M4F firmware really holds those values."""
+
+from __future__ import annotations
+
+import shutil
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from elftools.elf.elffile import ELFFile
+from locations import VEHICLES
+
+from vsegen.codegen.generate import render
+from vsegen.harness.targets import TARGETS
+from vsegen.harness.vehicles import load_vehicle
+from vsegen.model.estimators import build
+
+pya2l = pytest.importorskip("pya2l")
+from pya2l import model as a2l_model  # noqa: E402
+
+M4F = TARGETS[0]
+needs_arm = pytest.mark.skipif(shutil.which(M4F.compiler) is None, reason="arm-none-eabi-gcc not installed")
+
+
+def parse(path: Path):
+    """The A2L file as pya2ldb's in-memory database session."""
+    return pya2l.import_a2l(str(path), in_memory=True, progress_bar=False, loglevel="ERROR", encoding="utf-8")
+
+
+def vsegen(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "vsegen.harness.cli", *args], cwd=cwd, capture_output=True,
+                          text=True)
+
+
+def kit(tmp_path: Path, name: str, real: str, car: str = "c_class") -> Path:
+    folder = tmp_path / f"{name}-{real}"
+    folder.mkdir()
+    for file, text in render(load_vehicle(VEHICLES / f"{car}.toml"), name, real, "calibratable").items():
+        (folder / file).write_text(text)
+    return folder
+
+
+def firmware(folder: Path) -> Path:
+    """The kit's example linked for a Cortex-M4F (newlib, no OS)."""
+    elf = folder / "firmware.elf"
+    sources = sorted(str(p) for p in folder.glob("*.c"))
+    subprocess.run([M4F.compiler, *M4F.flags, "-O2", "-std=c99", "--specs=nosys.specs", *sources, "-lm", "-o",
+                    str(elf)], check=True, capture_output=True, cwd=folder)
+    return elf
+
+
+def nm_addresses(elf: Path) -> dict[str, int]:
+    """Symbol addresses as binutils' nm reads them (independent of the linker under test)."""
+    out = subprocess.run([M4F.tools_prefix + "nm", str(elf)], check=True, capture_output=True, text=True).stdout
+    return {parts[2]: int(parts[0], 16) for parts in (line.split() for line in out.splitlines()) if len(parts) == 3}
+
+
+def read_float(elf: Path, address: int) -> float:
+    """The float32 the ELF's loaded image holds at ``address``."""
+    with open(elf, "rb") as handle:
+        for section in ELFFile(handle).iter_sections():
+            start, size = section["sh_addr"], section["sh_size"]
+            if section["sh_type"] == "SHT_PROGBITS" and start <= address < start + size:
+                return struct.unpack_from("<f", section.data(), address - start)[0]
+    raise AssertionError(f"no loaded section holds 0x{address:08x}")
+
+
+@pytest.mark.parametrize("name,real,car", [("kf2dof", "float", "c_class"), ("switching", "double", "rwd_saloon"),
+                                           ("pf_improved", "double", "c_class")])
+def test_the_generated_a2l_parses_and_lists_every_value(tmp_path, name, real, car):
+    folder = kit(tmp_path, name, real, car)
+    estimator = build(name, load_vehicle(VEHICLES / f"{car}.toml"), "calibratable")
+    session = parse(folder / f"vse_{name}.a2l")
+    characteristics = {c.name: c for c in session.query(a2l_model.Characteristic).all()}
+    measurements = {m.name: m for m in session.query(a2l_model.Measurement).all()}
+    conversions = {c.name: c for c in session.query(a2l_model.CompuMethod).all()}
+    assert list(characteristics) == [f"vse_{name}_calibration.{n}" for n in estimator.parameters.names]
+    size = 4 if real == "float" else 8
+    for i, c in enumerate(characteristics.values()):
+        assert c.symbol_link.symbolName == f"vse_{name}_calibration" and c.symbol_link.offset == i * size
+        assert c.conversion in conversions and c.lowerLimit <= c.upperLimit
+        assert c.deposit == f"RL_VALUE_FLOAT{size * 8}_IEEE"
+    for s in estimator.outputs.signals:
+        m = measurements[f"vse_{name}_output.{s.name}"]
+        assert m.datatype == ("SLONG" if s.integer else f"FLOAT{size * 8}_IEEE")
+        assert conversions[m.conversion].unit == s.unit
+    assert f"vse_{name}_state.{estimator.states.names[0]}" in measurements
+
+
+def test_limits_and_units_come_from_the_schema(tmp_path):
+    session = parse(kit(tmp_path, "kf2dof", "float") / "vse_kf2dof.a2l")
+    mass = session.query(a2l_model.Characteristic).filter_by(name="vse_kf2dof_calibration.mass").one()
+    units = {c.name: c.unit for c in session.query(a2l_model.CompuMethod).all()}
+    assert (mass.lowerLimit, units[mass.conversion]) == (0.0, "kg")
+    r_noise = session.query(a2l_model.Characteristic).filter_by(
+        name="vse_kf2dof_calibration.measurement_noise_22").one()
+    assert units[r_noise.conversion] == "(rad/s)^2"
+
+
+@needs_arm
+@pytest.mark.parametrize("name", ["kf2dof", "switching"])
+def test_vsegen_a2l_fills_the_addresses_the_firmware_holds_the_values_at(tmp_path, name):
+    folder = kit(tmp_path, name, "float")
+    elf = firmware(folder)
+    result = vsegen("a2l", "--elf", str(elf), "--a2l", f"vse_{name}.a2l", "--out", "filled.a2l", cwd=folder)
+    assert result.returncode == 0, result.stderr
+    session, symbols = parse(folder / "filled.a2l"), nm_addresses(elf)
+    estimator = build(name, load_vehicle(VEHICLES / "c_class.toml"), "calibratable")
+    base = symbols[f"vse_{name}_calibration"]
+    for c, value in zip(session.query(a2l_model.Characteristic).order_by(a2l_model.Characteristic.rid).all(),
+                        estimator.parameters.values, strict=True):
+        assert c.address == base + c.symbol_link.offset
+        assert read_float(elf, c.address) == struct.unpack("<f", struct.pack("<f", value))[0], c.name
+    for m in session.query(a2l_model.Measurement).all():
+        assert m.ecu_address.address == symbols[m.symbol_link.symbolName] + m.symbol_link.offset
+        assert m.symbol_link.symbolName in (f"vse_{name}_example_state", f"vse_{name}_example_output")
+
+
+@needs_arm
+def test_a_mismatched_firmware_or_symbol_is_one_line(tmp_path):
+    double = kit(tmp_path, "kf2dof", "double")
+    elf = firmware(kit(tmp_path, "kf2dof", "float"))
+    cases = [
+        (["--elf", str(elf), "--a2l", str(double / "vse_kf2dof.a2l")], "expected the build this A2L file was"),
+        (["--elf", str(elf), "--a2l", str(elf.parent / "vse_kf2dof.a2l"), "--state", "my_state"],
+         "no data object 'my_state' for MEASUREMENT vse_kf2dof_state.vy"),
+        (["--elf", str(double / "vse_kf2dof.h"), "--a2l", str(double / "vse_kf2dof.a2l")], "not an ELF file"),
+        (["--elf", str(elf), "--a2l", str(double / "vse_kf2dof.h")], "expected an A2L file vsegen generated"),
+    ]
+    for args, fragment in cases:
+        result = vsegen("a2l", *args, "--out", "x.a2l", cwd=tmp_path)
+        assert result.returncode == 2 and result.stderr.count("\n") == 1 and fragment in result.stderr, result.stderr
+        assert not (tmp_path / "x.a2l").exists()
