@@ -21,7 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import DEFAULT_VEHICLE, REPO, feedback, seed003
+from bench import DEFAULT_VEHICLE, REPO, feedback, pil, seed003
+from bench.document import section_of, with_section
 from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.fuzz import fuzz_estimator
@@ -150,8 +151,12 @@ def main(argv: list[str] | None = None) -> None:
                          f"{'clean' if report.ok else 'FAILED: ' + report.message} |")
     lines.append("")
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    kept = feedback.section_of(args.out.read_text()) if args.out.exists() else []
-    args.out.write_text(feedback.with_section("\n".join(lines), kept) if kept else "\n".join(lines))
+    text = "\n".join(lines)
+    previous = args.out.read_text() if args.out.exists() else ""
+    for heading in (feedback.SECTION, pil.SECTION):     # sections other commands write
+        kept = section_of(previous, heading)
+        text = with_section(text, kept) if kept else text
+    args.out.write_text(text)
     print("\n".join(lines))
 
 

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from bench import REPO
+from bench.document import with_section
 from vsegen.harness.parallel import worker_count
 
 SECTION = "## Feedback times"
@@ -37,29 +38,6 @@ def timed(command: str, cache: Path) -> tuple[float, float, str]:
         raise SystemExit(f"bench.feedback: '{command}' failed:\n{result.stdout[-2000:]}{result.stderr[-2000:]}")
     last = (result.stdout.strip().splitlines() or [""])[-1]
     return seconds, load, last
-
-
-def section_of(document: str) -> list[str]:
-    """The feedback section's lines of ``document`` (empty if it has none)."""
-    lines = document.rstrip("\n").split("\n")
-    if SECTION not in lines:
-        return []
-    start = lines.index(SECTION)
-    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
-    return lines[start:end]
-
-
-def with_section(document: str, body: list[str]) -> str:
-    """``document`` with its feedback section (from SECTION to the next '## ' heading or the end)
-    replaced by ``body``, or ``body`` appended."""
-    lines = document.rstrip("\n").split("\n") if document else []
-    old = section_of(document)
-    if old:
-        start = lines.index(SECTION)
-        lines[start:start + len(old)] = body + ([""] if start + len(old) < len(lines) else [])
-    else:
-        lines += ([""] if lines else []) + body
-    return "\n".join(lines).rstrip("\n") + "\n"
 
 
 def main(argv: list[str] | None = None) -> None:

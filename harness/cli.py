@@ -224,8 +224,6 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
            params: str | None) -> None:
     """Compile the generated C and compare it step by step with the NumPy reference."""
-    from vsegen.harness.compare import PEAK_FRACTION, TOLERANCES
-    from vsegen.harness.verify import FLIP_MARGIN
     from vsegen.harness.verify import verify as verify_all
 
     config = _vehicle(vehicle)
@@ -235,12 +233,92 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
     with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
         results = verify_all(config, names, seed=seed, real=real, params=params,
                              on_done=lambda result: progress.done(result.estimator, result.ok))
-    table = Table(title=f"generated C vs NumPy reference, vehicle {config.name}, "
-                        f"T = {config.sample_time} s, {real}, {params} parameters")
+    table = _difference_table(f"generated C vs NumPy reference, vehicle {config.name}, "
+                              f"T = {config.sample_time} s, {real}, {params} parameters", results)
+    console.print(table)
+    _explain_differences(real, any(r.flips for r in results))
+    failed = [r for r in results if not r.ok]
+    if failed:
+        click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
+        sys.exit(1)
+    console.print(f"verify passed: {len(results)} runs, every output within tolerance")
+
+
+@main.command(name="pil")
+@VEHICLE_OPTION
+@click.option("--estimator", "estimators", multiple=True,
+              help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
+@click.option("--target", "targets", multiple=True, type=click.Choice(["m4f", "m7"]),
+              help="Cortex-M4F (float, QEMU mps2-an386) or Cortex-M7 (double, mps2-an500); repeatable. "
+                   "Default: both.")
+@PARAMS_OPTION
+@click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
+@user_errors
+def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tuple[str, ...], params: str | None,
+                seed: int) -> None:
+    """Processor-in-the-loop: run the generated C on an emulated Cortex-M (QEMU) over the
+    verification scenarios; compare with the reference and with the host build of the same
+    precision; report instructions per step, CPU load and stack."""
+    from vsegen.harness import pil
+
+    missing = pil.available()
+    if missing:
+        raise UserError(missing)
+    config = _vehicle(vehicle)
+    params = params or config.codegen["params"]
+    names = _estimators(config, estimators)
+    failed, costs = 0, Table(title=f"cost on the target, vehicle {config.name}, {1.0 / config.sample_time:g} Hz "
+                                   f"(instructions from QEMU -icount; load = instructions x rate / clock, "
+                                   f"taking one instruction as one cycle)")
+    for column in ("estimator", "target", "real", "instructions/step", "worst scenario", "CPU load",
+                   "stack init / step", "static stack"):
+        costs.add_column(column, justify="left" if column in ("estimator", "target", "real") else "right")
+    for board_name in targets or tuple(pil.BOARDS):
+        board = pil.BOARDS[board_name]
+        with RunProgress(f"PIL on {board.machine}", {name: len(VERIFICATION_SET) for name in names}) as progress:
+            results = pil.pil(config, names, board_name, params, seed=seed,
+                              on_done=lambda r: progress.done(r.reference.estimator, r.ok))
+
+        def host_rows(i: int, results=results) -> list[tuple[str, ...]]:
+            host = results[i].host
+            rows = [("vs host build", "0.00e+00", "0.00e+00", "identical", "ok") if host.identical else
+                    ("vs host build (step)", f"{host.steps.max_abs:.2e}", f"{host.steps.max_rel:.2e}",
+                     f"{host.steps.tolerance:.0e}", "ok" if host.steps.ok else "FAIL")]
+            if host.resampling:
+                rows.append(("resampling vs host", str(host.resampling), "-", "explained", "ok"))
+            return rows
+
+        console.print(_difference_table(
+            f"{board.target.name} under QEMU {board.machine} vs NumPy reference and host build, vehicle "
+            f"{config.name}, {board.real}, {params} parameters", [r.reference for r in results], host_rows))
+        _explain_differences(board.real, any(r.reference.flips for r in results))
+        failed += sum(not r.ok for r in results)
+        for name in names:
+            c = pil.cost(config, name, board, params, results)
+            costs.add_row(name, board.target.name, board.real, f"{c.instructions_mean:,.0f}",
+                          f"{c.instructions_max:,.0f}", f"{100 * c.load:.2f} % of {board.clock_hz / 1e6:g} MHz",
+                          f"{c.stack_init} / {c.stack_step}", f"{c.static_stack_init} / {c.static_stack_step}")
+    console.print("vs host build: identical, or each target step from its own state against the host build's "
+                  "step from that state (newlib's libm may round atan2, exp, log, sin, cos to the neighbouring "
+                  "number of glibc's; both builds are ISO C99 without FMA contraction)")
+    console.print(costs)
+    console.print("stack: painted (bytes below main's stack pointer that init / step wrote, library calls "
+                  "included); static: gcc -fstack-usage along the worst call path (library frames not known)")
+    if failed:
+        click.echo(f"vsegen: PIL FAILED on {failed} runs", err=True)
+        sys.exit(1)
+    console.print("PIL passed: every run within the verify tolerances of the reference and equal to the host build "
+                  "(or within them, step by step)")
+
+
+def _difference_table(title: str, results, extra_rows=None) -> Table:
+    """The verify table of ``results`` (harness.verify.CaseResult); ``extra_rows(i)`` gives more
+    rows (cells) after the ``i``-th result."""
+    table = Table(title=title)
     for column in ("estimator", "scenario", "samples", "signal", "max |diff|", "max rel diff",
                    "tolerance", "result"):
         table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
-    for result in results:
+    for i, result in enumerate(results):
         stepwise = () if result.stepwise is result.states else (result.stepwise,)
         for diff in (*result.outputs, result.states, *stepwise):
             tolerance = "identical" if diff.integer else f"{diff.tolerance:.0e}"
@@ -250,25 +328,29 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
         if result.flips:
             table.add_row(result.estimator, result.case, str(result.samples),
                           "resampling flips", str(result.flips), "-", "explained", "ok")
+        for row in (extra_rows(i) if extra_rows else ()):
+            table.add_row(result.estimator, result.case, str(result.samples), *row)
         table.add_section()
-    console.print(table)
+    return table
+
+
+def _explain_differences(real: str, flips: bool) -> None:
+    """The notes under a difference table."""
+    from vsegen.harness.compare import PEAK_FRACTION, TOLERANCES
+    from vsegen.harness.verify import FLIP_MARGIN
+
     tolerance = TOLERANCES[real]
     console.print(f"relative difference = |c - ref| / max(|c|, |ref|, {tolerance.floor:g} x the "
                   f"signal's scale, {PEAK_FRACTION:g} x peak |signal|); tolerance "
                   f"{tolerance.relative:.0e} for {real}, wider where an estimator amplifies its "
                   "reference's rounding (the unscented filters, ekf_rls's stiffness rate; column "
                   "'tolerance'; harness/compare.py)")
-    if any(r.flips for r in results):
+    if flips:
         console.print("resampling flips: steps of a float particle filter whose resampling chose "
                       "another particle than the reference because a point lay within float "
                       f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; each matches the "
                       "reference's step with that point moved across the weight (every step is "
                       "checked from the C's own state)")
-    failed = [r for r in results if not r.ok]
-    if failed:
-        click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
-        sys.exit(1)
-    console.print(f"verify passed: {len(results)} runs, every output within tolerance")
 
 
 @main.command()

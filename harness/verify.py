@@ -75,14 +75,30 @@ def verify_estimator(config: VehicleConfig, name: str, cases: tuple[Case, ...] =
 def verify_case(config: VehicleConfig, name: str, case: Case, seed: int, real: str,
                 params: str) -> CaseResult:
     """Build ``name`` (memoised per process), run C and reference over ``case``, compare."""
-    estimator, reference, compiled, tolerance = _prepared(config, name, real, params)
+    estimator, _, compiled, _ = prepared(config, name, real, params)
+    inputs = case_inputs(config, estimator, case, seed, real)
+    c_out, c_states = compiled.run(inputs)
+    return against_reference(config, name, case, real, params, inputs, c_out, c_states)
+
+
+def case_inputs(config: VehicleConfig, estimator, case: Case, seed: int, real: str) -> np.ndarray:
+    """The input rows of ``case`` as C code of type ``real`` receives them."""
+    log = case.simulate(config, 1.0 / config.sample_time, seed)
+    return as_seen_by(real, log.matrix(estimator.inputs.names))
+
+
+def against_reference(config: VehicleConfig, name: str, case: Case, real: str, params: str, inputs: np.ndarray,
+                      c_out: np.ndarray, c_states: np.ndarray, host_libm: bool = True) -> CaseResult:
+    """A run of ``name``'s C (outputs n x ny, states (n+1) x nx) against the reference: whole
+    trajectories and every step from the C's own state. ``host_libm`` False (a run on a target,
+    with another libm): a particle filter is checked step by step only, as a float or calibratable
+    build is (:func:`_particles_step_by_step`), since an ulp of exp or log parts its trajectory."""
+    estimator, reference, _, tolerance = prepared(config, name, real, params)
     state_scales = np.array(estimator.states.scales)
     step_scales = np.concatenate([state_scales, estimator.outputs.scales])
-    log = case.simulate(config, 1.0 / config.sample_time, seed)
-    inputs = as_seen_by(real, log.matrix(estimator.inputs.names))
-    c_out, c_states = compiled.run(inputs)
-    if isinstance(estimator.structure, Particles) and (real == "float" or params == "calibratable"):
-        return _particles_step_by_step(estimator, reference, config, case, len(log), c_states,
+    if isinstance(estimator.structure, Particles) and (real == "float" or params == "calibratable"
+                                                       or not host_libm):
+        return _particles_step_by_step(estimator, reference, config, case, len(inputs), c_states,
                                        c_out, inputs, tolerance, step_scales, real)
     r_out, r_states = run_reference(reference, config, inputs)
     outputs = tuple(
@@ -91,7 +107,7 @@ def verify_case(config: VehicleConfig, name: str, case: Case, seed: int, real: s
     )
     states = difference("state (all entries)", c_states, r_states, tolerance, scale=state_scales)
     stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
-    return CaseResult(name, real, case.label, len(log), outputs, states, stepwise)
+    return CaseResult(name, real, case.label, len(inputs), outputs, states, stepwise)
 
 
 def _check_layouts(config: VehicleConfig, name: str, estimator) -> None:
@@ -107,13 +123,13 @@ def _simulate(config: VehicleConfig, case: Case, rate_hz: float, seed: int) -> N
 
 
 def _compile(config: VehicleConfig, name: str, real: str, params: str) -> None:
-    _prepared(config, name, real, params)       # fills the build cache for the comparison jobs
+    prepared(config, name, real, params)       # fills the build cache for the comparison jobs
 
 
 _PREPARED: dict[tuple, tuple] = {}
 
 
-def _prepared(config: VehicleConfig, name: str, real: str, params: str):
+def prepared(config: VehicleConfig, name: str, real: str, params: str):
     """(estimator, reference, compiled C, tolerance) of ``name``, memoised in this process."""
     key = (config.fingerprint(), name, real, params)
     if key not in _PREPARED:
@@ -136,7 +152,8 @@ flip lay within 5e-7."""
 def _particles_step_by_step(estimator, reference, config, case, samples, c_states, c_out, inputs,
                             tolerance, scales, real) -> CaseResult:
     """A particle filter that is not bit-identical to its reference, step by step. Only the
-    baked double build is (its trajectory is compared whole); a calibratable build computes the
+    baked double build on the host is (its trajectory is compared whole); on a target, newlib's
+    libm rounds some exp, log or cos to the neighbouring number of glibc's; a calibratable build computes the
     derived constants at run time, a float build rounds every operation, and a particle filter
     amplifies such rounding along its trajectory (weights through exp, resampling, adaptive
     noise: 1-ulp steps grew to 6e-12 relative on pf_adaptive's calibratable double build). A

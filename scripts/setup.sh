@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# One-time set-up of a fresh Debian/Ubuntu machine: C toolchains (apt), then vsegen with its test
-# tools (pip, from pyproject.toml). Safe to run again.
+# One-time set-up of a fresh Debian/Ubuntu machine: C toolchains and QEMU for processor-in-the-loop
+# runs (apt), then vsegen with its test tools (pip, from pyproject.toml). Safe to run again.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(gcc g++ clang binutils make cmake gcc-arm-none-eabi libnewlib-arm-none-eabi cppcheck valgrind)
+packages=(gcc g++ clang binutils make cmake gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm cppcheck valgrind)
 missing=()
 for package in "${packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")

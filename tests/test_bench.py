@@ -8,6 +8,7 @@ import ctypes
 import numpy as np
 import pytest
 
+from bench.document import section_of, with_section
 from bench.measure import HERE, hand_raw_parameters
 from vsegen.harness.build import build_library
 from vsegen.harness.compare import TOLERANCES, difference
@@ -58,8 +59,8 @@ def test_feedback_section_is_replaced_in_place_and_kept_by_the_suite():
     from bench import feedback
     body = [feedback.SECTION, "", "| new |"]
     document = "# Benchmarks\n\n## A\n\na\n\n## Feedback times\n\n| old |\n\n## B\n\nb\n"
-    updated = feedback.with_section(document, body)
+    updated = with_section(document, body)
     assert updated == "# Benchmarks\n\n## A\n\na\n\n## Feedback times\n\n| new |\n\n## B\n\nb\n"
-    assert feedback.section_of(updated) == body + [""]
-    assert feedback.with_section("# Benchmarks\n", body).endswith("# Benchmarks\n\n## Feedback times\n\n| new |\n")
-    assert feedback.section_of("# Benchmarks\n") == []
+    assert section_of(updated, feedback.SECTION) == body + [""]
+    assert with_section("# Benchmarks\n", body).endswith("# Benchmarks\n\n## Feedback times\n\n| new |\n")
+    assert section_of("# Benchmarks\n", feedback.SECTION) == []

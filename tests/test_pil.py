@@ -1,0 +1,93 @@
+"""Processor-in-the-loop: the generated C built for a Cortex-M, run under QEMU, equal to the host
+build of the same precision (or within the verify tolerance, step by step) and to the reference;
+its instruction count and stack measured on the target."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from locations import DEFAULT_VEHICLE, REPO
+
+from vsegen.codegen.generate import render
+from vsegen.harness import pil
+from vsegen.harness.scenarios import VERIFICATION_SET
+from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.verify import against_reference, case_inputs, prepared
+from vsegen.model.params import parse_vehicle
+
+pytestmark = pytest.mark.skipif(bool(pil.available()), reason=pil.available() or "")
+
+
+@pytest.fixture(scope="module")
+def config():
+    return load_vehicle(DEFAULT_VEHICLE)
+
+
+@pytest.mark.parametrize("name,board", [("kf2dof", "m4f"), ("switching", "m7")])
+def test_one_estimator_per_target_runs_every_verification_scenario(config, name, board):
+    results = pil.pil(config, (name,), board, "baked")
+    assert len(results) == len(VERIFICATION_SET)
+    for result in results:
+        assert result.reference.ok, result.reference
+        assert result.host.ok, (result.reference.case, result.host)
+        assert result.instructions_per_step > 100 and 0 < result.stack_step < 4096
+
+
+def test_a_float_kf2dof_on_the_m4f_is_bit_identical_to_the_host_build(config):
+    result = pil.pil_case(config, "kf2dof", VERIFICATION_SET[0], 1, "m4f", "baked")
+    assert result.host.identical
+
+
+def _target_run(config, name: str, board: pil.Board):
+    estimator, _, host, tolerance = prepared(config, name, board.real, "baked")
+    inputs = case_inputs(config, estimator, VERIFICATION_SET[0], 1, board.real)
+    elf = pil.build(estimator, render(config, name, board.real, "baked"), board)
+    return estimator, host, tolerance, inputs, pil.run(elf, estimator, inputs, board)
+
+
+def test_a_changed_value_on_the_target_fails_both_comparisons(config):
+    board = pil.BOARDS["m7"]
+    estimator, host, tolerance, inputs, run = _target_run(config, "kf2dof", board)
+    states = run.states.copy()
+    states[500, 0] *= 1.0 + 1e-9          # one state entry, one step, far above double rounding
+    wrong = replace(run, states=states)
+    assert not pil.against_host(wrong, host, estimator, inputs, board.real, tolerance).ok
+    assert not against_reference(config, "kf2dof", VERIFICATION_SET[0], board.real, "baked", inputs,
+                                 wrong.outputs, wrong.states).ok
+
+
+def test_instructions_grow_with_the_particle_count(config):
+    """The instruction count measures the step's work: twice the particles, about twice the count."""
+    board = pil.BOARDS["m4f"]
+    counts = []
+    for particles in (100, 200):
+        text = with_settings(DEFAULT_VEHICLE.read_text(), "estimator.pf_improved", particles=particles)
+        car = parse_vehicle(text, "pf.toml", "pf")
+        counts.append(_target_run(car, "pf_improved", board)[4].instructions_per_step)
+    assert 1.8 < counts[1] / counts[0] < 2.1, counts
+
+
+def test_without_qemu_the_command_is_one_line(tmp_path):
+    bare = tmp_path / "bin"
+    bare.mkdir()
+    os.symlink(sys.executable, bare / "python3")
+    result = subprocess.run([sys.executable, "-m", "vsegen.harness.cli", "pil", "--estimator", "kf2dof"], cwd=REPO,
+                            capture_output=True, text=True, env={**os.environ, "PATH": str(bare)})
+    assert result.returncode == 2 and result.stderr.count("\n") == 1
+    assert "qemu-system-arm, arm-none-eabi-gcc not found: expected the Debian packages" in result.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("board", ["m4f", "m7"])
+@pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
+def test_every_estimator_runs_under_pil(board, car):
+    vehicle = load_vehicle(REPO / "vehicles" / f"{car}.toml")
+    results = pil.pil(vehicle, tuple(vehicle.estimators), board, "baked")
+    failures = [(r.reference.estimator, r.reference.case) for r in results if not r.ok]
+    assert failures == []
+    assert np.isfinite([r.instructions_per_step for r in results]).all()
