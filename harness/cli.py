@@ -343,8 +343,8 @@ def _explain_differences(real: str, flips: bool) -> None:
     console.print(f"relative difference = |c - ref| / max(|c|, |ref|, {tolerance.floor:g} x the "
                   f"signal's scale, {PEAK_FRACTION:g} x peak |signal|); tolerance "
                   f"{tolerance.relative:.0e} for {real}, wider where an estimator amplifies its "
-                  "reference's rounding (the unscented filters, ekf_rls's stiffness rate; column "
-                  "'tolerance'; harness/compare.py)")
+                  "reference's rounding (the unscented filters, ekf_rls's stiffness rate, "
+                  "arx_dual_kf's random-walk parameters; column 'tolerance'; harness/compare.py)")
     if flips:
         console.print("resampling flips: steps of a float particle filter whose resampling chose "
                       "another particle than the reference because a point lay within float "

@@ -20,8 +20,9 @@ Two refinements, both declared by the estimator's model, not chosen per run:
   ``Signal.scale``;
 * an algorithm that amplifies rounding (``Estimator.rounding_gain``: the unscented transform's
   weights of +-1e6 at the paper's alpha = 0.001; ekf_rls's stiffness rate, a difference quotient
-  over one sample) has its double tolerance widened by what its reference cannot absorb: the
-  unscented references compute in long double, ekf_rls's in double (:func:`for_estimator`).
+  over one sample; arx_dual_kf's random-walk parameters, which keep every step's rounding) has
+  its double tolerance widened by what its reference cannot absorb: the unscented references
+  compute in long double, the others in double (:func:`for_estimator`).
   Measured for ukf and aukf over the verification set: up to 1.1e-9 relative against a tolerance
   of 2.1e-8; the float check is unchanged and passes at up to 6.2e-5 (low-speed restart), 2.8e-5
   elsewhere.
@@ -98,7 +99,9 @@ def for_estimator(real: str, rounding_gain: float,
       tyres' force-per-speed conditioning, about 20. Their reference computes in long double
       (``long_double_reference``), so what remains is gain x REFERENCE_PRECISION (about 2e4).
     * ekf_rls: its fusion weight differences the cornering stiffness over one sample (about 1e2);
-      its reference computes in double, so the whole gain remains."""
+      its reference computes in double, so the whole gain remains.
+    * arx_dual_kf: its parameters are random walks that keep each step's rounding (10,
+      ``model.estimators.arx_dual_kf.PARAMETER_WALK_GAIN``)."""
     base = TOLERANCES[real]
     if real == "double":
         remaining = rounding_gain * (REFERENCE_PRECISION if long_double_reference else 1.0)
