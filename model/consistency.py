@@ -54,10 +54,11 @@ def fields(channels: tuple[str, ...]) -> tuple[Field, ...]:
 
 
 LINEAR_RANGE = nonnegative(
-    "linear_range", "m/s^2", "beyond the papers: above this |a_y| the linear tyre model no longer "
-    "holds and the status says BEYOND_LINEAR_RANGE (about half the friction limit: 4 for a dry "
-    "road); 0 = never", default=0.0)
-"""For estimators built on a linear tyre model."""
+    "linear_range", "m/s^2", "beyond the papers: above this |a_y| the tyres leave their linear "
+    "range, where the estimate rests on the tyre model (a linear one, or one with a friction "
+    "coefficient the road may not offer) and the status says BEYOND_LINEAR_RANGE (about half the "
+    "friction limit: 4 for a dry road); 0 = never", default=0.0)
+"""For estimators whose sideslip rests on a tyre model (kf2dof, ukf, aukf)."""
 
 
 def beyond_linear_range(ay, settings):

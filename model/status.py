@@ -38,7 +38,8 @@ STATUS_BITS = {
                                                "(mean squared innovation above residual_limit sensor "
                                                "variances over residual_window): the estimate is suspect"),
     "BEYOND_LINEAR_RANGE": (BEYOND_LINEAR_RANGE, "the lateral acceleration is beyond linear_range, where "
-                                                 "the estimator's linear tyre model no longer holds: the "
+                                                 "the estimate rests on the tyre model (linear, or with a "
+                                                 "friction coefficient the road may not offer): the "
                                                  "estimate is suspect"),
     "INVALID_CALIBRATION": (INVALID_CALIBRATION, "the calibration struct breaks a check of the vehicle-file "
                                                  "schema (e.g. a mass <= 0): the estimator holds, outputs 0 "

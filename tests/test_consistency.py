@@ -7,6 +7,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from locations import VEHICLES
 
 from vsegen.harness.logs import Log
 from vsegen.harness.run import run_estimator
@@ -14,7 +15,7 @@ from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.score import SILENT_DURATION, silent_error_time
 from vsegen.harness.vehicles import load_vehicle
 from vsegen.model import consistency
-from vsegen.model.status import MODEL_INCONSISTENT
+from vsegen.model.status import BEYOND_LINEAR_RANGE, MODEL_INCONSISTENT
 
 SETTINGS = {"residual_window": 0.2, "residual_limit": 6.0, "sensor_noise": (0.3, 0.3, 0.0175)}
 
@@ -53,7 +54,7 @@ def test_silent_error_time_counts_only_unflagged_wrong_samples_before_a_spin():
     assert silent_error_time(*_log(t, truth, nan, np.zeros_like(t)))[0] == pytest.approx(1.0)
 
 
-MONITORED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf")
+MONITORED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
 """The estimators for which the rule holds today, on both truth cars (docs/accuracy.md lists the
 others' longest silent errors)."""
 
@@ -64,7 +65,7 @@ others' longest silent errors)."""
 def test_never_silently_wrong(name, vehicle):
     """On every verification scenario, |beta error| > 2 deg lasts at most 0.5 s with status 0
     (samples after the car spins are not scored)."""
-    config = load_vehicle(f"vehicles/{vehicle}.toml")
+    config = load_vehicle(VEHICLES / f"{vehicle}.toml")
     for case in VERIFICATION_SET:
         log = case.simulate(config, 1.0 / config.sample_time, 1)
         longest, start = silent_error_time(log, run_estimator(config, name, log))
@@ -85,3 +86,20 @@ def test_the_monitor_flags_the_ukf_beyond_its_friction(variant):
         flagged = (estimates["status"].astype(int) & MODEL_INCONSISTENT) > 0
         assert flagged.any() == (window > 0)
     assert silent[0.0] > SILENT_DURATION >= silent[0.2]
+
+
+@pytest.mark.slow
+def test_linear_range_flags_the_aukf_where_its_adaptation_hides_the_error(variant):
+    """At mu = 0.5 the aukf's Sage-Husa noise estimate absorbs the innovations, so its monitor
+    stays quiet while beta is wrong by up to 10 deg; ``linear_range`` (|a_y| > 4 m/s^2: the road may be
+    at its friction limit) raises BEYOND_LINEAR_RANGE there."""
+    case = Case.of("dlc", speed_kmh=120.0, mu=0.5)
+    silent = {}
+    for limit in (0.0, 4.0):
+        config = variant("estimator.aukf", linear_range=limit)
+        log = case.simulate(config, 100.0, 1)
+        estimates = run_estimator(config, "aukf", log)
+        silent[limit] = silent_error_time(log, estimates)[0]
+        flagged = (estimates["status"].astype(int) & BEYOND_LINEAR_RANGE) > 0
+        assert flagged.any() == (limit > 0)
+    assert silent[0.0] > SILENT_DURATION >= silent[4.0]

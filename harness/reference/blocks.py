@@ -118,6 +118,15 @@ MONITOR_STATES = ("residual", "residual_hold_left")
 """The consistency monitor's state entries (model.consistency.STATES)."""
 
 
+BEYOND_LINEAR_RANGE = 256
+
+
+def beyond_linear_range(ay: float, settings) -> int:
+    """Status bit BEYOND_LINEAR_RANGE when |``ay``| (the logged a_y, m/s^2) exceeds the setting
+    ``linear_range`` (0 = never), else 0."""
+    return BEYOND_LINEAR_RANGE if settings["linear_range"] > 0 and abs(ay) > settings["linear_range"] else 0
+
+
 def residual_monitor(x, innovation, settings, T):
     """(new monitor entries, suspect, first) of the consistency monitor: the mean (residual_mean),
     the flag raised above residual_limit and held residual_hold seconds after, and whether the

@@ -12,7 +12,7 @@ from vsegen.harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
 OUTPUTS = ("beta", "vy", "r", "status")
-MODEL_INCONSISTENT, BEYOND_LINEAR_RANGE = 128, 256
+MODEL_INCONSISTENT = 128
 
 
 def _monitored(config) -> bool:
@@ -68,8 +68,7 @@ def step(config, state, u):
     z = np.array([inputs["ay"], inputs["r"]])
     innovation = z - C @ x - D @ np.array([inputs["delta"]])
     x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
-    if s["linear_range"] > 0 and abs(inputs["ay"]) > s["linear_range"]:
-        status |= BEYOND_LINEAR_RANGE
+    status |= blocks.beyond_linear_range(inputs["ay"], s)
     if monitor:
         updates, suspect, _ = blocks.residual_monitor(dict(zip(blocks.MONITOR_STATES, monitor)),
                                                       innovation, s, T)

@@ -131,6 +131,7 @@ class Variant:
                         "fading": LD(x["fading"]) * f})
         new["holding"] = 0.0
         status |= COVARIANCE_REPAIRED if repaired else 0
+        status |= blocks.beyond_linear_range(inputs["ay"], s)
         first_inconsistent = False
         if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
             monitor, suspect, first_inconsistent = blocks.residual_monitor(x, eps, s, config.sample_time)

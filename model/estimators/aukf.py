@@ -84,6 +84,7 @@ UKF_FIELDS: tuple[Field, ...] = (
                 "this; 0 = never"),
     ROLL_CORRECTION,
     *consistency.fields(("ax", "ay", "r")),
+    consistency.LINEAR_RANGE,
     *LOW_SPEED_FIELDS,
 )
 """Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""
@@ -333,7 +334,9 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     x_out = ca.if_else(restarted, restart[:N], x_new)
     code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
             + ca.if_else(restarted, status.FILTER_RESTARTED, 0)
-            + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0))
+            + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
+            + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
+                         status.BEYOND_LINEAR_RANGE, 0))
     output = outputs.pack({
         "beta": ca.if_else(active, ca.atan2(x_out[1], x_out[0]), 0),
         **{out: keep(x_out[X_NAMES.index(n)], n) for out, n in
@@ -363,7 +366,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
 _UKF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "COVARIANCE_REPAIRED", "FILTER_RESTARTED",
-               "MODEL_INCONSISTENT")
+               "MODEL_INCONSISTENT", "BEYOND_LINEAR_RANGE")
 _UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
 DEFINITIONS = (
     Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE, _UKF_STATUS, _UKF_DERIVED),

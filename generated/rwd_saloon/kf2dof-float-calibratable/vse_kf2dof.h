@@ -33,7 +33,7 @@ typedef float vse_kf2dof_real;
 #define VSE_KF2DOF_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
 #define VSE_KF2DOF_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 #define VSE_KF2DOF_STATUS_MODEL_INCONSISTENT (128) /**< the measurements disagree with the model's predictions (mean squared innovation above residual_limit sensor variances over residual_window): the estimate is suspect */
-#define VSE_KF2DOF_STATUS_BEYOND_LINEAR_RANGE (256) /**< the lateral acceleration is beyond linear_range, where the estimator's linear tyre model no longer holds: the estimate is suspect */
+#define VSE_KF2DOF_STATUS_BEYOND_LINEAR_RANGE (256) /**< the lateral acceleration is beyond linear_range, where the estimate rests on the tyre model (linear, or with a friction coefficient the road may not offer): the estimate is suspect */
 #define VSE_KF2DOF_STATUS_INVALID_CALIBRATION (512) /**< the calibration struct breaks a check of the vehicle-file schema (e.g. a mass <= 0): the estimator holds, outputs 0 (calibratable builds) */
 
 /** One sample of inputs (log columns of the same names; SI units). */
