@@ -118,11 +118,15 @@ def main(argv: list[str] | None = None) -> None:
                      f"{'met' if g / h <= TARGET_RATIO else 'MISSED'} | "
                      f"{generated.ns_per_step(inputs_file):.1f} | {hand.ns_per_step(inputs_file):.1f} |")
 
-    if any(isinstance(build(name, config).structure, Particles) for name in config.estimators):
+    filters = [build(name, config) for name in config.estimators
+               if isinstance(build(name, config).structure, Particles)]
+    if filters:
+        pf = filters[0].structure
         lines += ["", "## Particle filters by particle count (seed 003)", "",
                   f"{seed003.COSTS_CASE.label}; instructions per step as above; the Cortex-M4F "
-                  "float build's code, the caller-owned state (4 B per entry: 6 per particle and "
-                  "10 more), the step's worst-case stack and their sum with static data as RAM.",
+                  f"float build's code, the caller-owned state (4 B per entry: {len(pf.particle)} per particle "
+                  f"and {len(filters[0].states) - pf.count * len(pf.particle)} more), the step's worst-case "
+                  "stack and their sum with static data as RAM.",
                   "", *seed003.costs(args.vehicle.read_text(), str(args.vehicle), config.name,
                                      seed003.COSTS_CASE)]
 

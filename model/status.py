@@ -15,6 +15,7 @@ KINEMATIC_DWELL_LIMITED = 64
 MODEL_INCONSISTENT = 128
 BEYOND_LINEAR_RANGE = 256
 INVALID_CALIBRATION = 512
+DEAD_RECKONING = 1024
 
 STATUS_BITS = {
     "LOW_SPEED": (LOW_SPEED, "vx below the low-speed limit (or not yet back above the resume speed): "
@@ -44,5 +45,9 @@ STATUS_BITS = {
     "INVALID_CALIBRATION": (INVALID_CALIBRATION, "the calibration struct breaks a check of the vehicle-file "
                                                  "schema (e.g. a mass <= 0): the estimator holds, outputs 0 "
                                                  "(calibratable builds)"),
+    "DEAD_RECKONING": (DEAD_RECKONING, "v_y is integrated without a measurement and its error bound "
+                                       "(drift_acceleration plus the speed times drift_yaw_rate, integrated "
+                                       "since the particles were drawn) exceeds the speed times "
+                                       "tan(drift_limit): beta is suspect"),
 }
 """Every status bit by name: (value, meaning)."""

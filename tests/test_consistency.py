@@ -9,13 +9,15 @@ import numpy as np
 import pytest
 from locations import VEHICLES
 
+from vsegen.harness.build import compile_estimator
 from vsegen.harness.logs import Log
 from vsegen.harness.run import run_estimator
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.score import SILENT_DURATION, silent_error_time
 from vsegen.harness.vehicles import load_vehicle
 from vsegen.model import consistency
-from vsegen.model.status import BEYOND_LINEAR_RANGE, MODEL_INCONSISTENT
+from vsegen.model.estimators import DEFINITIONS, build
+from vsegen.model.status import BEYOND_LINEAR_RANGE, DEAD_RECKONING, MODEL_INCONSISTENT
 
 SETTINGS = {"residual_window": 0.2, "residual_limit": 6.0, "sensor_noise": (0.3, 0.3, 0.0175)}
 
@@ -54,9 +56,9 @@ def test_silent_error_time_counts_only_unflagged_wrong_samples_before_a_spin():
     assert silent_error_time(*_log(t, truth, nan, np.zeros_like(t)))[0] == pytest.approx(1.0)
 
 
-MONITORED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
-"""The estimators for which the rule holds today, on both truth cars (docs/accuracy.md lists the
-others' longest silent errors)."""
+MONITORED = tuple(name for name in DEFINITIONS if "beta" in build(name, load_vehicle(VEHICLES / "c_class.toml"))
+                  .outputs.names)
+"""Every sideslip estimator: the rule holds for each on both truth cars (docs/silent.md)."""
 
 
 @pytest.mark.slow
@@ -103,3 +105,35 @@ def test_linear_range_flags_the_aukf_where_its_adaptation_hides_the_error(varian
         flagged = (estimates["status"].astype(int) & BEYOND_LINEAR_RANGE) > 0
         assert flagged.any() == (limit > 0)
     assert silent[0.0] > SILENT_DURATION >= silent[4.0]
+
+
+@pytest.mark.slow
+def test_the_drift_bound_flags_the_particle_filters_dead_reckoned_sideslip(variant):
+    """v_y is never measured by the particle filters: on the hill sine pf_improved's beta drifts
+    past 2 deg with status 0 for more than 0.5 s without the bound; with it, DEAD_RECKONING."""
+    case = Case.of("hil_sine", mu=0.85)
+    silent = {}
+    for rate in (0.0, 0.015):
+        config = variant("estimator.pf_improved", drift_acceleration=0.05 * (rate > 0), drift_yaw_rate=rate)
+        log = case.simulate(config, 100.0, 1)
+        estimates = run_estimator(config, "pf_improved", log)
+        silent[rate] = silent_error_time(log, estimates)[0]
+        assert ((estimates["status"].astype(int) & DEAD_RECKONING) > 0).any() == (rate > 0)
+    assert silent[0.0] > SILENT_DURATION >= silent[0.015]
+
+
+def test_the_drift_bound_grows_with_speed_and_time_from_the_initial_spread(variant):
+    """The state's bound: 3 sigma of the initial v_y spread at the draw, then
+    (drift_acceleration + |v_x| drift_yaw_rate) T per active sample, v_x the filter's estimate."""
+    config = variant("estimator.pf_adaptive", drift_acceleration=0.05, drift_yaw_rate=0.01, particles=20)
+    log = Case.of("sine_steer").simulate(config, 100.0, 1)
+    estimator, compiled = compile_estimator(config, "pf_adaptive")
+    outputs, states = compiled.run(log.matrix(estimator.inputs.names))
+    drift = states[:, estimator.states.names.index("drift")]
+    vx = outputs[:, estimator.outputs.names.index("vx")]
+    spread = config.settings("pf_adaptive")["initial_spread"][1]
+    expected = 3 * spread + np.cumsum(0.01 * (0.05 + 0.01 * np.abs(vx)))
+    assert drift[0] == pytest.approx(3 * spread)
+    np.testing.assert_allclose(drift[1:], expected, rtol=1e-12)
+    flagged = (outputs[:, -1].astype(int) & DEAD_RECKONING) > 0
+    np.testing.assert_array_equal(flagged, drift[1:] > np.tan(0.0349) * np.abs(vx))

@@ -26,7 +26,9 @@ from vsegen.model.params import ParameterError
 
 NAMES = (pf.IMPROVED, pf.ADAPTIVE)
 TABLE = f"estimator.{pf.IMPROVED}"
-HEAD = len(pf.K_NAMES) + 1
+HOLDING = len(pf.K_NAMES)
+"""Index of ``holding`` in the state; ``drift`` follows it, then the stream."""
+HEAD = HOLDING + 2
 PARTICLES_AT = HEAD + 4
 SIGMAS = slice(pf.SHARED.index("sigma_ax"), pf.SHARED.index("sigma_r") + 1)
 
@@ -130,7 +132,7 @@ def test_adaptive_noise_follows_16(config):
     sigma_v = sigma_v0 + T sigma_a."""
     prepare = build(pf.IMPROVED, config).structure.prepare
     s = config.settings(pf.IMPROVED)
-    head = [20.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    head = [20.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.15]
     small = np.array(prepare(head, [20.0, 1.0, 0.0, 0.02])).ravel()
     assert small[0] == pf.PROPAGATE
     assert small[SIGMAS] == pytest.approx([0.2 + 0.5 * 1.0, 0.2, 0.01 + 0.5 * 0.02], rel=1e-15)
@@ -141,7 +143,7 @@ def test_adaptive_noise_follows_16(config):
 
 def test_roll_correction_of_the_lateral_acceleration(config):
     prepare = build(pf.IMPROVED, config).structure.prepare
-    z = np.array(prepare([20.0, 0, 0, 0, 0, 0], [20.0, 0.0, 5.0, 0.0])).ravel()
+    z = np.array(prepare([20.0, 0, 0, 0, 0, 0, 0.15], [20.0, 0.0, 5.0, 0.0])).ravel()
     assert z[3] == pytest.approx(5.0 / (1 + 9.81 * config.settings(pf.IMPROVED)["roll_gradient"]))
 
 
@@ -206,9 +208,9 @@ def test_invalid_input_holds_particles_and_stream(config):
     state, output = c.step(states[-1], np.array([25.0, np.nan, 1.0, 0.1]))
     assert int(output[est.outputs.index("status")]) == status.INVALID_INPUT
     assert output[0] == 0.0
-    assert np.array_equal(state[:HEAD - 1], states[-1][:HEAD - 1])
-    assert state[HEAD - 1] == 1.0                                   # holding: invalid input
-    assert np.array_equal(state[HEAD:], states[-1][HEAD:])          # particles and stream kept
+    assert np.array_equal(state[:HOLDING], states[-1][:HOLDING])
+    assert state[HOLDING] == 1.0                                    # holding: invalid input
+    assert np.array_equal(state[HOLDING + 1:], states[-1][HOLDING + 1:])  # drift bound, stream, particles kept
 
 
 def test_low_speed_hold_then_a_new_particle_set(config):

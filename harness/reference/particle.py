@@ -28,7 +28,8 @@ KINEMATIC = ("vx", "vy", "ax", "ay", "r")
 PARTICLE = (*KINEMATIC, "weight")
 INPUTS = ("vx", "ax", "ay", "r")
 OUTPUTS = ("beta", "vx", "vy", "n_eff", "sigma_ax", "sigma_ay", "sigma_r", "status")
-HEAD = (*KINEMATIC, "holding")
+HEAD = (*KINEMATIC, "holding", "drift")
+DEAD_RECKONING = 1024
 WEIGHT_FLOOR = 1e-30
 HOLD, PROPAGATE, SPAWN = 0, 1, 2
 
@@ -59,7 +60,7 @@ class ParticleFilter:
         z = self._measured(s, first)
         stream = Stream.seeded(s["seed"], s["seed"], self.uniform_bits)
         particles = self._spawn(s, vx0, z, stream)
-        head = [vx0, 0.0, *z, 2.0 * holding]
+        head = [vx0, 0.0, *z, 2.0 * holding, 3.0 * s["initial_spread"][1]]
         return np.concatenate([head, stream.words(), particles.ravel()])
 
     def step(self, config, state, u):
@@ -106,12 +107,22 @@ class ParticleFilter:
         holding = 0.0 if active else (2.0 if code & blocks.LOW_SPEED else max(head["holding"], 1.0))
         slow = active and estimate[0] < s["vx_min"]
         beta = float(np.arctan2(estimate[1], estimate[0])) if active and not slow else 0.0
+        # the bound of the integrated v_y's error (beyond the spec)
+        if mode == SPAWN:
+            drift = 3.0 * s["initial_spread"][1]
+        elif mode == PROPAGATE:
+            drift = head["drift"] + T * (s["drift_acceleration"] + abs(estimate[0]) * s["drift_yaw_rate"])
+        else:
+            drift = head["drift"]
+        if (active and not slow and s["drift_acceleration"] + s["drift_yaw_rate"] > 0
+                and drift > np.tan(s["drift_limit"]) * abs(estimate[0])):
+            code |= DEAD_RECKONING
         output = [beta, estimate[0], estimate[1], n_eff, *sigma,
                   float(code | (blocks.LOW_SPEED if slow else 0))]
         near: list[tuple[int, int]] = []
         if mode == PROPAGATE and (s["resampling"] == "every_sample" or n_eff < n / 2):
             particles, near = _resample(particles, stream.uniforms(1)[0], margin, flip)
-        new_state = np.concatenate([estimate, [holding], stream.words(), particles.ravel()])
+        new_state = np.concatenate([estimate, [holding, drift], stream.words(), particles.ravel()])
         return new_state, np.array(output, dtype=float), near
 
     # ---- blocks ---------------------------------------------------------------------------------

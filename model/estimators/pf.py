@@ -24,7 +24,10 @@ holds the particles and the random stream (no draws), beta = 0; ``holding`` is 2
 hold, 1 for an invalid input. The first sample after a low-speed hold draws a new particle set
 from that sample (2.9), as the initialisation does. Active, an estimated v_x below vx_min gives
 beta = 0 and LOW_SPEED (the spec's validity rule). Beyond the spec, a_y is corrected for body roll
-with the vehicle's roll gradient, as seed 000's estimators do (0 = the literal (13)).
+with the vehicle's roll gradient, as seed 000's estimators do (0 = the literal (13)), and the
+head keeps a bound of the never-measured v_y's error (``drift``: 3 sigma of the initial spread
+at each draw, plus (drift_acceleration + |v_x| drift_yaw_rate) T per propagated sample), which
+raises DEAD_RECKONING once it exceeds tan(drift_limit) |v_x|.
 """
 
 from __future__ import annotations
@@ -77,6 +80,13 @@ PF_FIELDS: tuple[Field, ...] = (
     diagonal("speed_noise", 2, "[v_x, v_y] per sample: m/s", "sigma_vx,0, sigma_vy,0 (16)"),
     nonnegative("adaptation_gain_acceleration", "-", "kappa_a of (16); 0 = no adaptation"),
     nonnegative("adaptation_gain_yaw_rate", "-", "kappa_r of (16); 0 = no adaptation"),
+    nonnegative("drift_acceleration", "m/s^2", "beyond the paper: the part of v_y's error rate that "
+                "does not scale with speed (a_y offset); with drift_yaw_rate the status bound of the "
+                "integrated, never measured v_y (DEAD_RECKONING); both 0 = off", default=0.0),
+    nonnegative("drift_yaw_rate", "rad/s", "beyond the paper: the yaw-rate error whose product with "
+                "|v_x| adds to v_y's error rate (v_y' = a_y - r v_x)", default=0.0),
+    positive("drift_limit", "rad", "beyond the paper: DEAD_RECKONING once the bound of v_y's error "
+             "exceeds tan(drift_limit) |v_x|", default=0.0349),
     ROLL_CORRECTION,
     *LOW_SPEED_FIELDS,
 )
@@ -120,6 +130,8 @@ def layouts(count: int) -> tuple[Layout, Layout, Layout]:
     states = Layout((
         *(Signal(n, u, f"estimate of the {d} (weighted mean)") for n, u, d in KINEMATIC),
         signals.HOLDING_REASON,
+        Signal("drift", "m/s", "bound of the v_y error: 3 sigma of the initial spread, plus the drift "
+                               "rate integrated since the particles were drawn"),
         *(Signal(f"rng_{i}", "-", f"PCG32 state bits {63 - 16 * i}..{48 - 16 * i}")
           for i in range(RNG_WORDS)),
         *(Signal(f"p{i}_{s.name}", s.unit, f"particle {i}: {s.doc}")
@@ -152,7 +164,7 @@ def _build(params: Parameters, name: str) -> Estimator:
     numeric = params.numeric.settings(name)
     count = numeric["particles"]
     inputs_layout, states, outputs = layouts(count)
-    head = Layout(states.signals[:len(KINEMATIC) + 1])
+    head = Layout(states.signals[:len(KINEMATIC) + 2])
     extra = params.inputs()
     extra_names = ["params"] * len(extra)
 
@@ -209,13 +221,18 @@ def _initial(params: Parameters, name: str, u) -> tuple[ca.SX, ca.SX]:
     first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"])
     vx0 = ca.fmin(ca.fmax(first["vx"], settings["vx_min"]), config.limits["vx_max"])
     z = _measured(params, name, first)
-    head = ca.vertcat(vx0, 0, z["ax"], z["ay"], z["r"], 2 * holding)
+    head = ca.vertcat(vx0, 0, z["ax"], z["ay"], z["r"], 2 * holding, initial_drift(settings))
     speed, accel = settings["speed_noise"], settings["process_noise"]
     sigma_a = ca.vertcat(*accel)
     shared = ca.vertcat(SPAWN, vx0, z["ax"], z["ay"], z["r"],
                         speed[0] + config.sample_time * sigma_a[0],
                         speed[1] + config.sample_time * sigma_a[1], sigma_a, 0, 2 * holding)
     return head, shared
+
+
+def initial_drift(settings):
+    """The v_y error bound when the particles are drawn: 3 sigma of their v_y spread (m/s)."""
+    return 3 * settings["initial_spread"][1]
 
 
 def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
@@ -285,22 +302,33 @@ def _finish(params: Parameters, name: str, h, shared, summary, head: Layout,
     active = shared["mode"] > 0.5
     estimate = {n: ca.if_else(active, summary[i], h[n]) for i, n in enumerate(K_NAMES)}
     slow = ca.logic_and(active, estimate["vx"] < settings["vx_min"])
+    # beyond the spec: the bound of the integrated v_y's error (v_y' = a_y - r v_x, never measured)
+    rate = settings["drift_acceleration"] + ca.fabs(estimate["vx"]) * settings["drift_yaw_rate"]
+    drift = ca.if_else(shared["mode"] > 1.5, initial_drift(settings),
+                       ca.if_else(active, h["drift"] + params.config.sample_time * rate, h["drift"]))
+    dead_reckoning = ca.logic_and(
+        ca.logic_and(active, ca.logic_not(slow)),
+        ca.logic_and(settings["drift_acceleration"] + settings["drift_yaw_rate"] > 0,
+                     drift > ca.tan(settings["drift_limit"]) * ca.fabs(estimate["vx"])))
     output = outputs.pack({
         "beta": ca.if_else(ca.logic_and(active, ca.logic_not(slow)),
                            ca.atan2(estimate["vy"], estimate["vx"]), 0),
         "vx": estimate["vx"], "vy": estimate["vy"], "n_eff": summary[len(K_NAMES)],
         **{f"sigma_{n}": shared[f"sigma_{n}"] for n in MEASURED},
-        "status": shared["status"] + ca.if_else(slow, status.LOW_SPEED, 0),
+        "status": (shared["status"] + ca.if_else(slow, status.LOW_SPEED, 0)
+                   + ca.if_else(dead_reckoning, status.DEAD_RECKONING, 0)),
     })
-    return head.pack({**estimate, "holding": shared["holding"]}), output
+    return head.pack({**estimate, "holding": shared["holding"], "drift": drift}), output
 
 
 _PF_TUNABLE = {"measurement_noise": Tunable(0.005, 2.0), "process_noise": Tunable(0.001, 1.0),
                "adaptation_gain_acceleration": Tunable(0.0, 5.0, log=False),
                "adaptation_gain_yaw_rate": Tunable(0.0, 5.0, log=False)}
 _PF_DERIVED = {**ROLL_GRADIENT, **INERTIAL_SIGMAS}
+_PF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "DEAD_RECKONING")
 DEFINITIONS = (
-    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE, derived=_PF_DERIVED),
+    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE, _PF_STATUS, derived=_PF_DERIVED),
     Definition(IMPROVED, build_improved, IMPROVED_SCHEMA,
-               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}, derived=_PF_DERIVED),
+               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}, _PF_STATUS,
+               derived=_PF_DERIVED),
 )
