@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vsegen.codegen.generate import library_sources, template_environment
+from vsegen.codegen.generate import template_environment
+from vsegen.harness.build import library_files
 from vsegen.harness.targets import link_to_api
 from vsegen.model.bicycle import state_matrix_norm_bound
 from vsegen.model.discretize import plan_zoh
@@ -70,9 +71,7 @@ def generated_driver(estimator: Estimator, files: dict[str, str], real: str) -> 
         "step": set_inputs + f"\n            {p}_step(&state, &in, &out);\n"
                              f"            checksum += (double)out.{estimator.outputs.signals[0].name};",
     }
-    sources = {n: files[n] for n in library_sources(files)}
-    headers = {n: t for n, t in files.items() if n.endswith(".h")}
-    return _compile(code, estimator.inputs, {**sources, **headers}, f"{p}_step",
+    return _compile(code, estimator.inputs, library_files(files), f"{p}_step",
                     api=(f"{p}_init", f"{p}_step"))
 
 

@@ -47,26 +47,35 @@ def runner_source(estimator: Estimator, writable_calibration: bool = False) -> s
 def build_library(files: dict[str, str], extra_sources: dict[str, str], cc: str | None = None,
                   flags: tuple[str, ...] = ()) -> Path:
     """Compile the library sources of ``files`` and ``extra_sources`` into a cached shared library."""
-    cc = cc or compiler()
-    all_files = {name: files[name] for name in library_sources(files)}
-    all_files.update({name: text for name, text in files.items() if name.endswith(".h")})
-    all_files.update(extra_sources)
-    command_flags = (*WARNING_FLAGS, *LIBRARY_FLAGS, *flags)
+    return compile_cached({**library_files(files), **extra_sources}, cc or compiler(),
+                          (*WARNING_FLAGS, *LIBRARY_FLAGS, *flags), "lib", ".so")
+
+
+def library_files(files: dict[str, str]) -> dict[str, str]:
+    """The library sources and every header of a generated folder's ``files``."""
+    return {**{name: files[name] for name in library_sources(files)},
+            **{name: text for name, text in files.items() if name.endswith(".h")}}
+
+
+def compile_cached(sources: dict[str, str], cc: str, flags: tuple[str, ...], kind: str, suffix: str) -> Path:
+    """Every .c of ``sources`` (file name -> text; headers beside them) compiled and linked with
+    ``cc`` and ``flags`` (and libm) into the build cache, ``cache_dir()/kind/<digest><suffix>``,
+    keyed by the SHA-256 of every source, the compiler and the flags: an unchanged build is
+    compiled once. BuildError with the compiler's messages if it fails."""
     digest = hashlib.sha256()
-    for name in sorted(all_files):
-        digest.update(name.encode() + b"\0" + all_files[name].encode() + b"\0")
-    digest.update(" ".join((cc, *command_flags)).encode())
-    target = cache_dir() / "lib" / f"{digest.hexdigest()[:24]}.so"
+    for name in sorted(sources):
+        digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
+    digest.update(" ".join((cc, *flags)).encode())
+    target = cache_dir() / kind / f"{digest.hexdigest()[:24]}{suffix}"
     if target.exists():
         return target
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="vsegen-build-") as tmp:
-        for name, text in all_files.items():
+        for name, text in sources.items():
             (Path(tmp) / name).write_text(text)
-        sources = sorted(n for n in all_files if n.endswith(".c"))
-        out = Path(tmp) / "lib.so"
-        result = subprocess.run([cc, *command_flags, "-o", str(out), *sources, "-lm"], cwd=tmp,
-                                capture_output=True, text=True)
+        out = Path(tmp) / f"out{suffix}"
+        result = subprocess.run([cc, *flags, "-o", str(out), *sorted(n for n in sources if n.endswith(".c")), "-lm"],
+                                cwd=tmp, capture_output=True, text=True)
         if result.returncode != 0:
             raise BuildError(f"{cc} failed on generated code:\n{result.stderr}")
         shutil.move(str(out), str(target))

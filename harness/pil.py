@@ -22,7 +22,6 @@ Equality rules (measured, see the README's PIL section):
 
 from __future__ import annotations
 
-import hashlib
 import re
 import shutil
 import subprocess
@@ -33,11 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from vsegen.codegen.generate import library_sources, render, template_environment
-from vsegen.harness.build import WARNING_FLAGS
+from vsegen.codegen.generate import render, template_environment
+from vsegen.harness.build import WARNING_FLAGS, compile_cached, library_files
 from vsegen.harness.compare import Difference, Tolerance, difference, relative_errors
 from vsegen.harness.parallel import Workers
-from vsegen.harness.paths import cache_dir
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.targets import TARGETS, Target, build_for_target
 from vsegen.harness.verify import CaseResult, against_reference, case_inputs, prepared
@@ -73,7 +71,7 @@ BOARDS = {
 
 
 class PilError(RuntimeError):
-    """The PIL build or run failed (QEMU or the cross compiler missing, a crash on the target)."""
+    """A PIL run failed on the target (a crash, a time-out, output of the wrong size)."""
 
 
 @dataclass(frozen=True)
@@ -108,28 +106,10 @@ def driver_source(estimator: Estimator) -> str:
 
 def build(estimator: Estimator, files: dict[str, str], board: Board) -> Path:
     """The PIL firmware (ELF) of the generated ``files`` for ``board``, cached by content."""
-    sources = {name: files[name] for name in library_sources(files)}
-    sources.update({name: text for name, text in files.items() if name.endswith(".h")})
-    sources["vse_pil_main.c"] = driver_source(estimator)
-    sources.update({path.name: path.read_text() for path in sorted(BOARDS_FOLDER.iterdir())})
-    flags = (*WARNING_FLAGS, *board.target.flags, *PIL_FLAGS, "-T", "mps2.ld")
-    digest = hashlib.sha256(" ".join((board.target.compiler, *flags)).encode())
-    for name in sorted(sources):
-        digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
-    elf = cache_dir() / "pil" / f"{digest.hexdigest()[:24]}.elf"
-    if elf.exists():
-        return elf
-    elf.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="vsegen-pil-") as tmp:
-        for name, text in sources.items():
-            (Path(tmp) / name).write_text(text)
-        c_files = sorted(name for name in sources if name.endswith(".c"))
-        result = subprocess.run([board.target.compiler, *flags, *c_files, "-lm", "-o", "app.elf"], cwd=tmp,
-                                capture_output=True, text=True)
-        if result.returncode != 0:
-            raise PilError(f"{board.target.compiler} failed on the PIL build of {estimator.name}:\n{result.stderr}")
-        shutil.move(str(Path(tmp) / "app.elf"), str(elf))
-    return elf
+    sources = {**library_files(files), "vse_pil_main.c": driver_source(estimator),
+               **{path.name: path.read_text() for path in sorted(BOARDS_FOLDER.iterdir())}}
+    return compile_cached(sources, board.target.compiler,
+                          (*WARNING_FLAGS, *board.target.flags, *PIL_FLAGS, "-T", "mps2.ld"), "pil", ".elf")
 
 
 def run(elf: Path, estimator: Estimator, inputs: np.ndarray, board: Board) -> PilRun:
