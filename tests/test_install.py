@@ -121,3 +121,14 @@ def test_the_wheel_in_a_fresh_venv_runs_init_generate_verify(wheel, tmp_path):
     assert verified.returncode == 0, verified.stderr
     assert "verify passed" in verified.stdout
     assert _tree(installed) == before, "vsegen wrote into its install location"
+
+
+def test_every_package_folder_is_in_the_wheel_list():
+    """pyproject lists the sub-packages explicitly (package-dir maps them under vsegen): a new
+    folder with an __init__.py must be listed, or the wheel leaves it out."""
+    import tomllib
+
+    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = {"vsegen." + ".".join(init.parent.relative_to(REPO).parts)
+             for folder in ("model", "codegen", "harness", "vehicles") for init in (REPO / folder).rglob("__init__.py")}
+    assert found == listed
