@@ -98,15 +98,6 @@ def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
     return codegen.forms_to_write(name, chosen)
 
 
-def _project_vehicles() -> list[Path]:
-    """The project's vehicle files; ProjectError (one line) when it has none."""
-    files = project().vehicle_files()
-    if not files:
-        raise ProjectError(f"no vehicle file in {project().vehicles}: expected --vehicle FILE, or a project "
-                           f"made by `vsegen init DIR`")
-    return files
-
-
 def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
     """Folders ``out/<vehicle>/<form>`` that no generation produced (e.g. of a removed estimator
     or vehicle file)."""
@@ -189,7 +180,7 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
     """Generate the C of each estimator (or check that --out is up to date)."""
     stale, expected = [], set()
     out = out or project().generated
-    for path in vehicles or _project_vehicles():
+    for path in vehicles or project().required_vehicle_files():
         config = load_vehicle(path)
         for name in _estimators(config, estimators):
             _warn_underived(config, name)
@@ -636,7 +627,7 @@ def misra(update_baseline: bool, out: Path | None) -> None:
                         f"source checkout, not an installed vsegen")
 
     sections, total = [], Counter()
-    configs = [load_vehicle(path) for path in _project_vehicles()]
+    configs = [load_vehicle(path) for path in project().required_vehicle_files()]
     out = out or project().reports / "misra.md"
     estimators = checks.distinct_code([(config, name) for config in configs for name in _estimators(config, ())])
     for (config, name), forms in zip(estimators, checks.all_findings(estimators)):

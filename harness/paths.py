@@ -41,17 +41,22 @@ class Project:
         """The project's vehicle files, sorted by name."""
         return sorted(self.vehicles.glob("*.toml"))
 
+    def required_vehicle_files(self) -> list[Path]:
+        """:meth:`vehicle_files`; ProjectError (one line) when there is none."""
+        files = self.vehicle_files()
+        if not files:
+            raise ProjectError(f"no vehicle file in {self.vehicles}: expected --vehicle FILE, or a project "
+                               f"made by `vsegen init DIR`")
+        return files
+
     def default_vehicle(self) -> Path:
         """The vehicle file used when a command is given none: the project's only vehicle file, else
         its vehicles/c_class.toml. ProjectError when there is neither."""
-        files = self.vehicle_files()
+        files = self.required_vehicle_files()
         if len(files) == 1:
             return files[0]
         if self.vehicles / DEFAULT_VEHICLE_NAME in files:
             return self.vehicles / DEFAULT_VEHICLE_NAME
-        if not files:
-            raise ProjectError(f"no vehicle file in {self.vehicles}: expected --vehicle FILE, or a project "
-                               f"made by `vsegen init DIR`")
         raise ProjectError(f"{len(files)} vehicle files in {self.vehicles} and none is {DEFAULT_VEHICLE_NAME}: "
                            f"expected --vehicle FILE to choose one")
 

@@ -16,6 +16,9 @@ GRAVITY = 9.81
 """m/s^2, as in the model."""
 LOW_SPEED = 1
 INVALID_INPUT = 2
+MODEL_INCONSISTENT = 128
+BEYOND_LINEAR_RANGE = 256
+"""Status bits several estimators raise (model/status.py; the others live with their estimator)."""
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
             "mz": "mz_max", "omega_fl": "omega_max", "omega_fr": "omega_max",
             "omega_rl": "omega_max", "omega_rr": "omega_max"}
@@ -116,9 +119,6 @@ def residual_mean(previous, innovation, settings, T):
 
 MONITOR_STATES = ("residual", "residual_hold_left")
 """The consistency monitor's state entries (model.consistency.STATES)."""
-
-
-BEYOND_LINEAR_RANGE = 256
 
 
 def beyond_linear_range(ay: float, settings) -> int:

@@ -20,7 +20,6 @@ RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
 STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
           "c_rear", "r_last", "r_dot", "indicator", "beta", "holding")
 OUTPUTS = ("beta", "beta_ekf", "beta_int", "r", "weight", "c_front", "c_rear", "status")
-MODEL_INCONSISTENT = 128
 KINEMATIC = ("beta_kin", "ax_f", "ay_f", "r_f", "delta_f", "beta_f")
 """States of the ``kinematic_slip`` regressor: its integral method (re-seeded from the fused beta
 only while lambda = 0) and the low-passed a_x, a_y, r, delta and beta_kin."""
@@ -193,7 +192,7 @@ def step(config, state, u):
         weight = 1.0
     beta = (1 - weight) * xe[0] + weight * beta_int
     if s["residual_window"] > 0 and suspect_ekf and weight < 0.5:   # the EKF carries the output
-        status |= MODEL_INCONSISTENT
+        status |= blocks.MODEL_INCONSISTENT
 
     new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
             "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,

@@ -13,7 +13,6 @@ TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
 
 
-MODEL_INCONSISTENT = 128
 
 
 def extra(config) -> tuple[str, ...]:
@@ -43,7 +42,7 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     monitor = {}
     if "residual" in x:                       # the consistency monitor (beyond the paper)
         monitor, suspect, _ = blocks.residual_monitor(x, innovation, s, T)
-        status |= MODEL_INCONSISTENT if suspect else 0
+        status |= blocks.MODEL_INCONSISTENT if suspect else 0
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)

@@ -12,7 +12,6 @@ from vsegen.harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
 OUTPUTS = ("beta", "vy", "r", "status")
-MODEL_INCONSISTENT = 128
 
 
 def _monitored(config) -> bool:
@@ -73,6 +72,6 @@ def step(config, state, u):
         updates, suspect, _ = blocks.residual_monitor(dict(zip(blocks.MONITOR_STATES, monitor)),
                                                       innovation, s, T)
         monitor = [updates[k] for k in blocks.MONITOR_STATES]
-        status |= MODEL_INCONSISTENT if suspect else 0
+        status |= blocks.MODEL_INCONSISTENT if suspect else 0
     new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *monitor, 0.0])
     return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

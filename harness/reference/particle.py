@@ -60,7 +60,7 @@ class ParticleFilter:
         z = self._measured(s, first)
         stream = Stream.seeded(s["seed"], s["seed"], self.uniform_bits)
         particles = self._spawn(s, vx0, z, stream)
-        head = [vx0, 0.0, *z, 2.0 * holding, 3.0 * s["initial_spread"][1]]
+        head = [vx0, 0.0, *z, 2.0 * holding, _initial_drift(s)]
         return np.concatenate([head, stream.words(), particles.ravel()])
 
     def step(self, config, state, u):
@@ -109,7 +109,7 @@ class ParticleFilter:
         beta = float(np.arctan2(estimate[1], estimate[0])) if active and not slow else 0.0
         # the bound of the integrated v_y's error (beyond the spec)
         if mode == SPAWN:
-            drift = 3.0 * s["initial_spread"][1]
+            drift = _initial_drift(s)
         elif mode == PROPAGATE:
             drift = head["drift"] + T * (s["drift_acceleration"] + abs(estimate[0]) * s["drift_yaw_rate"])
         else:
@@ -172,6 +172,11 @@ class ParticleFilter:
             log_weight += libm(math.log, np.maximum(weight, WEIGHT_FLOOR))
         likelihood = libm(math.exp, log_weight - log_weight.max())
         return np.column_stack([vx_new, vy_new, new, likelihood / _total(likelihood)])
+
+
+def _initial_drift(s) -> float:
+    """The v_y error bound when particles are drawn: 3 sigma of their v_y spread (m/s)."""
+    return 3.0 * s["initial_spread"][1]
 
 
 def _total(terms: np.ndarray) -> np.ndarray:

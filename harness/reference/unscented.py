@@ -26,7 +26,6 @@ OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
 WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
-MODEL_INCONSISTENT = 128
 AIR_DENSITY = 1.2
 N = 6
 
@@ -136,7 +135,7 @@ class Variant:
         if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
             monitor, suspect, first_inconsistent = blocks.residual_monitor(x, eps, s, config.sample_time)
             new.update(monitor)
-            status |= MODEL_INCONSISTENT if suspect else 0
+            status |= blocks.MODEL_INCONSISTENT if suspect else 0
         speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
         if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
                 or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)
