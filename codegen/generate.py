@@ -16,12 +16,13 @@ from pathlib import Path
 
 import casadi as ca
 import jinja2
+import numpy as np
 
 from vsegen.codegen import a2l
 from vsegen.codegen.checks import condition
 from vsegen.codegen.kernel import generate_kernel
 from vsegen.codegen.precision import literal
-from vsegen.model import status
+from vsegen.model import status, ziggurat
 from vsegen.model.calibration_checks import calibration_checks
 from vsegen.model.estimator import RNG_WORDS
 from vsegen.model.estimators import DEFINITIONS, SCHEMAS, build
@@ -59,6 +60,17 @@ REVIEWED_FORMS: dict[str, tuple[tuple[str, str], ...]] = {
 """Forms other than a vehicle's [codegen] default whose output is committed to the repository's
 ``generated/`` too (as ``<vehicle>/<estimator>-<real>-<params>/``), so a change to the float or
 calibratable output shows up in a reviewed diff: a plain filter and a particle filter."""
+
+
+def ziggurat_literals(real: str) -> dict[str, list[str]]:
+    """The ziggurat's tables (``model.ziggurat``) as C literals of type ``real``: a float build's
+    entries are the double tables rounded once to float (written as that float's exact value)."""
+    tables = ziggurat.tables()
+    rounded = (lambda v: float(np.float32(v))) if real == "float" else float
+    reals = {name: [literal(rounded(v), real) for v in getattr(tables, name)]
+             for name in ("width", "floor", "height")}
+    return {"core": [f"{k}UL" for k in tables.core], "edge": literal(rounded(ziggurat.EDGE), real),
+            **reals}
 
 
 def forms_to_write(name: str, default: tuple[str, str]) -> list[tuple[str, str, str]]:
@@ -105,6 +117,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "status_index": estimator.outputs.index("status"),
         "kernel": kernel,
         "rng_words": RNG_WORDS,
+        "ziggurat": ziggurat_literals(real),
         "f": "f" if real == "float" else "",
         "arm_flags": ARM_FLAGS[real],
     }

@@ -141,6 +141,7 @@ class Particles:
       weighted mean of the particles' entries but the last, then N_eff = 1 / sum w^2.
 
     ``resampling``: "every_sample" or "effective_size" (only when N_eff < count / 2), systematic.
+    ``sampler``: the normal draws' algorithm, "ziggurat" (``model.ziggurat``) or "box_muller".
     """
 
     init: ca.Function
@@ -151,6 +152,7 @@ class Particles:
     count: int
     seed: int
     resampling: str
+    sampler: str
     head_size: int
     particle: Layout
 

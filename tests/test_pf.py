@@ -1,6 +1,6 @@
-"""Seed 003's particle filters: the random stream (PCG32, uniforms, Box-Muller) in C and NumPy, the
-per-particle kernels (kinematics signs, proposal correction, adaptive noise (16), weights), the
-systematic resampling rule, the hold rule, the resampling modes and observation options, and the
+"""Seed 003's particle filters: the random stream (PCG32, uniforms, ziggurat and Box-Muller normals)
+in C and NumPy, the per-particle kernels (kinematics signs, proposal correction, adaptive noise
+(16), weights), the systematic resampling rule, the hold rule, the resampling modes and observation options, and the
 C against the reference in double (every step and every trajectory) and float (every step, flips
 explained) on every verification scenario."""
 
@@ -12,15 +12,17 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from vsegen.harness import verify
 from vsegen.harness.build import compile_estimator
-from vsegen.harness.reference import REFERENCES
+from vsegen.harness.reference import REFERENCES, normals
 from vsegen.harness.reference.particle import _resample
 from vsegen.harness.reference.pcg32 import MASK, MULTIPLIER, Stream
 from vsegen.harness.reference.run import run_reference
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.vehicles import load_vehicle
-from vsegen.harness.verify import verify_estimator
+from vsegen.harness.verify import _flip_sets, prepared, verify_estimator
 from vsegen.model import status
+from vsegen.model import ziggurat as zig
 from vsegen.model.estimators import build, pf
 from vsegen.model.params import ParameterError
 
@@ -62,25 +64,79 @@ def test_jumped_blocks_equal_the_lcg_one_step_at_a_time():
     assert stream.state == state
 
 
+SAMPLERS = {"box_muller": normals.box_muller, "ziggurat": normals.ziggurat}
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
 @pytest.mark.parametrize("bits", [53, 24])
-def test_normals_are_standard_normal(bits):
-    draws = Stream.seeded(3, 3, bits).normals(100_000)
+def test_normals_are_standard_normal(sampler, bits):
+    draws = SAMPLERS[sampler](Stream.seeded(3, 3, bits), 200_000)
     assert stats.kstest(draws, "norm").pvalue > 1e-3
+    beyond = np.abs(draws) > zig.EDGE                 # the ziggurat's tail: 0.058 %, 115 expected
+    assert stats.binomtest(int(beyond.sum()), len(draws), 2 * stats.norm.sf(zig.EDGE)).pvalue > 1e-3
     uniforms = Stream.seeded(3, 3, bits).uniforms(100_000)
     assert uniforms.min() >= 0.0 and uniforms.max() < 1.0
     assert np.all(uniforms * 2.0 ** bits == np.floor(uniforms * 2.0 ** bits))  # bits of resolution
 
 
-@pytest.mark.parametrize("real, outputs_per_normal", [("double", 4), ("float", 2)])
-def test_c_init_leaves_the_stream_where_the_spec_says(config, real, outputs_per_normal):
-    """The C seeds pcg32_srandom_r(seed, seed) and draws 5 normals per particle, each from two
-    uniforms of two outputs (double, 53 bits) or one output (float, 24 bits)."""
+def test_ziggurat_tables_of_the_generator_and_the_reference_agree_and_hold():
+    """The C's tables (model.ziggurat) equal the reference's own; every layer has the area v under
+    exp(-x^2/2); a magnitude below CORE lies under the curve over the layer's whole height, the
+    next one beyond the layer above's edge."""
+    tables = zig.tables()
+    assert np.array_equal(np.array(tables.core, dtype=np.uint64), normals.CORE)
+    for ours, theirs in ((tables.width, normals.WIDTH), (tables.floor, normals.FLOOR),
+                         (tables.height, normals.HEIGHT)):
+        assert np.array_equal(ours, theirs)
+    edges = np.array(tables.width) * 2.0 ** zig.MAGNITUDE_BITS
+    areas = edges[1:] * np.array(tables.height[1:])
+    assert np.allclose(areas, zig.AREA, rtol=1e-8)
+    base = edges[0] * tables.floor[-1]          # the base strip: rectangle plus tail
+    assert base == pytest.approx(zig.EDGE * tables.floor[-1] + math.sqrt(math.pi / 2)
+                                 * math.erfc(zig.EDGE / math.sqrt(2)), rel=1e-8)
+    for i in range(2, zig.LAYERS):
+        assert tables.core[i] * tables.width[i] <= edges[i - 1] < (tables.core[i] + 1) * tables.width[i]
+    assert np.mean(np.array(tables.core) / 2.0 ** 24) == pytest.approx(0.972, abs=5e-4)
+
+
+def test_a_near_decision_is_recorded_and_can_be_flipped():
+    decisions = normals.Decisions(margin=1e-6, flip=1)
+    assert decisions.take(1.0, 2.0) is True                      # 0: far, kept
+    assert decisions.take(1.0, 2.0) is False                     # 1: flipped
+    assert decisions.take(1.0, 1.0 + 1e-7) is True               # 2: near
+    assert decisions.near == [2]
+
+
+@pytest.mark.parametrize("sampler", SAMPLERS)
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_c_init_leaves_the_stream_where_the_reference_does(variant, sampler, real):
+    """The C seeds pcg32_srandom_r(seed, seed) and draws 5 normals per particle with the
+    vehicle file's sampler, as many 32-bit outputs as the reference's draws take (two uniforms
+    of two outputs each per Box-Muller normal in double, of one in float; one output for most
+    ziggurat normals, more beyond a core)."""
+    config = variant(TABLE, normals=sampler)
     est, c = compile_estimator(config, pf.IMPROVED, real)
     _, states = c.run(np.array([[20.0, 0.0, 0.0, 0.0]]))
     settings = config.settings(pf.IMPROVED)
-    stream = Stream.seeded(settings["seed"], settings["seed"])
-    stream.outputs(outputs_per_normal * 5 * settings["particles"])
+    stream = Stream.seeded(settings["seed"], settings["seed"], 53 if real == "double" else 24)
+    SAMPLERS[sampler](stream, 5 * settings["particles"])
     assert states[0, HEAD:PARTICLES_AT].tolist() == stream.words()
+
+
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_c_spawns_from_the_reference_ziggurat_normals(config, real):
+    """The initial particles are the measurement plus spread x normal: their deviations give
+    the C's normals back, equal to the reference's (float: its float arithmetic) to rounding."""
+    est, c = compile_estimator(config, pf.IMPROVED, real)
+    _, states = c.run(np.array([[20.0, 0.0, 0.0, 0.0]]))
+    settings = config.settings(pf.IMPROVED)
+    n = settings["particles"]
+    draws = normals.ziggurat(Stream.seeded(settings["seed"], settings["seed"],
+                                           53 if real == "double" else 24), 5 * n).reshape(n, 5)
+    spread = np.array([*settings["initial_spread"], *settings["measurement_noise"]])
+    spawned = particles_of(states[0], n)[:, :5] - np.array([20.0, 0.0, 0.0, 0.0, 0.0])
+    rounding = 1e-13 if real == "double" else 1e-5     # of 20 m/s, subtracted again
+    assert np.allclose(spawned, spread * draws, rtol=0.0, atol=rounding)
 
 
 # ---- per-particle kernels ---------------------------------------------------------------------
@@ -182,8 +238,52 @@ def test_points_near_a_cumulative_weight_and_their_alternatives():
     assert near == [(1, 0)]                                   # not the empty particle 1
     _, near = _resample(particles, 0.5, margin=1e-6)          # point 2 = 0.5 ~ c_2 ~ c_3
     assert near == [(2, 3), (2, 4)]
-    flipped, _ = _resample(particles, 0.5, flip=(2, 4))
+    flipped, _ = _resample(particles, 0.5, flip=((2, 4),))
     assert sorted(flipped[:, 0].tolist()) == [0.0, 2.0, 4.0, 4.0, 4.0]
+
+
+def test_a_flip_set_is_one_decision_or_two_resampling_points():
+    alternatives = [("resample", 3, 7), ("resample", 3, 8), ("resample", 9, 1), ("draw", 4)]
+    assert list(_flip_sets(alternatives)) == [
+        (("resample", 3, 7),), (("resample", 3, 8),), (("resample", 9, 1),), (("draw", 4),),
+        (("resample", 3, 7), ("resample", 9, 1)), (("resample", 3, 8), ("resample", 9, 1))]
+
+
+def test_verify_explains_a_ziggurat_decision_taken_the_other_way(config, monkeypatch):
+    """A run that took one wedge or tail decision the other way (as a float libm's expf or logf
+    rounding the other way would) is explained by that flip when the decision was near, and fails
+    when the margin says it was not."""
+    name = pf.IMPROVED
+    estimator, reference, _, tolerance = prepared(config, name, "float", "baked")
+    inputs = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1).matrix(
+        estimator.inputs.names)[:40]
+    states, outputs, k = [reference.init(config, inputs[0])], [], 20
+    for i, row in enumerate(inputs):
+        if i == k:          # the "C" takes a draw decision the other way
+            draw = next(a for a in reference.alternatives(config, states[-1], row, 0.0, 0.5)
+                        if a[0] == "draw")
+            state, output = reference.step_flipped(config, states[-1], row, (draw,))
+        else:
+            state, output = reference.step(config, states[-1], row)
+        states.append(state)
+        outputs.append(output)
+    states, outputs = np.array(states), np.array(outputs)
+    case = Case.of("dlc", speed_kmh=80.0)
+    monkeypatch.setattr(verify, "DECISION_MARGIN", 0.5)
+    result = verify.against_reference(config, name, case, "float", "baked", inputs, outputs, states)
+    assert result.ok and result.flips == 1, result
+    monkeypatch.setattr(verify, "DECISION_MARGIN", 1e-12)
+    result = verify.against_reference(config, name, case, "float", "baked", inputs, outputs, states)
+    assert not result.ok
+
+
+@pytest.mark.parametrize("real", ["double", pytest.param("float", marks=pytest.mark.slow)])
+def test_the_spec_box_muller_normals_verify(variant, real):
+    config = variant(TABLE, normals="box_muller")
+    (result,) = verify_estimator(config, pf.IMPROVED, cases=(Case.of("dlc", speed_kmh=120.0),),
+                                 real=real)
+    assert result.ok, result
+    assert real == "float" or result.flips == 0
 
 
 def test_effective_size_mode_resamples_only_below_half(variant):

@@ -2,7 +2,8 @@
 §3/§5 defaults): particle state [v_x, v_y, a_x, a_y, r], the corrected transition (14)-(15)
 (G = 0: the adaptive PF of ref. [17]), adaptive process noise (16), Gaussian likelihood of (13)
 (D2: also v_x), the weighted mean before resampling (17) and systematic resampling (D4), with the
-random stream of D5 (``harness.reference.pcg32``). NumPy only, vectorised over the particles.
+random stream of D5 (``harness.reference.pcg32``) and the normal sampler the vehicle file names
+(``harness.reference.normals``). NumPy only, vectorised over the particles.
 
 Project rules as for every estimator: the hold rule on the logged v_x (hold the particles and the
 stream; a new particle set on the first sample after a low-speed hold), a_y corrected for body
@@ -21,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from vsegen.harness.reference import blocks
+from vsegen.harness.reference import blocks, normals
 from vsegen.harness.reference.pcg32 import WORDS, Stream, libm
 
 KINEMATIC = ("vx", "vy", "ax", "ay", "r")
@@ -59,32 +60,42 @@ class ParticleFilter:
         vx0 = min(max(first["vx"], s["vx_min"]), config.limits["vx_max"])
         z = self._measured(s, first)
         stream = Stream.seeded(s["seed"], s["seed"], self.uniform_bits)
-        particles = self._spawn(s, vx0, z, stream)
+        particles = self._spawn(s, vx0, z, _draws(s, stream))
         head = [vx0, 0.0, *z, 2.0 * holding, _initial_drift(s)]
         return np.concatenate([head, stream.words(), particles.ravel()])
 
     def step(self, config, state, u):
-        new_state, output, _ = self._advance(config, state, u)
+        new_state, output, _, _ = self._advance(config, state, u)
         return new_state, output
 
-    def alternatives(self, config, state, u, margin: float) -> list[tuple[int, int]]:
-        """(point, particle): the resampling points of the step from ``state`` and the other
-        particles whose cumulative-weight interval lies within ``margin`` of them (none if the
-        step does not resample): where a float build may select differently and still be
-        right."""
-        return self._advance(config, state, u, margin=margin)[2]
+    def alternatives(self, config, state, u, margin: float, decision_margin: float) -> list[tuple]:
+        """The decisions of the step from ``state`` that a float build (or another libm) may take
+        the other way and still be right: ("resample", point, particle) for a resampling point
+        and another particle whose cumulative-weight interval lies within ``margin`` of it, and
+        ("draw", number) for a ziggurat wedge or tail test whose sides lie within
+        ``decision_margin`` (relative) of each other."""
+        _, _, near_points, decisions = self._advance(config, state, u, margin=margin,
+                                                     decisions=normals.Decisions(decision_margin))
+        return ([("resample", point, particle) for point, particle in near_points]
+                + [("draw", number) for number in decisions.near])
 
-    def step_flipped(self, config, state, u, point: int, particle: int):
-        """The step from ``state`` with resampling point ``point`` selecting ``particle``."""
-        new_state, output, _ = self._advance(config, state, u, flip=(point, particle))
+    def step_flipped(self, config, state, u, flips: tuple[tuple, ...]):
+        """The step from ``state`` with decisions of :meth:`alternatives` taken the other way
+        (resampling points at different points; at most one draw, as a flipped draw renumbers
+        the draws after it)."""
+        points = tuple(flip[1:] for flip in flips if flip[0] == "resample")
+        draws = [flip[1] for flip in flips if flip[0] == "draw"]
+        decisions = normals.Decisions(flip=draws[0] if draws else None)
+        new_state, output, _, _ = self._advance(config, state, u, flip=points, decisions=decisions)
         return new_state, output
 
-    def _advance(self, config, state, u, margin: float = 0.0,
-                 flip: tuple[int, int] | None = None):
+    def _advance(self, config, state, u, margin: float = 0.0, flip: tuple = (),
+                 decisions: normals.Decisions | None = None):
         s = config.settings(self.table)
         n = s["particles"]
         head = dict(zip(HEAD, state[:len(HEAD)]))
         stream = Stream.from_words(state[len(HEAD):len(HEAD) + WORDS], s["seed"], self.uniform_bits)
+        decisions = decisions if decisions is not None else normals.Decisions()
         particles = np.array(state[len(HEAD) + WORDS:], dtype=float).reshape(n, len(PARTICLE))
         inputs = dict(zip(INPUTS, u))
         active, code, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
@@ -97,9 +108,10 @@ class ParticleFilter:
         sigma_v = np.array(s["speed_noise"]) + T * sigma[:2]
         vx_measured = inputs["vx"] if active else head["vx"]
         if mode == SPAWN:
-            particles = self._spawn(s, vx_measured, z, stream)
+            particles = self._spawn(s, vx_measured, z, _draws(s, stream, decisions))
         elif mode == PROPAGATE:
-            particles = self._propagate(s, T, particles, z, vx_measured, sigma, sigma_v, stream)
+            particles = self._propagate(s, T, particles, z, vx_measured, sigma, sigma_v,
+                                        _draws(s, stream, decisions))
         weights = particles[:, -1]
         n_eff = 1.0 / _total(weights * weights)
         if mode != HOLD:
@@ -123,7 +135,7 @@ class ParticleFilter:
         if mode == PROPAGATE and (s["resampling"] == "every_sample" or n_eff < n / 2):
             particles, near = _resample(particles, stream.uniforms(1)[0], margin, flip)
         new_state = np.concatenate([estimate, [holding, drift], stream.words(), particles.ravel()])
-        return new_state, np.array(output, dtype=float), near
+        return new_state, np.array(output, dtype=float), near, decisions
 
     # ---- blocks ---------------------------------------------------------------------------------
 
@@ -141,18 +153,15 @@ class ParticleFilter:
         return np.clip(floor + gains * np.abs(z - previous), floor, cap)
 
     @staticmethod
-    def _spawn(s, vx, z, stream) -> np.ndarray:
+    def _spawn(s, vx, z, draws) -> np.ndarray:
         """(2.9): the measurement plus N(0, diag(spread^2, R)) per particle, weights 1/N."""
         n = s["particles"]
-        draws = stream.normals(n * len(KINEMATIC)).reshape(n, len(KINEMATIC))
         centre = np.array([vx, 0.0, *z])
         spread = np.array([*s["initial_spread"], *s["measurement_noise"]])
         return np.hstack([centre + spread * draws, np.full((n, 1), 1.0 / n)])
 
-    def _propagate(self, s, T, particles, z, vx_measured, sigma, sigma_v, stream) -> np.ndarray:
+    def _propagate(self, s, T, particles, z, vx_measured, sigma, sigma_v, draws) -> np.ndarray:
         """(14)-(15) for every particle, then the normalised weights."""
-        n = s["particles"]
-        draws = stream.normals(n * len(KINEMATIC)).reshape(n, len(KINEMATIC))
         vx, vy, old, weight = particles[:, 0], particles[:, 1], particles[:, 2:5], particles[:, 5]
         gain = np.array(s["correction_gain"]) if self.improved else np.zeros(3)
         correction = gain * (z - old)
@@ -174,6 +183,16 @@ class ParticleFilter:
         return np.column_stack([vx_new, vy_new, new, likelihood / _total(likelihood)])
 
 
+def _draws(s, stream: Stream, decisions: normals.Decisions | None = None) -> np.ndarray:
+    """Every particle's five normals, particle by particle, in state order (D5)."""
+    n = s["particles"]
+    if s["normals"] == "box_muller":
+        draws = normals.box_muller(stream, n * len(KINEMATIC))
+    else:
+        draws = normals.ziggurat(stream, n * len(KINEMATIC), decisions)
+    return draws.reshape(n, len(KINEMATIC))
+
+
 def _initial_drift(s) -> float:
     """The v_y error bound when particles are drawn: 3 sigma of their v_y spread (m/s)."""
     return 3.0 * s["initial_spread"][1]
@@ -185,15 +204,15 @@ def _total(terms: np.ndarray) -> np.ndarray:
 
 
 def _resample(particles: np.ndarray, u: float, margin: float = 0.0,
-              flip: tuple[int, int] | None = None) -> tuple[np.ndarray, list[tuple[int, int]]]:
+              flip: tuple[tuple[int, int], ...] = ()) -> tuple[np.ndarray, list[tuple[int, int]]]:
     """Systematic resampling (D4): point j = (u + j) / N selects the first particle whose
     cumulative weight exceeds it (the last one of positive weight when rounding leaves the point
     beyond the total). Each selected particle keeps its slot; its extra copies fill, in particle
     order, the slots of the particles not selected. Weights become 1 / N.
 
     Also returns (point, particle) for every other particle of positive weight whose interval
-    [c_(i-1), c_i) lies within ``margin`` of a point; ``flip`` = (point, particle) makes that
-    point select that particle (see ``ParticleFilter.step_flipped``)."""
+    [c_(i-1), c_i) lies within ``margin`` of a point; each (point, particle) of ``flip`` makes
+    that point select that particle (see ``ParticleFilter.step_flipped``)."""
     n = len(particles)
     weights = particles[:, -1]
     points = (u + np.arange(n)) / n
@@ -206,8 +225,8 @@ def _resample(particles: np.ndarray, u: float, margin: float = 0.0,
         high = np.minimum(np.searchsorted(cumulative, points + margin, side="right"), n - 1)
         near = [(j, i) for j in np.flatnonzero(high > low) for i in range(low[j], high[j] + 1)
                 if i != chosen[j] and weights[i] > 0]
-    if flip is not None:
-        chosen[flip[0]] = flip[1]
+    for point, particle in flip:
+        chosen[point] = particle
     copies = np.bincount(chosen, minlength=n)
     order = np.arange(n)
     order[copies == 0] = np.repeat(np.arange(n), np.maximum(copies - 1, 0))

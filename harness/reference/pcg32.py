@@ -7,8 +7,8 @@ is the XSH RR permutation: x = ((s >> 18) ^ s) >> 27 (32 bits), rotated right by
 Seeding ``pcg32_srandom_r(init, seq)``: s = 0, step, s += init, step.
 
 On top (003-improved-pf-velocity.md D5): uniforms in [0, 1) of 53 bits from two outputs
-((x1 >> 5) 2^26 + (x2 >> 6)) 2^-53, or of 24 bits from one, (x >> 8) 2^-24 (the float C);
-standard normals by Box-Muller, cosine branch only: sqrt(-2 ln(1 - u1)) cos(2 pi u2).
+((x1 >> 5) 2^26 + (x2 >> 6)) 2^-53, or of 24 bits from one, (x >> 8) 2^-24 (the float C).
+Normal draws from the stream: ``harness.reference.normals``.
 
 A block of n outputs is computed at once by jumping ahead: s_j = a^j s + c (a^(j-1) + ... + 1),
 with the powers tabulated once (uint64 arithmetic wraps modulo 2^64, as the LCG needs).
@@ -16,7 +16,6 @@ with the powers tabulated once (uint64 arithmetic wraps modulo 2^64, as the LCG 
 
 from __future__ import annotations
 
-import math
 from functools import lru_cache
 
 import numpy as np
@@ -27,9 +26,13 @@ WORD_BITS = 16
 WORDS = 4
 
 
-@lru_cache(maxsize=8)
 def _jumps(increment: int, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(a^j, c (a^(j-1) + ... + 1)) mod 2^64 for j = 0 .. n, as uint64."""
+    """(a^j, c (a^(j-1) + ... + 1)) mod 2^64 for j = 0 .. n (at least), as uint64."""
+    return _jump_table(increment, max(1024, 1 << (n - 1).bit_length()))
+
+
+@lru_cache(maxsize=8)
+def _jump_table(increment: int, n: int) -> tuple[np.ndarray, np.ndarray]:
     factors, offsets = [1], [0]
     for _ in range(n):
         factors.append(factors[-1] * MULTIPLIER & MASK)
@@ -79,6 +82,13 @@ class Stream:
         left = (np.uint64(32) - rotation) & np.uint64(31)
         return ((shifted >> rotation) | (shifted << left)) & np.uint64(0xFFFFFFFF)
 
+    def peek(self, n: int) -> np.ndarray:
+        """The next ``n`` outputs, leaving the stream where it is."""
+        state = self.state
+        outputs = self.outputs(n)
+        self.state = state
+        return outputs
+
     def uniforms(self, n: int) -> np.ndarray:
         """``n`` uniforms in [0, 1)."""
         if self.uniform_bits == 24:
@@ -87,11 +97,6 @@ class Stream:
         high = (x[:, 0] >> np.uint64(5)).astype(float)
         low = (x[:, 1] >> np.uint64(6)).astype(float)
         return (high * 67108864.0 + low) * 2.0 ** -53
-
-    def normals(self, n: int) -> np.ndarray:
-        """``n`` standard normals (two uniforms each, in order)."""
-        u = self.uniforms(2 * n).reshape(n, 2)
-        return np.sqrt(-2.0 * libm(math.log, 1.0 - u[:, 0])) * libm(math.cos, 2.0 * np.pi * u[:, 1])
 
 
 def libm(function, x: np.ndarray) -> np.ndarray:

@@ -56,6 +56,8 @@ from vsegen.model.schema import (
 from vsegen.model.sensors import roll_corrected
 from vsegen.model.signals import Signal
 
+SAMPLERS = {"ziggurat": "ziggurat normals (128 layers, 24-bit magnitudes)",
+            "box_muller": "Box-Muller normals (cos branch)"}
 IMPROVED = "pf_improved"
 ADAPTIVE = "pf_adaptive"
 
@@ -67,6 +69,10 @@ PF_FIELDS: tuple[Field, ...] = (
            "also the logged v_x (D2)"),
     choice("resampling", ("every_sample", "effective_size"), "systematic resampling at every "
            "sample (D4 default) or only when N_eff < N / 2"),
+    choice("normals", ("ziggurat", "box_muller"), "the standard normal sampler: Marsaglia and "
+           "Tsang's ziggurat (beyond the spec: one 32-bit draw and an integer comparison for "
+           "97.2 % of the normals) or the spec's Box-Muller, cosine branch (D5: log, cos, sqrt "
+           "and two uniforms per normal)", default="ziggurat"),
     diagonal("measurement_noise", 3, "[a_x, a_y, r]: m/s^2, m/s^2, rad/s", "R as standard "
              "deviations sigma_ax,m, sigma_ay,m, sigma_r,m (1 sigma)"),
     positive("wheel_speed_noise", "m/s", "sigma_vx,w of the logged v_x (observation = "
@@ -195,6 +201,7 @@ def _build(params: Parameters, name: str) -> Estimator:
                         [finish_head, finish_output], ["head", "shared", "summary"],
                         ["head_next", "output"]),
         count=count, seed=numeric["seed"], resampling=numeric["resampling"],
+        sampler=numeric["normals"],
         head_size=len(head), particle=PARTICLE)
     variant = ("improved PF (proposal correction, seed 003)" if name == IMPROVED
                else "adaptive PF (the baseline of seed 003)")
@@ -204,7 +211,8 @@ def _build(params: Parameters, name: str) -> Estimator:
         {"particles": f"{count}, systematic resampling "
                       f"{'at every sample' if numeric['resampling'] == 'every_sample' else 'when N_eff < N/2'}",
          "random_stream": f"PCG32 (XSH RR), seed {numeric['seed']}; uniforms of "
-                          "53 bits (double) or 24 bits (float); Box-Muller normals (cos branch)",
+                          "53 bits (double) or 24 bits (float); "
+                          + SAMPLERS[numeric["normals"]],
          "observation": numeric["observation"]})
 
 
