@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import DEFAULT_VEHICLE, REPO, feedback, pil, seed003
+from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, pil, seed003
 from bench.document import section_of, with_section
 from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
 from vsegen.codegen.generate import render
@@ -64,7 +64,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="vsegen benchmark suite")
     parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
     parser.add_argument("--fuzz-steps", type=int, default=10_000_000)
-    parser.add_argument("--out", type=Path, default=REPO / "docs" / "benchmarks.md")
+    parser.add_argument("--out", type=Path, default=BENCHMARKS)
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
     log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
@@ -118,17 +118,8 @@ def main(argv: list[str] | None = None) -> None:
                      f"{'met' if g / h <= TARGET_RATIO else 'MISSED'} | "
                      f"{generated.ns_per_step(inputs_file):.1f} | {hand.ns_per_step(inputs_file):.1f} |")
 
-    filters = [build(name, config) for name in config.estimators
-               if isinstance(build(name, config).structure, Particles)]
-    if filters:
-        pf = filters[0].structure
-        lines += ["", "## Particle filters by particle count (seed 003)", "",
-                  f"{seed003.COSTS_CASE.label}; instructions per step as above; the Cortex-M4F "
-                  f"float build's code, the caller-owned state (4 B per entry: {len(pf.particle)} per particle "
-                  f"and {len(filters[0].states) - pf.count * len(pf.particle)} more), the step's worst-case "
-                  "stack and their sum with static data as RAM.",
-                  "", *seed003.costs(args.vehicle.read_text(), str(args.vehicle), config.name,
-                                     seed003.COSTS_CASE)]
+    if any(isinstance(build(name, config).structure, Particles) for name in config.estimators):
+        lines += ["", *seed003.cost_section(args.vehicle.read_text(), str(args.vehicle), config.name)]
 
     lines += ["", "## Python, per step (for contrast)", "",
               "| estimator | NumPy reference (µs) | CasADi Function from Python (µs) |",

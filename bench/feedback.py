@@ -17,12 +17,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench import REPO
+from bench import BENCHMARKS, REPO
 from bench.document import with_section
 from vsegen.harness.parallel import worker_count
 
 SECTION = "## Feedback times"
-DOCUMENT = REPO / "docs" / "benchmarks.md"
 MAIN_JOB = "vsegen generate && vsegen verify"
 
 
@@ -43,7 +42,7 @@ def timed(command: str, cache: Path) -> tuple[float, float, str]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--suites", action="store_true", help="also time the test suites")
-    parser.add_argument("--out", type=Path, default=DOCUMENT)
+    parser.add_argument("--out", type=Path, default=BENCHMARKS)
     args = parser.parse_args(argv)
     rows = []
     with tempfile.TemporaryDirectory(prefix="vsegen-feedback-") as tmp:

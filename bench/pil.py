@@ -10,13 +10,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from bench import DEFAULT_VEHICLE, REPO
+from bench import BENCHMARKS, DEFAULT_VEHICLE
 from bench.document import with_section
 from vsegen.harness import pil
 from vsegen.harness.vehicles import load_vehicle
 
 SECTION = "## Processor in the loop (QEMU)"
-DOCUMENT = REPO / "docs" / "benchmarks.md"
 
 
 def host_agreement(results: list[pil.PilResult]) -> str:
@@ -33,7 +32,7 @@ def host_agreement(results: list[pil.PilResult]) -> str:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
-    parser.add_argument("--out", type=Path, default=DOCUMENT)
+    parser.add_argument("--out", type=Path, default=BENCHMARKS)
     args = parser.parse_args(argv)
     missing = pil.available()
     if missing:

@@ -6,8 +6,9 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 ``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
 :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
 :func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
-pointers), :func:`_drop_metadata` keeps of CasADi's exports only each Function's entry point, and
-:func:`_document_entries` writes above each the names of its arguments' entries.
+pointers), :func:`_compare_min_max` makes fmax/fmin comparisons, :func:`_drop_metadata` keeps
+of CasADi's exports only each Function's entry point, and :func:`_document_entries` writes above
+each the names of its arguments' entries.
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
 loudly instead of emitting unreviewed code.
 """
@@ -66,6 +67,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     c_text, h_text = _drop_metadata(c_text, h_text, [function.name() for function in functions])
     c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
+    c_text = _compare_min_max(c_text)
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)
@@ -137,6 +139,32 @@ def _drop_pointer_checks(c_text: str) -> str:
     if reads == 0 or writes == 0:
         raise RuntimeError("CasADi's generated code no longer checks argument pointers the "
                            "expected way; review codegen/kernel.py")
+    return c_text
+
+
+_MIN_MAX = {name: (f"static casadi_real casadi_{name}(casadi_real x, casadi_real y) {{\n"
+                   "/* Pre-c99 compatibility */\n"
+                   "#if __STDC_VERSION__ < 199901L\n"
+                   f"  return x{op}y ? x : y;\n"
+                   "#else\n"
+                   f"  return {name}(x, y);\n"
+                   "#endif\n"
+                   "}\n",
+                   f"static casadi_real casadi_{name}(casadi_real x, casadi_real y) {{\n"
+                   f"  return ((x {op} y) || (isnan(y) != 0)) ? x : y;\n"
+                   "}\n")
+            for name, op in (("fmax", ">"), ("fmin", "<"))}
+
+
+def _compare_min_max(c_text: str) -> str:
+    """CasADi's fmax and fmin as comparisons with C99's NaN rule (a NaN argument yields the
+    other), not the library calls: gcc inlines comparisons, while fmax/fmin stay calls of 10-15
+    instructions each on x86-64 and pull fmaxf/fminf into a Cortex-M4F image."""
+    for name, (raw, compared) in _MIN_MAX.items():
+        if f"casadi_{name}(" in c_text:
+            if raw not in c_text:
+                raise RuntimeError(f"CasADi's casadi_{name} changed; review codegen/kernel.py")
+            c_text = c_text.replace(raw, compared)
     return c_text
 
 

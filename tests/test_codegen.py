@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import ctypes
+import itertools
+import math
 import os
 import re
 import shutil
@@ -14,6 +17,7 @@ import pytest
 from locations import GENERATED
 
 from vsegen.codegen.generate import check, render, write
+from vsegen.codegen.kernel import kernel_options
 from vsegen.harness.build import WARNING_FLAGS
 from vsegen.harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
 from vsegen.model.estimators import DEFINITIONS, build
@@ -241,3 +245,36 @@ def test_each_kernel_entry_point_maps_its_arguments_to_names(config):
     flat = " ".join(line.strip(" *") for line in step.splitlines())
     assert f"arg[0] state[{len(estimator.states)}]: {', '.join(estimator.states.names)}" in flat
     assert f"res[1] output[{len(estimator.outputs)}]: {', '.join(estimator.outputs.names)}" in flat
+
+
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_min_max_are_inline_comparisons_with_c99s_nan_rule(tmp_path, real):
+    """The kernel's fmax/fmin are comparisons (no library call, kf2dof's Euler step 618 -> 571
+    instructions) that give what C99's fmax/fmin give, a NaN argument yielding the other, over
+    finite, infinite and NaN pairs; and the rewrite fails loudly if CasADi's helper changes."""
+    from vsegen.codegen.kernel import _compare_min_max
+    x = ca.SX.sym("x", 2)
+    generator = ca.CodeGenerator("vse_t_kernel.c", {**kernel_options(real, "vse_t_kernel_")})
+    generator.add(ca.Function("vse_t_kernel_f", [x], [ca.vertcat(ca.fmax(x[0], x[1]),
+                                                                  ca.fmin(x[0], x[1]))]))
+    generator.generate(str(tmp_path) + "/")
+    c_text = _compare_min_max((tmp_path / "vse_t_kernel.c").read_text())
+    assert "fmax(x, y)" not in c_text and "fmin(x, y)" not in c_text
+    (tmp_path / "vse_t_kernel.c").write_text(c_text)
+    library = tmp_path / "t.so"
+    subprocess.run(["gcc", "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(library),
+                    str(tmp_path / "vse_t_kernel.c"), "-lm"], check=True)
+    kind = ctypes.c_double if real == "double" else ctypes.c_float
+    function = ctypes.CDLL(str(library)).vse_t_kernel_f
+    values = [0.0, -0.0, 1.5, -2.0, math.inf, -math.inf, math.nan]
+    for a, b in itertools.product(values, repeat=2):
+        arg, res = (kind * 2)(a, b), (kind * 2)()
+        args, results = (ctypes.POINTER(kind) * 1)(arg), (ctypes.POINTER(kind) * 1)(res)
+        function(args, results, None, None, 0)
+        expected = (np.fmax(a, b), np.fmin(a, b))
+        for got, want in zip(res, expected):
+            assert (math.isnan(got) and math.isnan(want)) or got == want, (a, b, got, want)
+    with pytest.raises(RuntimeError, match="casadi_fmax changed"):
+        _compare_min_max(c_text.replace("casadi_real casadi_fmax(casadi_real x, casadi_real y) {",
+                                        "casadi_real casadi_fmax(casadi_real x, casadi_real y) {\n"
+                                        "/* changed */"))

@@ -356,10 +356,12 @@ static casadi_real normal(unsigned long long *stream)
     while (accepted == 0) {
         unsigned long layer;
         unsigned long magnitude;
+        long whole;
         bits = next_u32(stream);
         layer = bits & 0x7FUL;
         magnitude = bits >> 8U;
-        x = (casadi_real)magnitude * WIDTH[layer];
+        whole = (long)magnitude;    /* < 2^24: converts to a real in one instruction */
+        x = (casadi_real)whole * WIDTH[layer];
         accepted = 1;
         if (magnitude >= CORE[layer]) {
             if (layer == 0UL) {

@@ -77,21 +77,11 @@ static casadi_real casadi_fabs(casadi_real x) {
 }
 
 static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
-/* Pre-c99 compatibility */
-#if __STDC_VERSION__ < 199901L
-  return x>y ? x : y;
-#else
-  return fmax(x, y);
-#endif
+  return ((x > y) || (isnan(y) != 0)) ? x : y;
 }
 
 static casadi_real casadi_fmin(casadi_real x, casadi_real y) {
-/* Pre-c99 compatibility */
-#if __STDC_VERSION__ < 199901L
-  return x<y ? x : y;
-#else
-  return fmin(x, y);
-#endif
+  return ((x < y) || (isnan(y) != 0)) ? x : y;
 }
 
 static casadi_real casadi_sq(casadi_real x) { return x*x;}
