@@ -83,9 +83,11 @@ def test_never_silently_wrong(name, vehicle):
     # beta is wrong by up to 10 deg; linear_range (the road may be at its friction limit) flags it
     ("aukf", Case.of("dlc", speed_kmh=120.0, mu=0.5), {"linear_range": 0.0}, {"linear_range": 4.0},
      BEYOND_LINEAR_RANGE),
-    # v_y is never measured by the particle filters: on the hill sine pf_improved's beta drifts
-    # past 2 deg; the drift bound flags it
-    ("pf_improved", Case.of("hil_sine", mu=0.85), {"drift_acceleration": 0.0, "drift_yaw_rate": 0.0},
+    # v_y is never measured by the particle filters: on the hill sine pf_adaptive's and on the
+    # low-speed scenario pf_improved's beta drifts past 2 deg; the drift bound flags it
+    ("pf_adaptive", Case.of("hil_sine", mu=0.85), {"drift_acceleration": 0.0, "drift_yaw_rate": 0.0},
+     {"drift_acceleration": 0.05, "drift_yaw_rate": 0.015}, DEAD_RECKONING),
+    ("pf_improved", Case.of("low_speed"), {"drift_acceleration": 0.0, "drift_yaw_rate": 0.0},
      {"drift_acceleration": 0.05, "drift_yaw_rate": 0.015}, DEAD_RECKONING),
 ])
 def test_each_safeguard_turns_a_silent_error_into_a_status(variant, name, case, off, on, bit):
