@@ -21,21 +21,19 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, pil, seed003
+from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, pil, seed003, versus_hand
 from bench.document import section_of, with_section
-from bench.measure import CC, FLAGS, generated_driver, hand_driver, write_inputs
+from bench.measure import CC, FLAGS, generated_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.fuzz import fuzz_estimator
 from vsegen.harness.reference import REFERENCES
 from vsegen.harness.scenarios import Case
 from vsegen.harness.targets import TARGETS, available, build_for_target
-from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.vehicles import load_vehicle
 from vsegen.model.estimator import Particles
 from vsegen.model.estimators import build
-from vsegen.model.params import parse_vehicle
 
 LOG_CASE = Case.of("continuous_dlc")
-TARGET_RATIO = 1.10
 
 
 def _machine() -> str:
@@ -92,31 +90,7 @@ def main(argv: list[str] | None = None) -> None:
                          f"{driver.ns_per_step(inputs_file):.1f} | {driver.text_bytes} | "
                          f"{target.text if target else '-'} | {target.stack_step if target else '-'} |")
 
-    lines += ["", "## Generated against hand-written (2-DOF KF step, double, -O2)", "",
-              "`bench/handwritten/kf2dof_hand.c`: the same estimator written by hand (constants "
-              "derived once, 1/vx once, P as three entries, closed-form 2x2 inverse with one "
-              "division, no pointer checks); tested equal to the reference. The generated kf2dof "
-              "here has the monitors of the shipped file off (residual_window = 0, linear_range "
-              "= 0), as the hand-written one has none.", "",
-              "| discretisation | generated instr/step | hand-written instr/step | ratio | target "
-              "| generated ns | hand-written ns |",
-              "|---|---|---|---|---|---|---|"]
-    # the hand-written filter has neither the consistency monitor nor the linear-range flag
-    text = with_settings(args.vehicle.read_text(), "estimator.kf2dof", residual_window=0.0,
-                         linear_range=0.0)
-    for method in ("zoh", "euler"):
-        variant = parse_vehicle(text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
-                                str(args.vehicle), config.name)
-        estimator = build("kf2dof", variant)
-        inputs = log.matrix(estimator.inputs.names)
-        inputs_file = write_inputs(inputs, folder)
-        generated = generated_driver(estimator, render(variant, "kf2dof", "double"), "double")
-        hand = hand_driver(variant, estimator.inputs)
-        g = generated.instructions_per_step(inputs_file, len(inputs))
-        h = hand.instructions_per_step(inputs_file, len(inputs))
-        lines.append(f"| {method} | {g:.1f} | {h:.1f} | {g / h:.3f} | <= {TARGET_RATIO} "
-                     f"{'met' if g / h <= TARGET_RATIO else 'MISSED'} | "
-                     f"{generated.ns_per_step(inputs_file):.1f} | {hand.ns_per_step(inputs_file):.1f} |")
+    lines += ["", *versus_hand.section(args.vehicle, log, folder), ""]
 
     if any(isinstance(build(name, config).structure, Particles) for name in config.estimators):
         lines += ["", *seed003.cost_section(args.vehicle.read_text(), str(args.vehicle), config.name)]
