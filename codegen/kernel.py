@@ -6,7 +6,8 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 ``mem``); :func:`_mark_unused` adds ``(void)`` casts so the kernel builds with -Wextra -Werror,
 :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
 :func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
-pointers), :func:`_compare_min_max` makes fmax/fmin comparisons, :func:`_drop_metadata` keeps
+pointers), :func:`_compare_min_max` makes fmax/fmin comparisons, :func:`_read_state_first` lets a
+single step kernel update the caller's state in place, :func:`_drop_metadata` keeps
 of CasADi's exports only each Function's entry point, and :func:`_document_entries` writes above
 each the names of its arguments' entries.
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
@@ -24,7 +25,7 @@ from pathlib import Path
 import casadi as ca
 
 from vsegen.codegen.precision import to_single
-from vsegen.model.estimator import Estimator
+from vsegen.model.estimator import Estimator, SingleStep
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,8 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
     c_text = _compare_min_max(c_text)
+    if isinstance(estimator.structure, SingleStep):
+        c_text = _read_state_first(c_text, estimator.structure.step.name())
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)
@@ -166,6 +169,31 @@ def _compare_min_max(c_text: str) -> str:
                 raise RuntimeError(f"CasADi's casadi_{name} changed; review codegen/kernel.py")
             c_text = c_text.replace(raw, compared)
     return c_text
+
+
+_STATE_READ = re.compile(r"arg\[0\]\[(\d+)\]")
+
+
+def _read_state_first(c_text: str, entry: str) -> str:
+    """The step kernel ``entry`` with every read of its argument 0 (the state) that comes after
+    its first write of result 0 moved into a local set just before that write, so result 0 may be
+    the same array: the API steps the caller's state in place, without a copy. (CasADi's SX code
+    reads an input entry where it first needs it, often after it has written results; reads
+    before the first write stay where they are, so no value lives longer than it must.)"""
+    call = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(", c_text)
+    if call is None:
+        raise RuntimeError(f"CasADi's entry point {entry} changed; review codegen/kernel.py")
+    start = c_text.index(f"static int {call.group(1)}(")
+    end = c_text.index("\n}\n", start)
+    body = c_text[start:end]
+    first_write = body.find("  res[0][")
+    if first_write < 0:
+        raise RuntimeError(f"{entry} no longer writes its state as expected; review codegen/kernel.py")
+    before, after = body[:first_write], body[first_write:]
+    late = sorted({int(k) for k in _STATE_READ.findall(after)})
+    after = _STATE_READ.sub(r"state_\1", after)
+    locals_ = "".join(f"  const casadi_real state_{k} = arg[0][{k}];\n" for k in late)
+    return c_text[:start] + before + locals_ + after + c_text[end:]
 
 
 def _include_own_header(c_text: str, header: str) -> str:

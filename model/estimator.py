@@ -59,7 +59,9 @@ class _ComposedStep:
 
 @dataclass(frozen=True)
 class SingleStep(_ComposedStep):
-    """A step that is one Function: ``step(state, input[, params]) -> (state_next, output)``."""
+    """A step that is one Function: ``step(state, input[, params]) -> (state_next, output)``;
+    its C kernel reads the whole state before writing any of it, so the API passes the caller's
+    state as both (``codegen.kernel._read_state_first``)."""
 
     step: ca.Function
     templates = ("init.c.j2", "step_single.c.j2")

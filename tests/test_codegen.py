@@ -278,3 +278,23 @@ def test_min_max_are_inline_comparisons_with_c99s_nan_rule(tmp_path, real):
         _compare_min_max(c_text.replace("casadi_real casadi_fmax(casadi_real x, casadi_real y) {",
                                         "casadi_real casadi_fmax(casadi_real x, casadi_real y) {\n"
                                         "/* changed */"))
+
+
+@pytest.mark.parametrize("name", [n for n in DEFINITIONS if n in ("kf2dof", "ukf", "aukf", "ekf_rls",
+                                                                  "arx_dual_kf", "fusion", "switching")])
+def test_a_single_step_kernel_reads_its_state_before_writing_it(config, name):
+    """The API passes the caller's state as the step kernel's argument 0 and result 0 (no copy):
+    in the kernel, no read of argument 0 may follow the first write of result 0."""
+    from vsegen.model.estimator import SingleStep
+    estimator = build(name, config)
+    if not isinstance(estimator.structure, SingleStep):
+        pytest.skip(f"{name} is no single step")
+    text = render(config, name)[f"vse_{name}_kernel.c"]
+    entry = estimator.structure.step.name()
+    function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
+                         text).group(1)
+    body = text[text.index(f"static int {function}("):]
+    body = body[:body.index("\n}\n")]
+    first_write = body.index("res[0][")
+    assert "arg[0][" not in body[first_write:]
+    assert "arg[0] = state->x;" in render(config, name)[f"vse_{name}.c"]

@@ -37,30 +37,12 @@ void vse_arx_dual_kf_init(vse_arx_dual_kf_state *state, const vse_arx_dual_kf_in
 void vse_arx_dual_kf_step(vse_arx_dual_kf_state *state, const vse_arx_dual_kf_input *in, vse_arx_dual_kf_output *out)
 {
     casadi_real u[4];
-    casadi_real current[VSE_ARX_DUAL_KF_N_STATE];
     casadi_real y[6];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
     const casadi_real *arg[2];
     casadi_real *res[2];
     pack_input(in, u);
-    /* the kernel reads its arguments while it writes its results: step from a copy */
-    current[0] = state->x[0];
-    current[1] = state->x[1];
-    current[2] = state->x[2];
-    current[3] = state->x[3];
-    current[4] = state->x[4];
-    current[5] = state->x[5];
-    current[6] = state->x[6];
-    current[7] = state->x[7];
-    current[8] = state->x[8];
-    current[9] = state->x[9];
-    current[10] = state->x[10];
-    current[11] = state->x[11];
-    current[12] = state->x[12];
-    current[13] = state->x[13];
-    current[14] = state->x[14];
-    current[15] = state->x[15];
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
      * initialised data without a suppression in user builds (a few stores per step) */
     y[0] = 0.0;
@@ -69,7 +51,9 @@ void vse_arx_dual_kf_step(vse_arx_dual_kf_state *state, const vse_arx_dual_kf_in
     y[3] = 0.0;
     y[4] = 0.0;
     y[5] = 0.0;
-    arg[0] = current;
+    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
+     * the caller's state in place */
+    arg[0] = state->x;
     arg[1] = u;
     res[0] = state->x;
     res[1] = y;

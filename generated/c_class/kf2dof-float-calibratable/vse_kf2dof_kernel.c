@@ -688,6 +688,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a19+a08);
   a37=(a37+a19);
   a19=(a12?a37:0);
+  const casadi_real state_7 = arg[0][7];
+  const casadi_real state_8 = arg[0][8];
   res[0][0]=a19;
   a08=(a30*a15);
   a46=(a28*a16);
@@ -790,7 +792,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=arg[2][21];
   a02=(a02/a03);
   a02=expf(a02);
-  a03=arg[0][7];
+  a03=state_7;
   a21=(a02*a03);
   a02=(a13-a02);
   a07=casadi_sq(a07);
@@ -822,7 +824,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=floorf(a21);
   a21=(a02?a21:0);
   a24=(!a02);
-  a29=arg[0][8];
+  a29=state_8;
   a07=(a29-a13);
   a03=0.f;
   a07=casadi_fmax(a07,a03);

@@ -621,6 +621,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25+a09);
   a21=(a21+a25);
   a25=(a13?a21:0);
+  const casadi_real state_7 = arg[0][7];
+  const casadi_real state_8 = arg[0][8];
   res[0][0]=a25;
   a09=(a19*a15);
   a28=(a27*a35);
@@ -708,7 +710,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a03+a04);
   res[0][6]=a03;
   a03=9.5122942450071402e-01;
-  a04=arg[0][7];
+  a04=state_7;
   a03=(a03*a04);
   a16=4.8770575499285984e-02;
   a08=casadi_sq(a08);
@@ -733,7 +735,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a16<a03);
   a22=(a03?a22:0);
   a08=(!a03);
-  a04=arg[0][8];
+  a04=state_8;
   a00=(a04-a02);
   a01=0.;
   a00=casadi_fmax(a00,a01);

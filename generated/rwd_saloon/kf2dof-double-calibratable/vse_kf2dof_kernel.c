@@ -669,6 +669,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a19+a08);
   a37=(a37+a19);
   a19=(a12?a37:0);
+  const casadi_real state_7 = arg[0][7];
+  const casadi_real state_8 = arg[0][8];
   res[0][0]=a19;
   a08=(a30*a15);
   a44=(a28*a16);
@@ -771,7 +773,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=arg[2][21];
   a02=(a02/a03);
   a02=exp(a02);
-  a03=arg[0][7];
+  a03=state_7;
   a21=(a02*a03);
   a02=(a13-a02);
   a07=casadi_sq(a07);
@@ -803,7 +805,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=floor(a21);
   a21=(a02?a21:0);
   a24=(!a02);
-  a29=arg[0][8];
+  a29=state_8;
   a07=(a29-a13);
   a03=0.;
   a07=casadi_fmax(a07,a03);

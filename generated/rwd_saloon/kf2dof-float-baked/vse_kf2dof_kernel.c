@@ -602,6 +602,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25+a09);
   a21=(a21+a25);
   a25=(a13?a21:0);
+  const casadi_real state_7 = arg[0][7];
+  const casadi_real state_8 = arg[0][8];
   res[0][0]=a25;
   a09=(a19*a15);
   a28=(a27*a34);
@@ -690,7 +692,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a03+a04);
   res[0][6]=a03;
   a03=9.5122942450071402e-01f;
-  a04=arg[0][7];
+  a04=state_7;
   a03=(a03*a04);
   a16=4.8770575499285984e-02f;
   a08=casadi_sq(a08);
@@ -716,7 +718,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a16<a03);
   a00=(a03?a00:0);
   a08=(!a03);
-  a04=arg[0][8];
+  a04=state_8;
   a01=(a04-a02);
   a26=0.f;
   a01=casadi_fmax(a01,a26);

@@ -37,31 +37,21 @@ void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
 void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf2dof_output *out)
 {
     casadi_real u[4];
-    casadi_real current[VSE_KF2DOF_N_STATE];
     casadi_real y[4];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
     const casadi_real *arg[2];
     casadi_real *res[2];
     pack_input(in, u);
-    /* the kernel reads its arguments while it writes its results: step from a copy */
-    current[0] = state->x[0];
-    current[1] = state->x[1];
-    current[2] = state->x[2];
-    current[3] = state->x[3];
-    current[4] = state->x[4];
-    current[5] = state->x[5];
-    current[6] = state->x[6];
-    current[7] = state->x[7];
-    current[8] = state->x[8];
-    current[9] = state->x[9];
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
      * initialised data without a suppression in user builds (a few stores per step) */
     y[0] = 0.0;
     y[1] = 0.0;
     y[2] = 0.0;
     y[3] = 0.0;
-    arg[0] = current;
+    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
+     * the caller's state in place */
+    arg[0] = state->x;
     arg[1] = u;
     res[0] = state->x;
     res[1] = y;
