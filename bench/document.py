@@ -3,6 +3,8 @@ kept when another command rewrites the rest."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 
 def section_of(document: str, heading: str) -> list[str]:
     """The lines of ``document``'s section ``heading`` (a '## ' line) up to the next '## '
@@ -26,3 +28,10 @@ def with_section(document: str, body: list[str]) -> str:
     else:
         lines += ([""] if lines else []) + body
     return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def write_section(report: Path, body: list[str]) -> None:
+    """Replace (or append) the section ``body`` in the report file ``report``, then print it."""
+    previous = report.read_text() if report.exists() else ""
+    report.write_text(with_section(previous, body))
+    print("\n".join(body))

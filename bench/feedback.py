@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from bench import BENCHMARKS, REPO
-from bench.document import with_section
+from bench.document import write_section
 from vsegen.harness.parallel import worker_count
 
 SECTION = "## Feedback times"
@@ -62,9 +62,7 @@ def main(argv: list[str] | None = None) -> None:
             "| command | cache | seconds | load before | last line |", "|---|---|---|---|---|"]
     body += [f"| {command} | {cache} | {seconds:.0f} | {load:.1f} | {last} |"
              for command, cache, seconds, load, last in rows]
-    previous = args.out.read_text() if args.out.exists() else ""
-    args.out.write_text(with_section(previous, body))
-    print("\n".join(body))
+    write_section(args.out, body)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import argparse
 from pathlib import Path
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE
-from bench.document import with_section
+from bench.document import write_section
 from vsegen.harness import pil
 from vsegen.harness.vehicles import load_vehicle
 
@@ -62,9 +62,7 @@ def main(argv: list[str] | None = None) -> None:
                         f"{100 * c.load:.2f} % of {board.clock_hz / 1e6:g} MHz | {c.stack_init} / {c.stack_step} | "
                         f"{c.static_stack_init} / {c.static_stack_step} | {host_agreement(runs)} | "
                         f"{verdict} ({len(runs)} scenarios) |")
-    previous = args.out.read_text() if args.out.exists() else ""
-    args.out.write_text(with_section(previous, body))
-    print("\n".join(body))
+    write_section(args.out, body)
 
 
 if __name__ == "__main__":

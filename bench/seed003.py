@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE
-from bench.document import with_section
+from bench.document import write_section
 from bench.measure import generated_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.run import run_estimator
@@ -184,9 +184,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
     body = cost_section(args.vehicle.read_text(), str(args.vehicle), config.name)
-    previous = args.out.read_text() if args.out.exists() else ""
-    args.out.write_text(with_section(previous, body))
-    print("\n".join(body))
+    write_section(args.out, body)
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE
-from bench.document import with_section
+from bench.document import write_section
 from bench.measure import generated_driver, hand_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.logs import Log
@@ -63,9 +63,7 @@ def main(argv: list[str] | None = None) -> None:
     config = load_vehicle(args.vehicle)
     log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
     body = section(args.vehicle, log, Path(tempfile.mkdtemp(prefix="vsegen-bench-hand-")))
-    previous = args.out.read_text() if args.out.exists() else ""
-    args.out.write_text(with_section(previous, body))
-    print("\n".join(body))
+    write_section(args.out, body)
 
 
 if __name__ == "__main__":
