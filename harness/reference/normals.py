@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vsegen.harness.reference.pcg32 import Stream, libm
+from vsegen.harness.reference.pcg32 import OUTPUTS_PER_UNIFORM, Stream, libm, uniforms_from
 
 LAYERS = 128
 EDGE = 3.442619855899
@@ -130,10 +130,8 @@ class _Words:
 
     def uniform(self) -> float:
         """As ``Stream.uniforms``: 24 bits of one output or 53 bits of two."""
-        if self.stream.uniform_bits == 24:
-            return (self.next() >> 8) * 2.0 ** -24
-        high = self.next() >> 5
-        return (high * 67108864.0 + (self.next() >> 6)) * 2.0 ** -53
+        bits = self.stream.uniform_bits
+        return float(uniforms_from([self.next() for _ in range(OUTPUTS_PER_UNIFORM[bits])], bits)[0])
 
 
 @dataclass(frozen=True)

@@ -91,12 +91,22 @@ class Stream:
 
     def uniforms(self, n: int) -> np.ndarray:
         """``n`` uniforms in [0, 1)."""
-        if self.uniform_bits == 24:
-            return (self.outputs(n) >> np.uint64(8)).astype(float) * 2.0 ** -24
-        x = self.outputs(2 * n).reshape(n, 2)
-        high = (x[:, 0] >> np.uint64(5)).astype(float)
-        low = (x[:, 1] >> np.uint64(6)).astype(float)
-        return (high * 67108864.0 + low) * 2.0 ** -53
+        return uniforms_from(self.outputs(OUTPUTS_PER_UNIFORM[self.uniform_bits] * n), self.uniform_bits)
+
+
+OUTPUTS_PER_UNIFORM = {24: 1, 53: 2}
+
+
+def uniforms_from(outputs: np.ndarray, uniform_bits: int) -> np.ndarray:
+    """Uniforms in [0, 1) of ``uniform_bits`` bits from consecutive 32-bit ``outputs``: (x >> 8)
+    2^-24 from one, or ((x1 >> 5) 2^26 + (x2 >> 6)) 2^-53 from two."""
+    outputs = np.asarray(outputs, dtype=np.uint64)
+    if uniform_bits == 24:
+        return (outputs >> np.uint64(8)).astype(float) * 2.0 ** -24
+    pairs = outputs.reshape(-1, 2)
+    high = (pairs[:, 0] >> np.uint64(5)).astype(float)
+    low = (pairs[:, 1] >> np.uint64(6)).astype(float)
+    return (high * 67108864.0 + low) * 2.0 ** -53
 
 
 def libm(function, x: np.ndarray) -> np.ndarray:
