@@ -20,8 +20,26 @@ from vsegen.model.increments import Value
 AIR_DENSITY = 1.2
 """kg/m^3, for the drag F_w = rho C_dA u^2 / 2 (§3)."""
 LOAD_GUARD = 1.0
-"""N: lambda divides by max(mu F_z, this), so a lifted wheel (F_z clamped to 0) carries no force."""
+"""N: lambda divides by the adhesion, a smooth max(mu F_z, this) (:func:`adhesion`), so a lifted
+wheel (F_z <= 0) has a few N of grip (3.5 N at mu F_z = -1 kN)."""
+ADHESION_ROUNDING = 100.0
+"""N: the width over which :func:`adhesion` bends from mu F_z to LOAD_GUARD. A kink there (a
+literal max(mu F_z, 1 N), or F_z clamped at 0) inside a pair of sigma points turns the pair's even
+part from second order to first, and the UT's mean weight 1/(alpha^2 (n + kappa)) = 1.7e5 (alpha =
+0.001) multiplies the absolute rounding of F_z (a difference of loads of ~3 kN: 2e-4 N in float)
+into tens of N of tyre force: the float C of seed 002's aukf departed from its reference by 2.7e-2
+on a_x where a wheel lifted. Bent over 100 N the guard's curvature is at most 1/(2 x 100 N), so the
+rounding stays of second order (bent over 10 N, the curvature's own change still multiplied float
+trajectory differences to 4e-4, measured); it exceeds mu F_z by W^2 / (4 mu F_z), 1.25 N at 2 kN."""
 WHEELS = ("fl", "fr", "rl", "rr")
+
+
+def adhesion(grip: Value) -> Value:
+    """mu F_z (N) guarded from below by LOAD_GUARD, smoothly: (g + G + sqrt((g - G)^2 + W^2)) / 2
+    with G = LOAD_GUARD, W = ADHESION_ROUNDING; above max(g, G) by at most W / 2 (at g = G) and by
+    W^2 / (4 |g - G|) far from it."""
+    excess = grip - LOAD_GUARD
+    return (grip + LOAD_GUARD + increments.sqrt(excess * excess + ADHESION_ROUNDING ** 2)) / 2
 
 
 @dataclass(frozen=True)
@@ -46,25 +64,23 @@ class ThreeDof:
     wheel_speeds: bool
 
     def loads(self, ax: Value, ay: Value) -> list[Value]:
-        """(7): F_z of fl, fr, rl, rr (N) with steady load transfer, clamped at 0."""
+        """(7): F_z of fl, fr, rl, rr (N) with steady load transfer; negative when a wheel would
+        lift (the tyre's :func:`adhesion` then gives it no grip)."""
         m, a, b, h, t = (self.mass, self.cg_to_front_axle, self.cg_to_rear_axle, self.cg_height,
                          self.track_width)
         L = a + b
         pitch = ax * (m * h / (2 * L))
         front, rear = m * GRAVITY * b / (2 * L), m * GRAVITY * a / (2 * L)
         roll_front, roll_rear = ay * (m * h * b / (L * t)), ay * (m * h * a / (L * t))
-        return [increments.fmax(front - pitch - roll_front, 0.0),
-                increments.fmax(front - pitch + roll_front, 0.0),
-                increments.fmax(rear + pitch - roll_rear, 0.0),
-                increments.fmax(rear + pitch + roll_rear, 0.0)]
+        return [front - pitch - roll_front, front - pitch + roll_front,
+                rear + pitch - roll_rear, rear + pitch + roll_rear]
 
     def tyre(self, slip_x: Value, slip_y: Value, load: Value, cornering: float):
         """(2): HSRI forces (F_x, F_y) in the wheel frame, N. f(lambda) = (l - 1/4) / l^2 with
         l = max(lambda, 1/2), which is 1 for lambda <= 1/2 (continuous with its derivative)."""
         cx_sx, cy_sy = slip_x * self.longitudinal, slip_y * cornering
         demand = increments.sqrt(cx_sx * cx_sx + cy_sy * cy_sy)
-        adhesion = increments.fmax(load * self.friction, LOAD_GUARD)
-        lam = increments.fmax(demand / adhesion, 0.5)
+        lam = increments.fmax(demand / adhesion(load * self.friction), 0.5)
         factor = (lam - 0.25) / (lam * lam)
         return cx_sx * factor, -(cy_sy * factor)
 

@@ -15,7 +15,7 @@ from vsegen.harness.reference import REFERENCES
 from vsegen.harness.reference.run import run_reference
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.verify import verify_estimator
-from vsegen.model import status, unscented
+from vsegen.model import status, three_dof, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import baked
 from vsegen.model.estimators import aukf
@@ -138,8 +138,27 @@ def test_hsri_saturates_at_the_friction_limit(config):
     assert far[5] == pytest.approx(model.friction * GRAVITY, rel=0.02)
     loads = ca.Function("l", [], [ca.vertcat(*model.loads(0.0, 0.0))])()
     assert float(ca.sum1(loads["o0"])) == pytest.approx(v["mass"] * GRAVITY, rel=1e-12)
-    lifted = ca.Function("l", [], [ca.vertcat(*model.loads(0.0, 25.0))])()["o0"]
-    assert float(lifted[0]) == 0.0 and float(lifted[2]) == 0.0      # inner wheels lift, no negative load
+    lifted = float(ca.Function("l", [], [model.loads(0.0, 25.0)[0]])()["o0"])
+    assert lifted < -1000.0                       # the inner wheel would carry a negative load...
+    grip = float(three_dof.adhesion(ca.SX(model.friction * lifted)))
+    f_x, f_y = (float(f) for f in ca.Function("t", [], list(model.tyre(0.2, 0.1, lifted, 4e4)))().values())
+    assert grip < 5.0 and np.hypot(f_x, f_y) <= grip * (1 + 1e-12)   # ...so its tyre has a few N of grip
+
+
+def test_adhesion_is_smooth_where_a_wheel_lifts():
+    """The guard max(mu F_z, 1 N) rounded over ADHESION_ROUNDING: within W/2 of the kinked guard,
+    equal to mu F_z far above it, and its even part over a pair of sigma points straddling the
+    bend is second order (1/2 f'' s^2), so the rounding of the load's base does not enter it at
+    first order (the kink did, amplified by the UT's 1/(alpha^2 (n + kappa)))."""
+    grips = np.linspace(-3000.0, 3000.0, 601)
+    values = np.array([float(three_dof.adhesion(ca.SX(g))) for g in grips])
+    kinked = np.maximum(grips, three_dof.LOAD_GUARD)
+    assert np.all(values >= kinked) and np.all(values - kinked <= three_dof.ADHESION_ROUNDING / 2)
+    assert float(three_dof.adhesion(ca.SX(3000.0))) == pytest.approx(3000.0, abs=1.0)
+    _, odd, even = (float(v) for v in pair_function(three_dof.adhesion)(three_dof.LOAD_GUARD, 2.0))
+    W = three_dof.ADHESION_ROUNDING
+    assert odd == pytest.approx(1.0, rel=1e-3)                      # f' = 1/2 at the bend
+    assert even == pytest.approx(2.0 ** 2 / (4 * W), rel=1e-3)     # 1/2 f'' s^2, f'' = 1/(2W)
 
 
 def steady_turn(config, est, n=600, vx=20.0, delta=0.02):

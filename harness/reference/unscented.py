@@ -28,6 +28,10 @@ COVARIANCE_REPAIRED = 16
 FILTER_RESTARTED = 32
 AIR_DENSITY = 1.2
 N = 6
+ADHESION_FLOOR = 1.0
+"""N: the adhesion mu F_z is bent smoothly to this when a wheel lifts (F_z <= 0)..."""
+ADHESION_ROUNDING = 100.0
+"""N: ...over this width (the model's three_dof.adhesion says why it is smooth)."""
 
 
 @dataclass(frozen=True)
@@ -214,9 +218,11 @@ def process(config, s, X, delta, rolling):
     static = np.array([b, b, a, a], dtype=LD)[:, None] * m * g / (2 * L)
     pitch = np.array([-1, -1, 1, 1], dtype=LD)[:, None] * m * ax * h / (2 * L)
     roll = np.array([-b / t, b / t, -a / t, a / t], dtype=LD)[:, None] * m * ay * h / L
-    F_z = np.maximum(static + pitch + roll, 0)
-    # (2) HSRI, lambda guarded by max(mu F_z, 1 N)
-    lam = np.sqrt((cx * s_x) ** 2 + (cy * s_y) ** 2) / np.maximum(mu * F_z, 1)
+    grip = mu * (static + pitch + roll)
+    # (2) HSRI, lambda divided by the adhesion: a smooth max(mu F_z, ADHESION_FLOOR)
+    adhesion = (grip + ADHESION_FLOOR
+                + np.sqrt((grip - ADHESION_FLOOR) ** 2 + LD(ADHESION_ROUNDING) ** 2)) / 2
+    lam = np.sqrt((cx * s_x) ** 2 + (cy * s_y) ** 2) / adhesion
     f = np.where(lam <= 0.5, LD(1), (lam - LD(0.25)) / np.maximum(lam, 0.5) ** 2)
     f_x, f_y = cx * s_x * f, -cy * s_y * f
     # (1) body-frame forces, moment, accelerations
