@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-from locations import DEFAULT_VEHICLE
+from locations import DEFAULT_VEHICLE, VEHICLES
 
 from vsegen.codegen.generate import render
 from vsegen.harness.build import compile_estimator, load_estimator
@@ -16,7 +16,7 @@ from vsegen.harness.reference import kf2dof as reference
 from vsegen.harness.reference.run import run_reference
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.vehicles import load_vehicle
-from vsegen.harness.verify import verify_estimator
+from vsegen.harness.verify import verify, verify_estimator
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.params import parse_vehicle
 from vsegen.model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
@@ -65,6 +65,18 @@ def test_kf2dof_equals_the_reference_in_every_form(config, real, params):
 @pytest.mark.parametrize("name", [n for n in ESTIMATORS if n != "kf2dof"])
 def test_every_estimator_equals_the_reference_in_every_form(config, name, real, params):
     check_every_scenario(config, name, real, params)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("real", ["double", "float"])
+@pytest.mark.parametrize("car", sorted(p.stem for p in VEHICLES.glob("*.toml") if p != DEFAULT_VEHICLE))
+def test_every_other_shipped_vehicle_verifies_in_both_precisions(car, real):
+    """`vsegen verify --vehicle vehicles/<car>.toml --real <real>`: every estimator the file
+    configures, every scenario (the default vehicle's forms are the tests above)."""
+    config = load_vehicle(VEHICLES / f"{car}.toml")
+    results = verify(config, tuple(config.estimators), real=real)
+    assert len(results) == len(config.estimators) * len(VERIFICATION_SET)
+    assert [(r.estimator, r.case) for r in results if not r.ok] == []
 
 
 def test_one_millisecond_sample_time(config):
