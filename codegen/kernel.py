@@ -7,7 +7,7 @@ Options (see DEVELOPERS guide, "Facts about CasADi code generation"): ``casadi_i
 :func:`_include_own_header` makes the source include its header (MISRA Rule 8.4), and
 :func:`_drop_pointer_checks` removes the per-access null tests (the API always passes valid
 pointers), :func:`_compare_min_max` makes fmax/fmin comparisons, :func:`_read_state_first` lets a
-single step kernel update the caller's state in place, :func:`_drop_metadata` keeps
+kernel update the caller's state in place, :func:`_drop_metadata` keeps
 of CasADi's exports only each Function's entry point, and :func:`_document_entries` writes above
 each the names of its arguments' entries.
 Every rewrite must match the text CasADi emits; if a CasADi upgrade changes it, generation fails
@@ -25,7 +25,7 @@ from pathlib import Path
 import casadi as ca
 
 from vsegen.codegen.precision import to_single
-from vsegen.model.estimator import Estimator, SingleStep
+from vsegen.model.estimator import Estimator
 
 
 @dataclass(frozen=True)
@@ -69,8 +69,8 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
     c_text = _compare_min_max(c_text)
-    if isinstance(estimator.structure, SingleStep):
-        c_text = _read_state_first(c_text, estimator.structure.step.name())
+    for entry in estimator.structure.in_place:
+        c_text = _read_state_first(c_text, entry)
     if real == "float":
         c_text = to_single(c_text)
     return Kernel(f"{base}.c", f"{base}.h", c_text, h_text, options)

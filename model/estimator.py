@@ -8,6 +8,10 @@ harness, equivalence checks and benchmarks are written once for all estimators.
 How the generated C computes a step is the estimator's *structure*, exactly one of:
 
 * :class:`SingleStep`: one ``step`` Function, called once per sample;
+* :class:`Guarded`: a ``guard`` Function decides whether the sample is active (every input
+  plausible, speed not low); the generated C then runs either the ``active`` Function, written
+  without the hold rule's selects and input holds, or the ``held`` one (``model.guard.Decisions``
+  derives both from one step expression);
 * :class:`Schemes`: an estimator that switches between schemes (seed 000) has a ``select``
   Function that updates the shared part of the state and picks a scheme, and one Function per
   scheme; the generated C evaluates only the chosen scheme (CasADi's SX ``if_else`` would evaluate
@@ -20,9 +24,10 @@ How the generated C computes a step is the estimator's *structure*, exactly one 
   composed ``step`` (random numbers and resampling are no SX expressions); the NumPy reference and
   the C are compared instead.
 
-Each structure names its kernel Functions (``kernel_functions``, generated after ``init``), its
-operation count per step and the template fragments (``codegen/templates/``) that call them, so
-the code generator and the API template never branch on the kind of estimator.
+Each structure names its kernel Functions (``kernel_functions``, generated after ``init``), those
+that step the caller's state in place (``in_place``), its operation count per step and the
+template fragments (``codegen/templates/``) that call them, so the code generator and the API
+template never branch on the kind of estimator.
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ from typing import Any
 import casadi as ca
 
 from vsegen.model.calibration import Parameters
+from vsegen.model.guard import Decisions
 from vsegen.model.layout import Layout
 from vsegen.model.schema import EstimatorSchema
 
@@ -44,6 +50,10 @@ class _ComposedStep:
     step: ca.Function | None
     header_template = "state_index.h.j2"
     system_headers: tuple[str, ...] = ()
+    in_place: tuple[str, ...] = ()
+    """Names of the kernels that read their whole state (argument 0) before writing any of their
+    next state (result 0), so the API passes the caller's state as both
+    (``codegen.kernel._read_state_first`` makes them so)."""
 
     def step_operations(self) -> int:
         return self.step.n_instructions()
@@ -69,6 +79,40 @@ class SingleStep(_ComposedStep):
     @property
     def kernel_functions(self) -> tuple[ca.Function, ...]:
         return (self.step,)
+
+    @property
+    def in_place(self) -> tuple[str, ...]:
+        return (self.step.name(),)
+
+
+@dataclass(frozen=True)
+class Guarded(_ComposedStep):
+    """A step that does only the work its sample needs: ``guard(state, input[, params]) ->
+    decisions`` (flags: each input's plausibility, low speed and, last, active), then
+    ``active(state, input[, params]) -> (state_next, output)`` on an active sample, else
+    ``held(state, input, decisions[, params])`` (same results). ``step`` is the composition, for
+    Python. Built by :func:`make_guarded`; both branches step the caller's state in place."""
+
+    guard: ca.Function
+    active: ca.Function
+    held: ca.Function
+    step: ca.Function
+    templates = ("init.c.j2", "step_guarded.c.j2")
+
+    @property
+    def kernel_functions(self) -> tuple[ca.Function, ...]:
+        return self.guard, self.active, self.held
+
+    @property
+    def in_place(self) -> tuple[str, ...]:
+        return self.active.name(), self.held.name()
+
+    @property
+    def decision_count(self) -> int:
+        return self.guard.numel_out(0)
+
+    def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        return {"decisions": tuple(str(flag) for flag in ca.vertsplit(self.held.sx_in("decisions")))}
 
 
 @dataclass(frozen=True)
@@ -165,6 +209,7 @@ class Particles:
 
     step = None
     """No composed step: random numbers and resampling are no SX expressions."""
+    in_place: tuple[str, ...] = ()
     templates = ("particles.c.j2",)
     header_template = "particle_index.h.j2"
     system_headers = ("math.h",)
@@ -188,7 +233,7 @@ class Particles:
                 "particle_next": self.particle.names}
 
 
-Structure = SingleStep | Schemes | Repeated | Particles
+Structure = SingleStep | Guarded | Schemes | Repeated | Particles
 
 
 @dataclass(frozen=True)
@@ -330,6 +375,39 @@ def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, i
     if step.numel_out("output") != len(outputs) or step.numel_in("input") != len(inputs):
         raise ValueError(f"{name}: output or input size does not match its layout")
     return init, step
+
+
+def make_guarded(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
+                 state_sym: ca.SX, init_state: ca.SX, next_state: ca.SX, output: ca.SX,
+                 parameters: Parameters, decisions: Decisions) -> tuple[ca.Function, Guarded]:
+    """``init`` and the :class:`Guarded` structure of a step whose ``next_state`` and ``output``
+    are written with the symbolic guard ``decisions`` (``model.guard.symbolic``): the composed
+    step takes their values, the active kernel the values of an active sample (where every hold
+    and select falls away), the held kernel the guard's decisions as its third argument."""
+    init, step = make_functions(name, inputs, states, outputs, input_sym, state_sym, init_state,
+                                decisions.actual(next_state), decisions.actual(output), parameters)
+    extra = parameters.inputs()
+    extra_names = ["params"] * len(extra)
+    arguments, names = [state_sym, input_sym], ["state", "input"]
+    guard = ca.Function(f"vse_{name}_kernel_guard", [*arguments, *extra], [decisions.values],
+                        [*names, *extra_names], ["decisions"])
+    active = ca.Function(f"vse_{name}_kernel_active", [*arguments, *extra],
+                         _shared(decisions.when_active(next_state), decisions.when_active(output)),
+                         [*names, *extra_names], ["state_next", "output"])
+    held = ca.Function(f"vse_{name}_kernel_held", [*arguments, decisions.symbols, *extra],
+                       _shared(decisions.when_held(next_state), decisions.when_held(output)),
+                       [*names, "decisions", *extra_names], ["state_next", "output"])
+    return init, Guarded(guard, active, held, step)
+
+
+def _shared(*results: ca.SX) -> list[ca.SX]:
+    """Dense ``results`` with their common subexpressions merged (a substitution rebuilds a
+    subexpression once per path that reaches it, e.g. a clamped speed used by two formulas)."""
+    joint = ca.cse(ca.vertcat(*[ca.densify(ca.vec(r)) for r in results]))
+    offsets = [0]
+    for r in results:
+        offsets.append(offsets[-1] + r.numel())
+    return [ca.reshape(part, *r.shape) for part, r in zip(ca.vertsplit(joint, offsets), results)]
 
 
 def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, input_sym: ca.SX,

@@ -8,6 +8,11 @@ Rule (design.md, "Generated C"; shared/methods/README.md, "Low speed / invalid i
 * *low speed*: vx < vx_min, or vx < vx_resume while the estimator is still holding (hysteresis);
 * the estimator is *active* when every input is plausible and the speed is not low; otherwise it
   holds (each estimator says what it holds and resets) and reports the status bits.
+
+Every decision is a *flag*, exactly 0 or 1 (a comparison's value), and flags combine by arithmetic
+(and: a b, or: a + b - a b, not: 1 - a): C's && and || on reals compile to compare-and-branch
+chains (the Cortex-M4F guard of kf2dof: 460 B with them, 228 B without, measured). Selecting an
+input keeps ``if_else`` (:func:`hold`): a rejected value may be NaN, which arithmetic would spread.
 """
 
 from __future__ import annotations
@@ -44,12 +49,54 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
     plausible = plausibility(inputs, limits)
     all_plausible = _all(plausible.values())
     vx = inputs["vx"]
-    low_speed = ca.logic_and(plausible["vx"],
-                             ca.logic_or(vx < vx_min, ca.logic_and(holding, vx < vx_resume)))
-    active = ca.logic_and(all_plausible, ca.logic_not(low_speed))
-    code = (ca.if_else(all_plausible, 0, status.INVALID_INPUT)
-            + ca.if_else(low_speed, status.LOW_SPEED, 0))
-    return Guard(plausible, active, code, low_speed)
+    low_speed = plausible["vx"] * _either(vx < vx_min, (holding > 0) * (vx < vx_resume))
+    active = all_plausible * (1 - low_speed)
+    return Guard(plausible, active, _status(all_plausible, low_speed), low_speed)
+
+
+def _status(all_plausible: ca.SX, low_speed: ca.SX) -> ca.SX:
+    """The guard's status bits: INVALID_INPUT unless every input is plausible, LOW_SPEED."""
+    return status.INVALID_INPUT * (1 - all_plausible) + status.LOW_SPEED * low_speed
+
+
+def _either(a: ca.SX, b: ca.SX) -> ca.SX:
+    """a or b, of flags."""
+    return a + b - a * b
+
+
+@dataclass(frozen=True)
+class Decisions:
+    """A guard's decisions as symbols (``symbols``: each input's plausibility, low speed, and
+    last, active) and what they stand for (``values``), so one step expression written with them
+    yields the composed step and the kernels of ``model.estimator.Guarded``."""
+
+    symbols: ca.SX
+    values: ca.SX
+
+    def actual(self, expression: ca.SX) -> ca.SX:
+        """``expression`` with every decision taken as the inputs and state decide it."""
+        return ca.substitute(expression, self.symbols, self.values)
+
+    def when_active(self, expression: ca.SX) -> ca.SX:
+        """``expression`` on an active sample: every input plausible, the speed not low."""
+        count = self.symbols.numel()
+        constants = ca.vertcat(*[ca.SX(1)] * (count - 2), ca.SX(0), ca.SX(1))
+        return ca.substitute(expression, self.symbols, constants)
+
+    def when_held(self, expression: ca.SX) -> ca.SX:
+        """``expression`` on a held sample, in terms of the other decisions' symbols."""
+        return ca.substitute(expression, self.symbols[-1], ca.SX(0))
+
+
+def symbolic(guard: Guard) -> tuple[Guard, Decisions]:
+    """``guard`` with its decisions replaced by symbols (its status written with them), and the
+    :class:`Decisions` that give them their values."""
+    plausible = {name: ca.SX.sym(f"plausible_{name}") for name in guard.plausible}
+    low_speed, active = ca.SX.sym("low_speed"), ca.SX.sym("active")
+    code = _status(_all(plausible.values()), low_speed)
+    return (Guard(plausible, active, code, low_speed),
+            Decisions(ca.vertcat(*plausible.values(), low_speed, active),
+                      ca.vertcat(*guard.plausible.values(), guard.low_speed, guard.active)))
 
 
 def plausibility(inputs: Mapping[str, ca.SX], limits: Mapping[str, float]) -> dict[str, ca.SX]:
@@ -63,9 +110,10 @@ def hold(value: ca.SX, accept: ca.SX, previous: ca.SX) -> ca.SX:
 
 
 def _all(flags) -> ca.SX:
+    """1 when every flag is 1: their product."""
     result = None
     for flag in flags:
-        result = flag if result is None else ca.logic_and(result, flag)
+        result = flag if result is None else result * flag
     return result
 
 

@@ -90,7 +90,7 @@ def test_compiles_warning_free_without_heap(tmp_path, files_real, cc, opt):
         assert result.returncode == 0 and result.stderr == "", result.stderr
         undefined = subprocess.run(["nm", "-u", str(obj)], capture_output=True, text=True).stdout
         symbols = {line.split()[-1] for line in undefined.splitlines() if line.strip()}
-        symbols -= {"vse_kf2dof_kernel_init", "vse_kf2dof_kernel_step"}
+        symbols -= {f"vse_kf2dof_kernel_{kernel}" for kernel in ("init", "guard", "active", "held")}
         assert symbols <= ALLOWED[real], f"unexpected symbols in {source}: {symbols - ALLOWED[real]}"
 
 
@@ -239,11 +239,14 @@ def test_only_the_entry_points_of_casadis_exports_are_kept_and_a_new_export_fail
 def test_each_kernel_entry_point_maps_its_arguments_to_names(config):
     estimator = build("kf2dof", config)
     kernel = render(config, "kf2dof")["vse_kf2dof_kernel.c"]
-    start = kernel.index(" * vse_kf2dof_kernel_step:")
-    step = kernel[start:kernel.index("CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_step(")]
-    assert f"vse_kf2dof_kernel_step: {estimator.step.n_instructions()} operations" in step
-    flat = " ".join(line.strip(" *") for line in step.splitlines())
+    held = estimator.structure.held
+    start = kernel.index(" * vse_kf2dof_kernel_held:")
+    comment = kernel[start:kernel.index("CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_held(")]
+    assert f"vse_kf2dof_kernel_held: {held.n_instructions()} operations" in comment
+    flat = " ".join(line.strip(" *") for line in comment.splitlines())
     assert f"arg[0] state[{len(estimator.states)}]: {', '.join(estimator.states.names)}" in flat
+    decisions = ", ".join(f"plausible_{name}" for name in estimator.inputs.names) + ", low_speed, active"
+    assert f"arg[2] decisions[{len(estimator.inputs) + 2}]: {decisions}" in flat
     assert f"res[1] output[{len(estimator.outputs)}]: {', '.join(estimator.outputs.names)}" in flat
 
 
@@ -282,19 +285,19 @@ def test_min_max_are_inline_comparisons_with_c99s_nan_rule(tmp_path, real):
 
 @pytest.mark.parametrize("name", [n for n in DEFINITIONS if n in ("kf2dof", "ukf", "aukf", "ekf_rls",
                                                                   "arx_dual_kf", "fusion", "switching")])
-def test_a_single_step_kernel_reads_its_state_before_writing_it(config, name):
-    """The API passes the caller's state as the step kernel's argument 0 and result 0 (no copy):
-    in the kernel, no read of argument 0 may follow the first write of result 0."""
-    from vsegen.model.estimator import SingleStep
+def test_an_in_place_kernel_reads_its_state_before_writing_it(config, name):
+    """The API passes the caller's state as an in-place kernel's argument 0 and result 0 (no
+    copy): in the kernel, no read of argument 0 may follow the first write of result 0."""
     estimator = build(name, config)
-    if not isinstance(estimator.structure, SingleStep):
-        pytest.skip(f"{name} is no single step")
-    text = render(config, name)[f"vse_{name}_kernel.c"]
-    entry = estimator.structure.step.name()
-    function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
-                         text).group(1)
-    body = text[text.index(f"static int {function}("):]
-    body = body[:body.index("\n}\n")]
-    first_write = body.index("res[0][")
-    assert "arg[0][" not in body[first_write:]
-    assert "arg[0] = state->x;" in render(config, name)[f"vse_{name}.c"]
+    if not estimator.structure.in_place:
+        pytest.skip(f"{name} has no in-place kernel")
+    files = render(config, name)
+    text = files[f"vse_{name}_kernel.c"]
+    for entry in estimator.structure.in_place:
+        function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
+                             text).group(1)
+        body = text[text.index(f"static int {function}("):]
+        body = body[:body.index("\n}\n")]
+        first_write = body.index("res[0][")
+        assert "arg[0][" not in body[first_write:], entry
+    assert "arg[0] = state->x;" in files[f"vse_{name}.c"] and "res[0] = state->x;" in files[f"vse_{name}.c"]

@@ -121,7 +121,7 @@ void kf2dof_hand_step(kf2dof_hand_state *s, const kf2dof_hand_params *p, const d
         s->vy = vy;
         s->r = r;
         s->holding = 0.0;
-        y[0] = atan2(vy, vx);
+        y[0] = atan(vy * iv);          /* atan2(vy, vx) for vx >= vx_min > 0, at a third of the cost */
     } else {
         s->vy = 0.0;
         s->p11 = p->p11; s->p12 = p->p12; s->p22 = p->p22;

@@ -46,11 +46,10 @@ from vsegen.model.estimator import (
     ROLL_GRADIENT,
     Definition,
     Estimator,
-    SingleStep,
     Tunable,
-    make_functions,
+    make_guarded,
 )
-from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.guard import first_sample, hold, input_guard, symbolic
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import (
     LOW_SPEED_FIELDS,
@@ -299,7 +298,7 @@ def build(params: Parameters) -> Estimator:
 
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
+    guard, decisions = symbolic(input_guard(u, config.limits, vx_min, vx_resume, s["holding"]))
     ok, active = guard.plausible, guard.active
     delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
     ay = roll_corrected(ay_measured, settings["roll_gradient"])
@@ -407,12 +406,12 @@ def build(params: Parameters) -> Estimator:
         **{n: kinematic0[n] for n in kinematic},
         **consistency.initial_entries(monitored),
     })
-    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
-                                next_state, output, params)
+    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
+                                   next_state, output, params, decisions)
     per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",
-                     INPUTS, layout, OUTPUTS, init, SingleStep(step), params,
+                     INPUTS, layout, OUTPUTS, init, structure, params,
                      notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
                             "stiffness_regressor": regressor,
                             "forgetting_factor_per_sample": f"{per_sample:.6g}"},

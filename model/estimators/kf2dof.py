@@ -19,10 +19,10 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import consistency, discretize, kalman, signals, status
-from vsegen.model.bicycle import bicycle_matrices, state_matrix_norm_bound
+from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
-from vsegen.model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, SingleStep, Tunable, make_functions
-from vsegen.model.guard import first_sample, hold, input_guard, previous_inputs
+from vsegen.model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, Tunable, make_guarded
+from vsegen.model.guard import first_sample, hold, input_guard, previous_inputs, symbolic
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
 from vsegen.model.signals import Signal
@@ -65,7 +65,8 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
     With calibratable parameters, a last input ``params`` carries them. ``table`` names the
     [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
-    Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad), ``innovation`` =
+    Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad; as atan(vy / vx), the
+    speed being clamped positive), ``innovation`` =
     z - C x- - D delta (the prior innovation of [a_y, r], for the consistency monitor).
     Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
     are plausible. Reused by every estimator with a dynamic (KF) scheme.
@@ -96,7 +97,7 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     return ca.Function(
         f"{table}_dynamic_update",
         [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
-        [x_new, kalman.pack_symmetric(P_new), ca.atan2(x_new[0], model_speed(vx)), innovation],
+        [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], model_speed(vx)), innovation],
         names + ["params"] * params.calibratable,
         ["x_next", "P_next", "beta", "innovation"],
     )
@@ -138,7 +139,7 @@ def build(params: Parameters) -> Estimator:
 
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    guard = input_guard(u, limits, vx_min, vx_resume, s["holding"])
+    guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"]))
     ok = guard.plausible
     result = update(
         x=ca.vertcat(s["vy"], s["r"]),
@@ -188,10 +189,10 @@ def build(params: Parameters) -> Estimator:
         **consistency.initial_entries(monitored),
         "holding": holding,
     })
-    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
-                                next_state, output, params)
+    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
+                                   next_state, output, params, decisions)
     return Estimator(NAME, "sideslip from the linear 2-DOF bicycle model + Kalman filter",
-                     INPUTS, layout, OUTPUTS, init, SingleStep(step), params, zoh_note(params))
+                     INPUTS, layout, OUTPUTS, init, structure, params, zoh_note(params))
 
 
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {"process_noise": Tunable(1e-4, 1e2),

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 96d85151551301212168a292e7ff0e5ff56de8a2054c0d14029323d55a9da065
- * Operations: step 7526, init 103 (CasADi SX instructions).
+ * Operations: step 7529, init 103 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

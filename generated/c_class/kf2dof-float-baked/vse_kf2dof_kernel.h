@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779
- * Operations: step 614, init 48 (CasADi SX instructions).
+ * Operations: step 699, init 48 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
@@ -30,7 +30,9 @@ extern "C" {
 #endif
 
 int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int vse_kf2dof_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int vse_kf2dof_kernel_guard(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int vse_kf2dof_kernel_active(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int vse_kf2dof_kernel_held(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

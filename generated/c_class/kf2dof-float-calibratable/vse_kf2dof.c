@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779
- * Operations: step 696, init 51 (CasADi SX instructions).
+ * Operations: step 783, init 51 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -155,10 +155,11 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
 {
     casadi_real u[4];
     casadi_real y[4];
+    casadi_real decisions[6];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0f;
     casadi_real p[27];
-    const casadi_real *arg[3];
+    const casadi_real *arg[4];
     casadi_real *res[2];
     pack_input(in, u);
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
@@ -172,14 +173,23 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
         /* the calibration breaks a schema check: hold (the state is kept), outputs 0 */
         y[3] = 512.0f;
     } else {
-    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
-     * the caller's state in place */
+    /* the guard decides whether the sample is active (its last decision); then only that
+     * kernel runs: the active one carries no holds or selects. Each reads the whole state before
+     * it writes any of it (codegen.kernel): they step the caller's state in place */
     arg[0] = state->x;
     arg[1] = u;
     arg[2] = p;
+    res[0] = decisions;
+    (void)vse_kf2dof_kernel_guard(arg, res, &iw, &w, 0);
     res[0] = state->x;
     res[1] = y;
-    (void)vse_kf2dof_kernel_step(arg, res, &iw, &w, 0);
+    if (decisions[5] > 0.0f) {
+        (void)vse_kf2dof_kernel_active(arg, res, &iw, &w, 0);
+    } else {
+        arg[3] = p;
+        arg[2] = decisions;
+        (void)vse_kf2dof_kernel_held(arg, res, &iw, &w, 0);
+    }
     }
     out->beta = y[0];
     out->vy = y[1];

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 7b8eee1f5329ff23259b2583f4a6bee8f64b7766e94bf85d1cf6e7cc02bc0c7a
- * Operations: step 13203, init 5871 (CasADi SX instructions).
+ * Operations: step 13207, init 5866 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial

@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3d5a714eca4e3d24c0d38dcfafd09efe3c0043c62054564d37340ef574cc24d2
- * Operations: step 15203, init 5871 (CasADi SX instructions).
+ * Operations: step 15207, init 5866 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial
@@ -126,24 +126,25 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=(a10<=a05);
   a08=(a10?a08:0);
   res[0][4]=a08;
-  a06=(a01&&a06);
-  a06=(a06&&a09);
-  a06=(a06&&a10);
-  a10=3.5000000000000000e+00f;
-  a00=(a00<a10);
+  a06=(a01*a06);
+  a06=(a06*a09);
+  a06=(a06*a10);
   a10=1.f;
-  a09=(a10&&a00);
-  a09=(a00||a09);
-  a09=(a01&&a09);
-  a09=(!a09);
-  a09=(a06&&a09);
-  a09=(!a09);
-  a05=2.f;
-  a09=(a09?a05:0);
-  res[0][5]=a09;
-  a09=1.5000000000000002e-01f;
-  res[0][6]=a09;
-  res[1][0]=a05;
+  a09=3.5000000000000000e+00f;
+  a00=(a00<a09);
+  a09=(2.f*a00);
+  a00=casadi_sq(a00);
+  a09=(a09-a00);
+  a01=(a01*a09);
+  a10=(a10-a01);
+  a06=(a06*a10);
+  a06=(!a06);
+  a10=2.f;
+  a01=(a06?a10:0);
+  res[0][5]=a01;
+  a01=1.5000000000000002e-01f;
+  res[0][6]=a01;
+  res[1][0]=a10;
   res[1][1]=a03;
   res[1][2]=a04;
   res[1][3]=a07;
@@ -157,19 +158,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=1.0000000000000000e-02f;
   res[1][9]=a08;
   res[1][10]=a02;
-  a10=(a10&&a00);
-  a00=(a00||a10);
-  a01=(a01&&a00);
-  a01=(!a01);
-  a06=(a06&&a01);
-  a06=(!a06);
-  a06=(a06?a05:0);
+  a06=(a06?a10:0);
   res[1][11]=a06;
   return 0;
 }
 
 /*
- * vse_pf_improved_kernel_init: 71 operations (CasADi SX instructions)
+ * vse_pf_improved_kernel_init: 66 operations (CasADi SX instructions)
  * arg[0] input[4]: vx, ax, ay, r
  * res[0] head[7]: vx, vy, ax, ay, r, holding, drift
  * res[1] shared[12]: 12 entries
@@ -182,7 +177,7 @@ CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, ca
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16;
+  casadi_real a12, a13, a14, a15;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
   a02=90.f;
@@ -191,107 +186,111 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=casadi_fabs(a02);
   a04=30.f;
   a03=(a03<=a04);
-  a03=(a01&&a03);
+  a03=(a01*a03);
   a05=arg[1][2];
   a06=casadi_fabs(a05);
   a06=(a06<=a04);
-  a03=(a03&&a06);
+  a03=(a03*a06);
   a06=arg[1][3];
   a04=casadi_fabs(a06);
   a07=3.f;
   a04=(a04<=a07);
-  a03=(a03&&a04);
+  a03=(a03*a04);
+  a04=1.f;
   a07=(a00<a07);
-  a04=5.0000000000000000e-01f;
-  a08=arg[0][5];
-  a09=(a04<a08);
-  a10=3.5000000000000000e+00f;
-  a10=(a00<a10);
-  a09=(a09&&a10);
-  a07=(a07||a09);
-  a01=(a01&&a07);
-  a07=(!a01);
-  a09=(a03&&a07);
-  a10=1.5000000000000000e+00f;
-  a10=(a10<a08);
-  a11=2.f;
-  a12=(a10?a11:0);
-  a10=(!a10);
-  a13=1.f;
-  a10=(a10?a13:0);
-  a12=(a12+a10);
-  a12=(a09?a12:0);
+  a08=0.f;
+  a09=5.0000000000000000e-01f;
+  a10=arg[0][5];
+  a11=(a09<a10);
+  a08=(a08<a11);
+  a11=3.5000000000000000e+00f;
+  a11=(a00<a11);
+  a08=(a08*a11);
+  a11=(a07+a08);
+  a07=(a07*a08);
+  a11=(a11-a07);
+  a01=(a01*a11);
+  a11=(a04-a01);
+  a11=(a03*a11);
+  a07=1.5000000000000000e+00f;
+  a07=(a07<a10);
+  a08=2.f;
+  a12=(a07?a08:0);
+  a07=(!a07);
+  a07=(a07?a04:0);
+  a12=(a12+a07);
+  a12=(a11?a12:0);
   res[0][0]=a12;
-  a00=(a09?a00:0);
-  a12=(!a09);
-  a10=arg[0][0];
-  a10=(a12?a10:0);
-  a00=(a00+a10);
+  a00=(a11?a00:0);
+  a12=(!a11);
+  a07=arg[0][0];
+  a07=(a12?a07:0);
+  a00=(a00+a07);
   res[0][1]=a00;
-  a02=(a09?a02:0);
+  a02=(a11?a02:0);
   a00=arg[0][2];
-  a10=(a12?a00:0);
-  a02=(a02+a10);
+  a07=(a12?a00:0);
+  a02=(a02+a07);
   res[0][2]=a02;
-  a10=9.2554713719014980e-01f;
-  a10=(a10*a05);
-  a10=(a09?a10:0);
+  a07=9.2554713719014980e-01f;
+  a07=(a07*a05);
+  a07=(a11?a07:0);
   a05=arg[0][3];
-  a14=(a12?a05:0);
-  a10=(a10+a14);
-  res[0][3]=a10;
-  a09=(a09?a06:0);
+  a13=(a12?a05:0);
+  a07=(a07+a13);
+  res[0][3]=a07;
+  a11=(a11?a06:0);
   a06=arg[0][4];
-  a14=(a12?a06:0);
-  a09=(a09+a14);
-  res[0][4]=a09;
-  a14=5.0000000000000001e-03f;
-  a15=1.0000000000000000e-02f;
-  a16=2.0000000000000001e-01f;
+  a13=(a12?a06:0);
+  a11=(a11+a13);
+  res[0][4]=a11;
+  a13=5.0000000000000001e-03f;
+  a14=1.0000000000000000e-02f;
+  a15=2.0000000000000001e-01f;
   a02=(a02-a00);
   a02=casadi_fabs(a02);
-  a02=(a04*a02);
-  a02=(a16+a02);
-  a02=casadi_fmax(a02,a16);
-  a02=casadi_fmin(a02,a11);
-  a00=(a15*a02);
-  a00=(a14+a00);
+  a02=(a09*a02);
+  a02=(a15+a02);
+  a02=casadi_fmax(a02,a15);
+  a02=casadi_fmin(a02,a08);
+  a00=(a14*a02);
+  a00=(a13+a00);
   res[0][5]=a00;
-  a10=(a10-a05);
-  a10=casadi_fabs(a10);
-  a10=(a04*a10);
-  a10=(a16+a10);
-  a10=casadi_fmax(a10,a16);
-  a10=casadi_fmin(a10,a11);
-  a16=(a15*a10);
-  a14=(a14+a16);
-  res[0][6]=a14;
+  a07=(a07-a05);
+  a07=casadi_fabs(a07);
+  a07=(a09*a07);
+  a07=(a15+a07);
+  a07=casadi_fmax(a07,a15);
+  a07=casadi_fmin(a07,a08);
+  a15=(a14*a07);
+  a13=(a13+a15);
+  res[0][6]=a13;
   res[0][7]=a02;
-  res[0][8]=a10;
-  a09=(a09-a06);
-  a09=casadi_fabs(a09);
-  a04=(a04*a09);
-  a04=(a15+a04);
-  a04=casadi_fmax(a04,a15);
-  a15=1.0000000000000001e-01f;
-  a04=casadi_fmin(a04,a15);
-  res[0][9]=a04;
-  a03=(!a03);
-  a03=(a03?a11:0);
-  a04=(a01?a13:0);
-  a03=(a03+a04);
+  res[0][8]=a07;
+  a11=(a11-a06);
+  a11=casadi_fabs(a11);
+  a09=(a09*a11);
+  a09=(a14+a09);
+  a09=casadi_fmax(a09,a14);
+  a14=1.0000000000000001e-01f;
+  a09=casadi_fmin(a09,a14);
+  res[0][9]=a09;
+  a03=(a04-a03);
+  a03=(2.f*a03);
+  a03=(a03+a01);
   res[0][10]=a03;
-  a01=(a01?a11:0);
-  a08=casadi_fmax(a08,a13);
-  a07=(a07?a08:0);
-  a01=(a01+a07);
-  a12=(a12?a01:0);
+  a08=(a01?a08:0);
+  a01=(!a01);
+  a10=casadi_fmax(a10,a04);
+  a01=(a01?a10:0);
+  a08=(a08+a01);
+  a12=(a12?a08:0);
   res[0][11]=a12;
   return 0;
 }
 
 /*
- * vse_pf_improved_kernel_prepare: 104 operations (CasADi SX instructions)
+ * vse_pf_improved_kernel_prepare: 108 operations (CasADi SX instructions)
  * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
  * arg[1] input[4]: vx, ax, ay, r
  * res[0] shared[12]: 12 entries

@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3d5a714eca4e3d24c0d38dcfafd09efe3c0043c62054564d37340ef574cc24d2
- * Operations: step 15821, init 6085 (CasADi SX instructions).
+ * Operations: step 15825, init 6080 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial

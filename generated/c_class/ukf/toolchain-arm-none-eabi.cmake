@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: a9557f4902e30744503b3b5361ca96acd5f7751b627409046b4d61c630d7d4c5
-# Operations: step 7319, init 88 (CasADi SX instructions).
+# Operations: step 7322, init 88 (CasADi SX instructions).
 # longitudinal_force: wheel_speeds
 # sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
 

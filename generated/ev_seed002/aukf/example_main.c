@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b371355ffb8c226330a02a087572af01e647a7f13c1e89c7fafd67d563449930
- * Operations: step 7454, init 101 (CasADi SX instructions).
+ * Operations: step 7457, init 101 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: b57cabb41116533b3a0d17a870e973483ac2e22d1f9f7063f27a0434d7514de8
-# Operations: step 7246, init 86 (CasADi SX instructions).
+# Operations: step 7249, init 86 (CasADi SX instructions).
 # longitudinal_force: wheel_speeds
 # sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b37be47f07368e63f062e7adcbf09547924dda802c094673bbd6d8504921f4ae
- * Operations: step 7527, init 103 (CasADi SX instructions).
+ * Operations: step 7530, init 103 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

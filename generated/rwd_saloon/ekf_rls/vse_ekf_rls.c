@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: aab3777e1b65e4534d34e95525e0fbf0d481cc457d87b0140b6736066c91d3ad
- * Operations: step 584, init 101 (CasADi SX instructions).
+ * Operations: step 828, init 101 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -41,9 +41,10 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
 {
     casadi_real u[5];
     casadi_real y[8];
+    casadi_real decisions[7];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
-    const casadi_real *arg[2];
+    const casadi_real *arg[3];
     casadi_real *res[2];
     pack_input(in, u);
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
@@ -56,13 +57,21 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
     y[5] = 0.0;
     y[6] = 0.0;
     y[7] = 0.0;
-    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
-     * the caller's state in place */
+    /* the guard decides whether the sample is active (its last decision); then only that
+     * kernel runs: the active one carries no holds or selects. Each reads the whole state before
+     * it writes any of it (codegen.kernel): they step the caller's state in place */
     arg[0] = state->x;
     arg[1] = u;
+    res[0] = decisions;
+    (void)vse_ekf_rls_kernel_guard(arg, res, &iw, &w, 0);
     res[0] = state->x;
     res[1] = y;
-    (void)vse_ekf_rls_kernel_step(arg, res, &iw, &w, 0);
+    if (decisions[6] > 0.0) {
+        (void)vse_ekf_rls_kernel_active(arg, res, &iw, &w, 0);
+    } else {
+        arg[2] = decisions;
+        (void)vse_ekf_rls_kernel_held(arg, res, &iw, &w, 0);
+    }
     out->beta = y[0];
     out->beta_ekf = y[1];
     out->beta_int = y[2];

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 09123ff0705fa5164476d0e77ad7898a6bb5fa4387054512f1fbd79b4c60747f
- * Operations: step 13403, init 6071 (CasADi SX instructions).
+ * Operations: step 13407, init 6066 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial

@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: ff18205be285a3268ceb7f52d9c1439a160994c2361187ff441159514952a406
- * Operations: step 15821, init 6085 (CasADi SX instructions).
+ * Operations: step 15825, init 6080 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial
@@ -132,25 +132,26 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=(a10<=a11);
   a09=(a10?a09:0);
   res[0][4]=a09;
-  a04=(a01&&a04);
-  a04=(a04&&a07);
-  a04=(a04&&a10);
+  a04=(a01*a04);
+  a04=(a04*a07);
+  a04=(a04*a10);
   a10=arg[1][24];
   a00=(a00<a10);
-  a10=(a08&&a00);
-  a10=(a00||a10);
-  a10=(a01&&a10);
-  a10=(!a10);
-  a10=(a04&&a10);
-  a10=(!a10);
-  a07=2.;
-  a10=(a10?a07:0);
-  res[0][5]=a10;
-  a10=3.;
-  a11=arg[1][8];
-  a10=(a10*a11);
-  res[0][6]=a10;
-  res[1][0]=a07;
+  a10=(2.*a00);
+  a00=casadi_sq(a00);
+  a10=(a10-a00);
+  a01=(a01*a10);
+  a08=(a08-a01);
+  a04=(a04*a08);
+  a04=(!a04);
+  a08=2.;
+  a01=(a04?a08:0);
+  res[0][5]=a01;
+  a01=3.;
+  a10=arg[1][8];
+  a01=(a01*a10);
+  res[0][6]=a01;
+  res[1][0]=a08;
   res[1][1]=a03;
   res[1][2]=a05;
   res[1][3]=a06;
@@ -171,19 +172,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=arg[1][11];
   res[1][9]=a03;
   res[1][10]=a02;
-  a08=(a08&&a00);
-  a00=(a00||a08);
-  a01=(a01&&a00);
-  a01=(!a01);
-  a04=(a04&&a01);
-  a04=(!a04);
-  a04=(a04?a07:0);
+  a04=(a04?a08:0);
   res[1][11]=a04;
   return 0;
 }
 
 /*
- * vse_pf_improved_kernel_init: 85 operations (CasADi SX instructions)
+ * vse_pf_improved_kernel_init: 80 operations (CasADi SX instructions)
  * arg[0] input[4]: vx, ax, ay, r
  * arg[1] params[28]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
  *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
@@ -202,7 +197,7 @@ CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, ca
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16;
+  casadi_real a12, a13, a14, a15;
   a00=arg[1][0];
   a01=casadi_fabs(a00);
   a02=arg[2][0];
@@ -211,119 +206,123 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=casadi_fabs(a02);
   a04=arg[2][1];
   a03=(a03<=a04);
-  a03=(a01&&a03);
+  a03=(a01*a03);
   a04=arg[1][2];
   a05=casadi_fabs(a04);
   a06=arg[2][2];
   a05=(a05<=a06);
-  a03=(a03&&a05);
+  a03=(a03*a05);
   a05=arg[1][3];
   a06=casadi_fabs(a05);
   a07=arg[2][3];
   a06=(a06<=a07);
-  a03=(a03&&a06);
-  a06=arg[2][23];
-  a06=(a00<a06);
-  a07=5.0000000000000000e-01;
-  a08=arg[0][5];
-  a07=(a07<a08);
+  a03=(a03*a06);
+  a06=1.;
+  a07=arg[2][23];
+  a07=(a00<a07);
+  a08=0.;
+  a09=5.0000000000000000e-01;
+  a10=arg[0][5];
+  a09=(a09<a10);
+  a08=(a08<a09);
   a09=arg[2][24];
   a09=(a00<a09);
-  a07=(a07&&a09);
-  a06=(a06||a07);
-  a01=(a01&&a06);
-  a06=(!a01);
-  a07=(a03&&a06);
-  a09=1.5000000000000000e+00;
-  a09=(a09<a08);
-  a10=2.;
-  a11=(a09?a10:0);
-  a09=(!a09);
-  a12=1.;
-  a09=(a09?a12:0);
-  a11=(a11+a09);
-  a11=(a07?a11:0);
+  a08=(a08*a09);
+  a09=(a07+a08);
+  a07=(a07*a08);
+  a09=(a09-a07);
+  a01=(a01*a09);
+  a09=(a06-a01);
+  a09=(a03*a09);
+  a07=1.5000000000000000e+00;
+  a07=(a07<a10);
+  a08=2.;
+  a11=(a07?a08:0);
+  a07=(!a07);
+  a07=(a07?a06:0);
+  a11=(a11+a07);
+  a11=(a09?a11:0);
   res[0][0]=a11;
-  a00=(a07?a00:0);
-  a11=(!a07);
-  a09=arg[0][0];
-  a09=(a11?a09:0);
-  a00=(a00+a09);
+  a00=(a09?a00:0);
+  a11=(!a09);
+  a07=arg[0][0];
+  a07=(a11?a07:0);
+  a00=(a00+a07);
   res[0][1]=a00;
-  a02=(a07?a02:0);
+  a02=(a09?a02:0);
   a00=arg[0][2];
-  a09=(a11?a00:0);
-  a02=(a02+a09);
+  a07=(a11?a00:0);
+  a02=(a02+a07);
   res[0][2]=a02;
-  a09=9.8100000000000005e+00;
-  a13=arg[2][22];
-  a09=(a09*a13);
-  a09=(a12+a09);
-  a04=(a04/a09);
-  a04=(a07?a04:0);
-  a09=arg[0][3];
-  a13=(a11?a09:0);
-  a04=(a04+a13);
+  a07=9.8100000000000005e+00;
+  a12=arg[2][22];
+  a07=(a07*a12);
+  a07=(a06+a07);
+  a04=(a04/a07);
+  a04=(a09?a04:0);
+  a07=arg[0][3];
+  a12=(a11?a07:0);
+  a04=(a04+a12);
   res[0][3]=a04;
-  a07=(a07?a05:0);
+  a09=(a09?a05:0);
   a05=arg[0][4];
-  a13=(a11?a05:0);
-  a07=(a07+a13);
-  res[0][4]=a07;
-  a13=arg[2][15];
-  a14=1.0000000000000000e-02;
-  a15=arg[2][9];
-  a16=arg[2][17];
+  a12=(a11?a05:0);
+  a09=(a09+a12);
+  res[0][4]=a09;
+  a12=arg[2][15];
+  a13=1.0000000000000000e-02;
+  a14=arg[2][9];
+  a15=arg[2][17];
   a02=(a02-a00);
   a02=casadi_fabs(a02);
-  a02=(a16*a02);
+  a02=(a15*a02);
+  a02=(a14+a02);
+  a02=casadi_fmax(a02,a14);
+  a14=arg[2][12];
+  a02=casadi_fmin(a02,a14);
+  a14=(a13*a02);
+  a12=(a12+a14);
+  res[0][5]=a12;
+  a12=arg[2][16];
+  a14=arg[2][10];
+  a04=(a04-a07);
+  a04=casadi_fabs(a04);
+  a15=(a15*a04);
+  a15=(a14+a15);
+  a15=casadi_fmax(a15,a14);
+  a14=arg[2][13];
+  a15=casadi_fmin(a15,a14);
+  a13=(a13*a15);
+  a12=(a12+a13);
+  res[0][6]=a12;
+  res[0][7]=a02;
+  res[0][8]=a15;
+  a15=arg[2][11];
+  a02=arg[2][18];
+  a09=(a09-a05);
+  a09=casadi_fabs(a09);
+  a02=(a02*a09);
   a02=(a15+a02);
   a02=casadi_fmax(a02,a15);
-  a15=arg[2][12];
+  a15=arg[2][14];
   a02=casadi_fmin(a02,a15);
-  a15=(a14*a02);
-  a13=(a13+a15);
-  res[0][5]=a13;
-  a13=arg[2][16];
-  a15=arg[2][10];
-  a04=(a04-a09);
-  a04=casadi_fabs(a04);
-  a16=(a16*a04);
-  a16=(a15+a16);
-  a16=casadi_fmax(a16,a15);
-  a15=arg[2][13];
-  a16=casadi_fmin(a16,a15);
-  a14=(a14*a16);
-  a13=(a13+a14);
-  res[0][6]=a13;
-  res[0][7]=a02;
-  res[0][8]=a16;
-  a16=arg[2][11];
-  a02=arg[2][18];
-  a07=(a07-a05);
-  a07=casadi_fabs(a07);
-  a02=(a02*a07);
-  a02=(a16+a02);
-  a02=casadi_fmax(a02,a16);
-  a16=arg[2][14];
-  a02=casadi_fmin(a02,a16);
   res[0][9]=a02;
-  a03=(!a03);
-  a03=(a03?a10:0);
-  a02=(a01?a12:0);
-  a03=(a03+a02);
+  a03=(a06-a03);
+  a03=(2.*a03);
+  a03=(a03+a01);
   res[0][10]=a03;
+  a08=(a01?a08:0);
+  a01=(!a01);
+  a10=casadi_fmax(a10,a06);
   a01=(a01?a10:0);
-  a08=casadi_fmax(a08,a12);
-  a06=(a06?a08:0);
-  a01=(a01+a06);
-  a11=(a11?a01:0);
+  a08=(a08+a01);
+  a11=(a11?a08:0);
   res[0][11]=a11;
   return 0;
 }
 
 /*
- * vse_pf_improved_kernel_prepare: 116 operations (CasADi SX instructions)
+ * vse_pf_improved_kernel_prepare: 120 operations (CasADi SX instructions)
  * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
  * arg[1] input[4]: vx, ax, ay, r
  * arg[2] params[28]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,

@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: ff18205be285a3268ceb7f52d9c1439a160994c2361187ff441159514952a406
- * Operations: step 15403, init 6071 (CasADi SX instructions).
+ * Operations: step 15407, init 6066 (CasADi SX instructions).
  * particles: 200, systematic resampling at every sample
  * random_stream: PCG32 (XSH RR), seed 1; uniforms of 53 bits (double) or 24 bits (float); ziggurat normals (128 layers, 24-bit magnitudes)
  * observation: inertial

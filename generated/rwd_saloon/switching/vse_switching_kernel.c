@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b2a208389ecb5f7e1b7cae0743fea238f4ee5730d09b6619c0074de12cd0a611
- * Operations: step 883, init 66 (CasADi SX instructions).
+ * Operations: step 886, init 66 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -79,6 +79,8 @@ static casadi_real casadi_fabs(casadi_real x) {
 #endif
 }
 
+static casadi_real casadi_sq(casadi_real x) { return x*x;}
+
 static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
   return ((x > y) || (isnan(y) != 0)) ? x : y;
 }
@@ -86,8 +88,6 @@ static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
 static casadi_real casadi_fmin(casadi_real x, casadi_real y) {
   return ((x < y) || (isnan(y) != 0)) ? x : y;
 }
-
-static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 
@@ -147,17 +147,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a8=(a8?a4:0);
   a7=(a7+a8);
   res[0][20]=a7;
-  a0=(a0&&a6);
-  a0=(a0&&a1);
-  a0=(a0&&a3);
+  a0=(a0*a6);
+  a0=(a0*a1);
+  a0=(a0*a3);
   a3=3.5000000000000000e+00;
-  a1=(a2<a3);
   a2=(a2<a3);
-  a2=(a5&&a2);
-  a1=(a1||a2);
-  a6=(a6&&a1);
-  a6=(!a6);
-  a0=(a0&&a6);
+  a3=(2.*a2);
+  a2=casadi_sq(a2);
+  a3=(a3-a2);
+  a6=(a6*a3);
+  a6=(a5-a6);
+  a0=(a0*a6);
   a0=(!a0);
   a0=(a0?a5:0);
   res[0][21]=a0;
@@ -188,88 +188,92 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=casadi_fabs(a02);
   a04=90.;
   a03=(a03<=a04);
-  a00=(a00&&a03);
+  a00=(a00*a03);
   a05=arg[1][2];
   a06=casadi_fabs(a05);
   a07=30.;
   a06=(a06<=a07);
-  a00=(a00&&a06);
+  a00=(a00*a06);
   a07=arg[1][3];
   a08=casadi_fabs(a07);
   a09=3.;
   a08=(a08<=a09);
-  a00=(a00&&a08);
+  a00=(a00*a08);
   a10=(a02<a09);
-  a11=arg[0][21];
-  a12=3.5000000000000000e+00;
-  a12=(a02<a12);
-  a12=(a11&&a12);
-  a10=(a10||a12);
-  a10=(a03&&a10);
-  a12=(!a10);
-  a12=(a00&&a12);
-  a13=8.6816196568537740e-01;
-  a13=(a13*a05);
-  a13=(a06?a13:0);
+  a11=0.;
+  a12=arg[0][21];
+  a11=(a11<a12);
+  a13=3.5000000000000000e+00;
+  a13=(a02<a13);
+  a11=(a11*a13);
+  a13=(a10+a11);
+  a10=(a10*a11);
+  a13=(a13-a10);
+  a13=(a03*a13);
+  a10=(a01-a13);
+  a10=(a00*a10);
+  a11=8.6816196568537740e-01;
+  a11=(a11*a05);
+  a11=(a06?a11:0);
   a06=(!a06);
   a05=arg[0][0];
   a06=(a06?a05:0);
-  a13=(a13+a06);
-  a06=(a12?a13:0);
-  a14=(!a12);
+  a11=(a11+a06);
+  a06=(a10?a11:0);
+  a14=(!a10);
   a14=(a14?a05:0);
   a06=(a06+a14);
   res[0][0]=a06;
-  a06=(a12?a05:0);
-  a14=(!a12);
+  a06=(a10?a05:0);
+  a14=(!a10);
   a15=arg[0][1];
   a14=(a14?a15:0);
   a06=(a06+a14);
   res[0][1]=a06;
   a06=1.1111111111111110e-01;
-  a13=(a06*a13);
+  a11=(a06*a11);
   a14=2.2222222222222221e-01;
   a14=(a14*a05);
-  a13=(a13+a14);
+  a11=(a11+a14);
   a15=(a06*a15);
-  a13=(a13+a15);
+  a11=(a11+a15);
   a15=-6.6666666666666663e-01;
   a14=arg[0][2];
   a15=(a15*a14);
-  a13=(a13-a15);
+  a11=(a11-a15);
   a15=arg[0][3];
   a06=(a06*a15);
-  a13=(a13-a06);
-  a06=(a12?a13:0);
-  a05=(!a12);
+  a11=(a11-a06);
+  a06=(a10?a11:0);
+  a05=(!a10);
   a05=(a05?a14:0);
   a06=(a06+a05);
   res[0][2]=a06;
-  a14=(a12?a14:0);
-  a06=(!a12);
+  a14=(a10?a14:0);
+  a06=(!a10);
   a06=(a06?a15:0);
   a14=(a14+a06);
   res[0][3]=a14;
-  a14=(a12?a13:0);
-  a06=(!a12);
+  a14=(a10?a11:0);
+  a06=(!a10);
   a15=arg[0][4];
   a06=(a06?a15:0);
   a14=(a14+a06);
   res[0][4]=a14;
-  a14=(a12?a15:0);
-  a06=(!a12);
+  a14=(a10?a15:0);
+  a06=(!a10);
   a05=arg[0][5];
   a06=(a06?a05:0);
   a14=(a14+a06);
   res[0][5]=a14;
-  a14=(a12?a05:0);
-  a06=(!a12);
+  a14=(a10?a05:0);
+  a06=(!a10);
   a16=arg[0][6];
   a06=(a06?a16:0);
   a14=(a14+a06);
   res[0][6]=a14;
-  a14=(a12?a16:0);
-  a06=(!a12);
+  a14=(a10?a16:0);
+  a06=(!a10);
   a17=arg[0][7];
   a06=(a06?a17:0);
   a14=(a14+a06);
@@ -298,8 +302,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=(!a08);
   a21=(a21?a14:0);
   a20=(a20+a21);
-  a20=(a12?a20:0);
-  a21=(!a12);
+  a20=(a10?a20:0);
+  a21=(!a10);
   a21=(a21?a14:0);
   a20=(a20+a21);
   res[0][8]=a20;
@@ -314,7 +318,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a04=(a04?a14:0);
   a07=(a07+a04);
   a02=(a02*a07);
-  a02=(a13-a02);
+  a02=(a11-a02);
   a02=casadi_fabs(a02);
   a04=4.;
   a02=(a02<=a04);
@@ -324,51 +328,51 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a18=(a18<=a20);
   a09=(a09&&a18);
   a02=(a02||a09);
-  a18=(a02?a13:0);
+  a18=(a02?a11:0);
   a20=(!a02);
   a21=arg[0][9];
   a20=(a20?a21:0);
   a18=(a18+a20);
-  a18=(a12?a18:0);
-  a20=(!a12);
+  a18=(a10?a18:0);
+  a20=(!a10);
   a20=(a20?a21:0);
   a18=(a18+a20);
   res[0][9]=a18;
   a08=(!a08);
   a18=(a19+a01);
   a08=(a08?a18:0);
-  a08=(a12?a08:0);
-  a18=(!a12);
+  a08=(a10?a08:0);
+  a18=(!a10);
   a18=(a18?a19:0);
   a08=(a08+a18);
   res[0][10]=a08;
   a02=(!a02);
   a08=(a03+a01);
   a02=(a02?a08:0);
-  a02=(a12?a02:0);
-  a08=(!a12);
+  a02=(a10?a02:0);
+  a08=(!a10);
   a08=(a08?a03:0);
   a02=(a02+a08);
   res[0][11]=a02;
   a02=1.5000000000000000e+00;
-  a08=casadi_fmin(a13,a15);
-  a13=casadi_fmax(a13,a15);
-  a15=casadi_fmin(a13,a05);
+  a08=casadi_fmin(a11,a15);
+  a11=casadi_fmax(a11,a15);
+  a15=casadi_fmin(a11,a05);
   a03=casadi_fmin(a08,a15);
   a08=casadi_fmax(a08,a15);
-  a13=casadi_fmax(a13,a05);
-  a05=casadi_fmin(a13,a16);
+  a11=casadi_fmax(a11,a05);
+  a05=casadi_fmin(a11,a16);
   a15=casadi_fmin(a08,a05);
   a03=casadi_fmax(a03,a15);
   a08=casadi_fmax(a08,a05);
-  a13=casadi_fmax(a13,a16);
-  a13=casadi_fmin(a13,a17);
-  a08=casadi_fmin(a08,a13);
+  a11=casadi_fmax(a11,a16);
+  a11=casadi_fmin(a11,a17);
+  a08=casadi_fmin(a08,a11);
   a03=casadi_fmax(a03,a08);
   a03=casadi_fabs(a03);
   a02=(a02<a03);
   a02=(a02?a01:0);
-  a03=(a12?a02:0);
+  a03=(a10?a02:0);
   res[0][12]=a03;
   a03=arg[0][13];
   res[0][13]=a03;
@@ -386,32 +390,31 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][19]=a03;
   a03=arg[0][20];
   res[0][20]=a03;
-  res[0][21]=a11;
-  a02=(a12?a02:0);
-  a11=(!a12);
+  res[0][21]=a12;
+  a02=(a10?a02:0);
+  a12=(!a10);
   a03=2.;
-  a11=(a11?a03:0);
-  a02=(a02+a11);
+  a12=(a12?a03:0);
+  a02=(a02+a12);
   res[1][0]=a02;
   res[1][1]=a07;
   res[1][2]=a14;
   res[1][3]=a21;
   a21=arg[0][12];
   res[1][4]=a21;
-  a00=(!a00);
-  a00=(a00?a03:0);
-  a10=(a10?a01:0);
-  a00=(a00+a10);
+  a01=(a01-a00);
+  a01=(2.*a01);
+  a01=(a01+a13);
   a06=(a06||a09);
-  a12=(a12&&a06);
-  a12=(a12?a04:0);
-  a00=(a00+a12);
-  res[1][5]=a00;
+  a10=(a10&&a06);
+  a10=(a10?a04:0);
+  a01=(a01+a10);
+  res[1][5]=a01;
   return 0;
 }
 
 /*
- * vse_switching_kernel_select: 227 operations (CasADi SX instructions)
+ * vse_switching_kernel_select: 230 operations (CasADi SX instructions)
  * arg[0] state[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
@@ -969,7 +972,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][21]=a21;
   a02=casadi_fmax(a02,a05);
   a02=casadi_fmin(a02,a06);
-  a02=atan2(a10,a02);
+  a02=(a10/a02);
+  a02=atan(a02);
   res[1][0]=a02;
   res[1][1]=a10;
   res[1][2]=a17;
@@ -980,7 +984,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_switching_kernel_dynamic: 545 operations (CasADi SX instructions)
+ * vse_switching_kernel_dynamic: 546 operations (CasADi SX instructions)
  * arg[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 6110b873918e72c2c91b900abffcea7211a2ec19f6814f81014f1c5c34251132
- * Operations: step 7320, init 88 (CasADi SX instructions).
+ * Operations: step 7323, init 88 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
