@@ -292,12 +292,32 @@ def test_an_in_place_kernel_reads_its_state_before_writing_it(config, name):
     if not estimator.structure.in_place:
         pytest.skip(f"{name} has no in-place kernel")
     files = render(config, name)
-    text = files[f"vse_{name}_kernel.c"]
     for entry in estimator.structure.in_place:
-        function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
-                             text).group(1)
-        body = text[text.index(f"static int {function}("):]
-        body = body[:body.index("\n}\n")]
+        body = _kernel_body(files[f"vse_{name}_kernel.c"], entry)
         first_write = body.index("res[0][")
         assert "arg[0][" not in body[first_write:], entry
     assert "arg[0] = state->x;" in files[f"vse_{name}.c"] and "res[0] = state->x;" in files[f"vse_{name}.c"]
+
+
+def _kernel_body(text: str, entry: str) -> str:
+    function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
+                         text).group(1)
+    body = text[text.index(f"static int {function}("):]
+    return body[:body.index("\n}\n")]
+
+
+def test_a_guarded_step_runs_no_hold_rule_work_on_an_active_sample(vehicle_text):
+    """kf2dof without its monitors: the active kernel has no select (no ``?:``: the holds of
+    rejected inputs and the hold rule's choices between held and updated values are gone) and
+    does not read the holding flag; the held kernel computes no Kalman update (no division)."""
+    from vsegen.harness.vehicles import with_settings
+    from vsegen.model.params import parse_vehicle
+    text = with_settings(vehicle_text, "estimator.kf2dof", residual_window=0.0, linear_range=0.0)
+    config = parse_vehicle(text, "c_class.toml", "c_class")
+    estimator = build("kf2dof", config)
+    kernel = render(config, "kf2dof")["vse_kf2dof_kernel.c"]
+    active = _kernel_body(kernel, estimator.structure.active.name())
+    held = _kernel_body(kernel, estimator.structure.held.name())
+    holding = estimator.states.index("holding")
+    assert "?" not in active and f"arg[0][{holding}]" not in active
+    assert "/" in active and "/" not in held and "atan" not in held

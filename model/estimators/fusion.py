@@ -18,9 +18,8 @@ from vsegen.model.estimator import (
     ROLL_GRADIENT,
     Definition,
     Estimator,
-    SingleStep,
     Tunable,
-    make_functions,
+    make_guarded,
 )
 from vsegen.model.estimators import kf2dof
 from vsegen.model.estimators.kinematic_dynamic import (
@@ -31,7 +30,7 @@ from vsegen.model.estimators.kinematic_dynamic import (
     KinematicDynamic,
 )
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
-from vsegen.model.guard import hold
+from vsegen.model.guard import hold, symbolic
 from vsegen.model.layout import Layout
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
 from vsegen.model.signals import Signal
@@ -61,7 +60,8 @@ def build(params: Parameters) -> Estimator:
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    pre = seed.preprocess(s, u)
+    guard, decisions = symbolic(seed.guard(s, u))
+    pre = seed.preprocess(s, u, guard)
     active = pre.guard.active
     weight = ca.fmin(ca.fmax(ca.fabs(pre.ay_filtered) / (2 * seed.settings["threshold"]), 0), 1)
 
@@ -85,7 +85,7 @@ def build(params: Parameters) -> Estimator:
     running = seed.advanced({**s, **pre.updates}, u, {
         "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
         **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor})
-    holding = seed.held({**s, **pre.updates}, u)
+    holding = seed.held({**s, **pre.updates}, u, guard.plausible)
     next_state = ca.if_else(active, layout.pack(running), layout.pack(holding))
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, beta, 0),
@@ -94,10 +94,10 @@ def build(params: Parameters) -> Estimator:
         "weight": ca.if_else(active, weight, 0),
         "status": code,
     })
-    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
-                                seed.initial_state(u), next_state, output, params)
+    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state,
+                                   seed.initial_state(u), next_state, output, params, decisions)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
-                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, SingleStep(step), params,
+                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, structure, params,
                      seed.notes())
 
 

@@ -148,9 +148,15 @@ class KinematicDynamic:
         """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""
         return ca.fmin(ca.fmax(vx, self.vx_min), self.vx_max)
 
-    def preprocess(self, s: dict, u: dict) -> Preprocessed:
-        settings, limits = self.settings, self.params.config.limits
-        guard = input_guard(u, limits, self.vx_min, self.vx_resume, s["holding"])
+    def guard(self, s: dict, u: dict) -> Guard:
+        """The input guard of the sample (``model.guard.input_guard``)."""
+        return input_guard(u, self.params.config.limits, self.vx_min, self.vx_resume, s["holding"])
+
+    def preprocess(self, s: dict, u: dict, guard: Guard | None = None) -> Preprocessed:
+        """Filters and reliability checks of the sample, under ``guard`` (default: its
+        :meth:`guard`; an estimator built with ``model.guard.symbolic`` passes the symbolic one)."""
+        settings = self.settings
+        guard = guard or self.guard(s, u)
         ok, active = guard.plausible, guard.active
         ay_m = hold(self.roll_corrected(u["ay"]), ok["ay"], s["ay_m_1"])
         ay_b = filters.biquad_step(self.biquad, ay_m, s["ay_m_1"], s["ay_m_2"], s["ay_b_1"],
@@ -187,13 +193,15 @@ class KinematicDynamic:
         }
         return Preprocessed(guard, r_check.value, filters.median(history), code, updates)
 
-    def held(self, m: dict, v: dict) -> dict:
+    def held(self, m: dict, v: dict, plausible: dict | None = None) -> dict:
         """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last
-        plausible previous inputs kept; pre-processing buffers held by ``preprocess``."""
+        plausible previous inputs kept (``plausible``: the guard's flags, default computed);
+        pre-processing buffers held by ``preprocess``."""
+        plausible = plausible or plausibility(v, self.params.config.limits)
         new = dict(m)
         new.update({"vy_kin": ca.SX(0), "vy": ca.SX(0), "mode": ca.SX(DYN), "holding": ca.SX(1),
                     **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
-                    **previous_inputs(v, plausibility(v, self.params.config.limits), m)})
+                    **previous_inputs(v, plausible, m)})
         return new
 
     def advanced(self, m: dict, v: dict, changes: dict) -> dict:

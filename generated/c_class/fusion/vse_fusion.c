@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 435136bfdd920c7ab387d85ff042db7cc1f63bca13f2d76ed1d465dc6f676aeb
- * Operations: step 855, init 87 (CasADi SX instructions).
+ * Operations: step 956, init 87 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -40,9 +40,10 @@ void vse_fusion_step(vse_fusion_state *state, const vse_fusion_input *in, vse_fu
 {
     casadi_real u[4];
     casadi_real y[5];
+    casadi_real decisions[6];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
-    const casadi_real *arg[2];
+    const casadi_real *arg[3];
     casadi_real *res[2];
     pack_input(in, u);
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
@@ -52,13 +53,21 @@ void vse_fusion_step(vse_fusion_state *state, const vse_fusion_input *in, vse_fu
     y[2] = 0.0;
     y[3] = 0.0;
     y[4] = 0.0;
-    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
-     * the caller's state in place */
+    /* the guard decides whether the sample is active (its last decision); then only that
+     * kernel runs: the active one carries no holds or selects. Each reads the whole state before
+     * it writes any of it (codegen.kernel): they step the caller's state in place */
     arg[0] = state->x;
     arg[1] = u;
+    res[0] = decisions;
+    (void)vse_fusion_kernel_guard(arg, res, &iw, &w, 0);
     res[0] = state->x;
     res[1] = y;
-    (void)vse_fusion_kernel_step(arg, res, &iw, &w, 0);
+    if (decisions[5] > 0.0) {
+        (void)vse_fusion_kernel_active(arg, res, &iw, &w, 0);
+    } else {
+        arg[2] = decisions;
+        (void)vse_fusion_kernel_held(arg, res, &iw, &w, 0);
+    }
     out->beta = y[0];
     out->vy = y[1];
     out->r = y[2];
