@@ -107,6 +107,11 @@ class Guarded(_ComposedStep):
     def in_place(self) -> tuple[str, ...]:
         return self.active.name(), self.held.name()
 
+    def step_operations(self) -> int:
+        """An active sample's: the guard's and the active kernel's (a held one runs the guard and
+        the held kernel)."""
+        return self.guard.n_instructions() + self.active.n_instructions()
+
     @property
     def decision_count(self) -> int:
         return self.guard.numel_out(0)

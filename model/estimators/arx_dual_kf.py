@@ -32,9 +32,9 @@ import casadi as ca
 from vsegen.model import discretize, kalman, signals, status
 from vsegen.model.bicycle import bicycle_matrices
 from vsegen.model.calibration import Parameters
-from vsegen.model.estimator import GYRO_VARIANCE, Definition, Estimator, Tunable, make_guarded
+from vsegen.model.estimator import GYRO_VARIANCE, Definition, Estimator, SingleStep, Tunable, make_functions
 from vsegen.model.estimators.kf2dof import zoh_plan
-from vsegen.model.guard import first_sample, hold, input_guard, symbolic
+from vsegen.model.guard import first_sample, hold, input_guard
 from vsegen.model.layout import Layout
 from vsegen.model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
 from vsegen.model.signals import Signal
@@ -162,7 +162,7 @@ def build(params: Parameters) -> Estimator:
 
     state, s = states.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    guard, decisions = symbolic(input_guard(u, config.limits, vx_min, vx_resume, s["holding"]))
+    guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
     ok = guard.plausible
     gyro_ok = ok["r"]
     adapting = ca.logic_and(gyro_ok, ca.logic_and(ok["vx"], ca.logic_not(guard.low_speed)))
@@ -226,10 +226,10 @@ def build(params: Parameters) -> Estimator:
         **({"delta_prev": first["delta"]} if n == 4 else {}),
         "holding": holding,
     })
-    init, structure = make_guarded(NAME, INPUTS, states, outputs, inputs, state, init_state,
-                                   next_state, output, params, decisions)
+    init, step = make_functions(NAME, INPUTS, states, outputs, inputs, state, init_state,
+                                next_state, output, params)
     return Estimator(NAME, "yaw rate from an ARX model with a dual Kalman filter (seed 004)",
-                     INPUTS, states, outputs, init, structure, params,
+                     INPUTS, states, outputs, init, SingleStep(step), params,
                      notes(params), rounding_gain=PARAMETER_WALK_GAIN)
 
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 82d8a3c83cff6eeaf7744142521f7d08799e8511b3e28485710801f8ba16e433
- * Operations: step 463, init 384 (CasADi SX instructions).
+ * Operations: step 402, init 384 (CasADi SX instructions).
  * exogenous: mz
  * prior_zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17
  */
@@ -38,10 +38,9 @@ void vse_arx_dual_kf_step(vse_arx_dual_kf_state *state, const vse_arx_dual_kf_in
 {
     casadi_real u[4];
     casadi_real y[6];
-    casadi_real decisions[6];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
-    const casadi_real *arg[3];
+    const casadi_real *arg[2];
     casadi_real *res[2];
     pack_input(in, u);
     /* the kernel writes every entry; set first so static analysers (cppcheck uninitvar) see
@@ -52,21 +51,13 @@ void vse_arx_dual_kf_step(vse_arx_dual_kf_state *state, const vse_arx_dual_kf_in
     y[3] = 0.0;
     y[4] = 0.0;
     y[5] = 0.0;
-    /* the guard decides whether the sample is active (its last decision); then only that
-     * kernel runs: the active one carries no holds or selects. Each reads the whole state before
-     * it writes any of it (codegen.kernel): they step the caller's state in place */
+    /* the kernel reads the whole state before it writes any of it (codegen.kernel): it steps
+     * the caller's state in place */
     arg[0] = state->x;
     arg[1] = u;
-    res[0] = decisions;
-    (void)vse_arx_dual_kf_kernel_guard(arg, res, &iw, &w, 0);
     res[0] = state->x;
     res[1] = y;
-    if (decisions[5] > 0.0) {
-        (void)vse_arx_dual_kf_kernel_active(arg, res, &iw, &w, 0);
-    } else {
-        arg[2] = decisions;
-        (void)vse_arx_dual_kf_kernel_held(arg, res, &iw, &w, 0);
-    }
+    (void)vse_arx_dual_kf_kernel_step(arg, res, &iw, &w, 0);
     out->r = y[0];
     out->a1 = y[1];
     out->a2 = y[2];

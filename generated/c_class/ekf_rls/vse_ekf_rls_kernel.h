@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: dffabe0c40022a320824a729a5751502cac42a1006930cb37b3b7259946c6712
- * Operations: step 828, init 101 (CasADi SX instructions).
+ * Operations: step 463, init 101 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: aab3777e1b65e4534d34e95525e0fbf0d481cc457d87b0140b6736066c91d3ad
- * Operations: step 828, init 101 (CasADi SX instructions).
+ * Operations: step 463, init 101 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 50fb1b07db1a9935e81c33a8a87be4e5340e241b31e3bb00ba6d66d7cf4ff7ec
- * Operations: step 682, init 48 (CasADi SX instructions).
+ * Operations: step 564, init 48 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
