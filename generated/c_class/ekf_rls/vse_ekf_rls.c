@@ -59,7 +59,10 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
     y[7] = 0.0;
     /* the guard decides whether the sample is active (its last decision); then only that
      * kernel runs: the active one carries no holds or selects. Each reads the whole state before
-     * it writes any of it (codegen.kernel): they step the caller's state in place */
+     * it writes any of it (codegen.kernel): they step the caller's state in place. The guard
+     * writes every decision; the one this function reads is set first for static analysers
+     * (cppcheck uninitvar) */
+    decisions[6] = 0.0;
     arg[0] = state->x;
     arg[1] = u;
     res[0] = decisions;

@@ -52,7 +52,10 @@ void vse_kf2dof_step(vse_kf2dof_state *state, const vse_kf2dof_input *in, vse_kf
     y[3] = 0.0f;
     /* the guard decides whether the sample is active (its last decision); then only that
      * kernel runs: the active one carries no holds or selects. Each reads the whole state before
-     * it writes any of it (codegen.kernel): they step the caller's state in place */
+     * it writes any of it (codegen.kernel): they step the caller's state in place. The guard
+     * writes every decision; the one this function reads is set first for static analysers
+     * (cppcheck uninitvar) */
+    decisions[5] = 0.0f;
     arg[0] = state->x;
     arg[1] = u;
     res[0] = decisions;
