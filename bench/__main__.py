@@ -28,7 +28,7 @@ from vsegen.codegen.generate import render
 from vsegen.harness.fuzz import fuzz_estimator
 from vsegen.harness.reference import REFERENCES
 from vsegen.harness.scenarios import Case
-from vsegen.harness.targets import TARGETS, available, build_for_target
+from vsegen.harness.targets import available, build_for_target, target_for
 from vsegen.harness.vehicles import load_vehicle
 from vsegen.model.estimator import Particles
 from vsegen.model.estimators import build
@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> None:
         inputs_file = write_inputs(inputs, folder)
         for real in ("double", "float"):
             driver = generated_driver(estimator, render(config, name, real), real)
-            m4f = next(t for t in TARGETS if t.real == "float")
+            m4f = target_for("float")
             target = (build_for_target(render(config, name, "float"), name, m4f)
                       if real == "float" and available(m4f) else None)
             lines.append(f"| {name} | {real} | {driver.instructions_per_step(inputs_file, len(inputs)):.1f} | "

@@ -25,7 +25,7 @@ from bench.measure import generated_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.run import run_estimator
 from vsegen.harness.scenarios import Case
-from vsegen.harness.targets import TARGETS, available, build_for_target
+from vsegen.harness.targets import available, build_for_target, target_for
 from vsegen.harness.vehicles import load_vehicle, with_settings
 from vsegen.model.estimators import build, pf
 from vsegen.model.params import VehicleConfig, parse_vehicle
@@ -138,7 +138,7 @@ def costs(text: str, source: str, name: str, inputs_case: Case = COSTS_CASE) -> 
     """Markdown: per filter, particle count and normal sampler, instructions per step and per
     particle (double and float, host -O2) and the Cortex-M4F float build's code, state and stack;
     then the per-particle cost of Box-Muller over the ziggurat's."""
-    m4f = next(t for t in TARGETS if t.real == "float")
+    m4f = target_for("float")
     lines = ["| filter | N | normals | instructions/step double | instructions/step float | "
              "per particle double | per particle float | M4F .text (B) | M4F state (B) | "
              "M4F stack step (B) | M4F RAM (B) |",

@@ -17,7 +17,7 @@ from bench.measure import generated_driver, hand_driver, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.logs import Log
 from vsegen.harness.scenarios import Case
-from vsegen.harness.targets import TARGETS, available, build_for_target
+from vsegen.harness.targets import available, build_for_target, target_for
 from vsegen.harness.vehicles import load_vehicle, with_settings
 from vsegen.model.estimators import build
 from vsegen.model.params import parse_vehicle
@@ -65,7 +65,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
 def _m4f_size(config) -> str:
     """The float kf2dof of ``config`` cross-built for the Cortex-M4F (``vsegen size``'s build):
     linked .text and the step's worst-case stack, or '-' without the cross compiler."""
-    target = next(t for t in TARGETS if t.real == "float")
+    target = target_for("float")
     if not available(target):
         return "-"
     report = build_for_target(render(config, "kf2dof", "float"), "kf2dof", target)

@@ -174,17 +174,23 @@ def _compare_min_max(c_text: str) -> str:
 _STATE_READ = re.compile(r"arg\[0\]\[(\d+)\]")
 
 
+def function_span(c_text: str, entry: str) -> tuple[int, int]:
+    """(start, end) in ``c_text`` of the static function that CasADi's entry point ``entry``
+    calls: its body, from its signature to before its closing brace."""
+    call = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(", c_text)
+    if call is None:
+        raise RuntimeError(f"CasADi's entry point {entry} changed; review codegen/kernel.py")
+    start = c_text.index(f"static int {call.group(1)}(")
+    return start, c_text.index("\n}\n", start)
+
+
 def _read_state_first(c_text: str, entry: str) -> str:
     """The step kernel ``entry`` with every read of its argument 0 (the state) that comes after
     its first write of result 0 moved into a local set just before that write, so result 0 may be
     the same array: the API steps the caller's state in place, without a copy. (CasADi's SX code
     reads an input entry where it first needs it, often after it has written results; reads
     before the first write stay where they are, so no value lives longer than it must.)"""
-    call = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(", c_text)
-    if call is None:
-        raise RuntimeError(f"CasADi's entry point {entry} changed; review codegen/kernel.py")
-    start = c_text.index(f"static int {call.group(1)}(")
-    end = c_text.index("\n}\n", start)
+    start, end = function_span(c_text, entry)
     body = c_text[start:end]
     first_write = body.find("  res[0][")
     if first_write < 0:

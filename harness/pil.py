@@ -37,7 +37,7 @@ from vsegen.harness.build import WARNING_FLAGS, compile_cached, library_files
 from vsegen.harness.compare import Difference, Tolerance, difference, relative_errors
 from vsegen.harness.parallel import Workers
 from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.targets import TARGETS, Target, build_for_target
+from vsegen.harness.targets import Target, build_for_target, target_for
 from vsegen.harness.verify import CaseResult, against_reference, case_inputs, prepared
 from vsegen.model.estimator import Estimator, Particles
 from vsegen.model.params import VehicleConfig
@@ -64,8 +64,8 @@ class Board:
 
 
 BOARDS = {
-    "m4f": Board("m4f", "mps2-an386", TARGETS[0], 168e6),
-    "m7": Board("m7", "mps2-an500", TARGETS[1], 400e6),
+    "m4f": Board("m4f", "mps2-an386", target_for("float"), 168e6),
+    "m7": Board("m7", "mps2-an500", target_for("double"), 400e6),
 }
 """--target choices: a Cortex-M4F (single-precision FPU, float code) and a Cortex-M7 (double FPU)."""
 
@@ -90,7 +90,7 @@ class PilRun:
 
 def available() -> str:
     """'' when PIL can run here, else what is missing (one line)."""
-    missing = [tool for tool in (QEMU, TARGETS[0].compiler) if shutil.which(tool) is None]
+    missing = [tool for tool in (QEMU, target_for("float").compiler) if shutil.which(tool) is None]
     if missing:
         return (f"{', '.join(missing)} not found: expected the Debian packages qemu-system-arm and "
                 f"gcc-arm-none-eabi (run scripts/setup.sh)")

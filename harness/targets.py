@@ -68,6 +68,11 @@ class TargetReport:
     undefined: tuple[str, ...]
 
 
+def target_for(real: str) -> Target:
+    """The target whose FPU builds ``real`` code ("float": the Cortex-M4F, "double": the M7)."""
+    return next(target for target in TARGETS if target.real == real)
+
+
 def available(target: Target) -> bool:
     return shutil.which(target.compiler) is not None
 

@@ -17,7 +17,7 @@ import pytest
 from locations import GENERATED
 
 from vsegen.codegen.generate import check, render, write
-from vsegen.codegen.kernel import kernel_options
+from vsegen.codegen.kernel import function_span, kernel_options
 from vsegen.harness.build import WARNING_FLAGS
 from vsegen.harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
 from vsegen.model.estimators import DEFINITIONS, build
@@ -300,10 +300,8 @@ def test_an_in_place_kernel_reads_its_state_before_writing_it(config, name):
 
 
 def _kernel_body(text: str, entry: str) -> str:
-    function = re.search(rf"int {entry}\(const casadi_real\*\* arg[^{{]*\{{\n  return (casadi_f\d+)\(",
-                         text).group(1)
-    body = text[text.index(f"static int {function}("):]
-    return body[:body.index("\n}\n")]
+    start, end = function_span(text, entry)
+    return text[start:end]
 
 
 def test_a_guarded_step_runs_no_hold_rule_work_on_an_active_sample(vehicle_text):
