@@ -12,6 +12,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import consistency, signals, status
+from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
@@ -76,7 +77,7 @@ def build(params: Parameters) -> Estimator:
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"]) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
-    beta = weight * ca.atan2(vy_kin, vx) + (1 - weight) * result["beta"]
+    beta = weight * sideslip(vy_kin, vx) + (1 - weight) * result["beta"]
     code, monitor = pre.status, {}
     if monitored:   # beyond the paper: the consistency monitor of the KF's innovations
         check = consistency.monitor(s, result["innovation"], seed.settings, T)

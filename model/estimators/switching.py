@@ -24,6 +24,7 @@ from dataclasses import replace
 import casadi as ca
 
 from vsegen.model import signals
+from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
@@ -224,7 +225,7 @@ def build(params: Parameters) -> Estimator:
         offset = m["kin_offset"] if OFFSET in seed.extra else 0
         vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - offset)
         return (seed.advanced(m, v, {"vy_kin": vy_kin}),
-                output(ca.atan2(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
+                output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))
 
     def holding(m, c, v):

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9564fb7c3df0ad3fd0fd2e03df25608f796a7032bb3751b51363af5a2eec7e1e
- * Operations: step 904, init 66 (CasADi SX instructions).
+ * Operations: step 905, init 66 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

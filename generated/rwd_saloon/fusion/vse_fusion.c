@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 67ed317fee3289cf0ce748a790ca3f23a8e5c119b123a275da9251dd57c0dcdf
- * Operations: step 675, init 87 (CasADi SX instructions).
+ * Operations: step 676, init 87 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

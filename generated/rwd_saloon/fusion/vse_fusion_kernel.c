@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 67ed317fee3289cf0ce748a790ca3f23a8e5c119b123a275da9251dd57c0dcdf
- * Operations: step 675, init 87 (CasADi SX instructions).
+ * Operations: step 676, init 87 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -896,7 +896,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a16=(a16/a09);
   a16=casadi_fmax(a16,a08);
   a16=casadi_fmin(a16,a14);
-  a09=atan2(a22,a10);
+  a09=(a22/a10);
+  a09=atan(a09);
   a09=(a16*a09);
   a24=(a14-a16);
   a10=(a43/a10);
@@ -924,7 +925,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_fusion_kernel_active: 637 operations (CasADi SX instructions)
+ * vse_fusion_kernel_active: 638 operations (CasADi SX instructions)
  * arg[0] state[24]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding, residual, residual_hold_left

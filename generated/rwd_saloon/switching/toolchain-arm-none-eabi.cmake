@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: b2a208389ecb5f7e1b7cae0743fea238f4ee5730d09b6619c0074de12cd0a611
-# Operations: step 886, init 66 (CasADi SX instructions).
+# Operations: step 887, init 66 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 # median_window: 5 samples

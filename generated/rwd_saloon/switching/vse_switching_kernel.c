@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b2a208389ecb5f7e1b7cae0743fea238f4ee5730d09b6619c0074de12cd0a611
- * Operations: step 886, init 66 (CasADi SX instructions).
+ * Operations: step 887, init 66 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -1065,7 +1065,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a2=casadi_fmax(a2,a1);
   a1=90.;
   a2=casadi_fmin(a2,a1);
-  a2=atan2(a3,a2);
+  a2=(a3/a2);
+  a2=atan(a2);
   res[1][0]=a2;
   res[1][1]=a3;
   a3=arg[2][1];
@@ -1078,7 +1079,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_switching_kernel_kinematic: 71 operations (CasADi SX instructions)
+ * vse_switching_kernel_kinematic: 72 operations (CasADi SX instructions)
  * arg[0] state_mid[22]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding
