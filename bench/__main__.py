@@ -25,11 +25,11 @@ from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, pil, seed003, versus_ha
 from bench.document import section_of, with_section
 from bench.measure import CC, FLAGS, generated_driver, write_inputs
 from vsegen.codegen.generate import render
-from vsegen.harness.fuzz import fuzz_estimator
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import REFERENCES
-from vsegen.harness.scenarios import Case
-from vsegen.harness.targets import available, build_for_target, target_for
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.target.toolchains import available, build_for_target, target_for
+from vsegen.harness.verify.fuzz import fuzz_estimator
 from vsegen.model.estimator import Particles
 from vsegen.model.estimators import build
 

@@ -9,7 +9,7 @@ mean ± standard deviation over seeds 1..N), plus vy and r RMSE. Also draws a se
 plot of each estimator on every scenario (seed 1) into docs/figures/. The paper reproductions
 (seeds 000, 001, 002, 004) follow the common table (not with --common-only, e.g. for another car).
 The common table's runs (scenario x seed, every estimator) go to a Dask cluster
-(``harness.cluster``: a local cluster by default, or --scheduler); the numbers do not depend on it.
+(``harness.jobs.pool``: a local cluster by default, or --scheduler); the numbers do not depend on it.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from rich.console import Console
 from rich.progress import Progress
 
 from bench import DEFAULT_VEHICLE, REPO, seed001, seed002, seed003, table3, transfer, tuning, yaw_rate
-from vsegen.harness.cluster import Cluster
-from vsegen.harness.plot import plot
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import Case
-from vsegen.harness.score import score_case
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.jobs.pool import DaskPool
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.score.metrics import score_case
+from vsegen.harness.score.plot import plot
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import build
 
 SCORING_SET: tuple[Case, ...] = (
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> None:
             "| v_y RMSE (m/s) | r RMSE (°/s) |", "|---|---|---|---|---|---|---|---|---|"]
     figures = [_figure(config, FIG8[1], list(FIG8[2]), FIG8[0])] if not args.common_only else []
     jobs = [(config, case, seed, tuple(names)) for case in SCORING_SET for seed in range(1, args.seeds + 1)]
-    with Progress(console=Console(stderr=True)) as progress, Cluster(args.scheduler) as cluster:
+    with Progress(console=Console(stderr=True)) as progress, DaskPool(args.scheduler) as cluster:
         task = progress.add_task(f"scoring {len(jobs)} runs x {len(names)} estimators", total=len(jobs))
         results = cluster.map(score_case, jobs, lambda *_: progress.advance(task))
     for index, case in enumerate(SCORING_SET):

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from bench import BENCHMARKS, REPO
 from bench.document import write_section
-from vsegen.harness.parallel import worker_count
+from vsegen.harness.jobs.pool import worker_count
 
 SECTION = "## Feedback times"
 MAIN_JOB = "vsegen generate && vsegen verify"

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from vsegen.codegen.generate import template_environment
-from vsegen.harness.build import library_files
-from vsegen.harness.targets import link_to_api
+from vsegen.harness.host.build import library_files
+from vsegen.harness.target.toolchains import link_to_api
 from vsegen.model.bicycle import state_matrix_norm_bound
 from vsegen.model.discretize import plan_zoh
 from vsegen.model.estimator import Estimator

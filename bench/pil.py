@@ -12,8 +12,8 @@ from pathlib import Path
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE
 from bench.document import write_section
-from vsegen.harness import pil
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.target import emulator as pil
 
 SECTION = "## Processor in the loop (QEMU)"
 

@@ -16,10 +16,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from bench.figures import save_figure
-from vsegen.harness.logs import Log
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import Case
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.params import VehicleConfig, parse_vehicle
 
 NAME = "ekf_rls"

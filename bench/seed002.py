@@ -20,10 +20,10 @@ import numpy as np
 
 from bench import REPO
 from bench.figures import save_figure
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import Case
-from vsegen.harness.scenarios.manoeuvres import GRAVITY
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.sim.manoeuvres import GRAVITY
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.params import VehicleConfig, parse_vehicle
 
 VEHICLE = REPO / "vehicles" / "ev_seed002.toml"

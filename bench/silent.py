@@ -8,11 +8,11 @@ from __future__ import annotations
 import argparse
 
 from bench import REPO
-from vsegen.harness.cluster import Cluster
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.score import SILENT_DURATION, silent_error_time
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.jobs.pool import DaskPool
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.model.estimators import DEFINITIONS
 
 CARS = ("c_class", "rwd_saloon")
@@ -34,7 +34,7 @@ def longest_silent(car: str, case: Case) -> dict[str, float]:
 
 def report(scheduler: str | None) -> list[str]:
     jobs = [(car, case) for car in CARS for case in VERIFICATION_SET]
-    with Cluster(scheduler) as cluster:
+    with DaskPool(scheduler) as cluster:
         results = cluster.map(longest_silent, jobs)
     names = list(results[0])
     lines = ["# Never silently wrong", "",

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from bench import REPO
-from vsegen.harness.cluster import Cluster
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import Case
-from vsegen.harness.score import score
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.jobs.pool import DaskPool
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.score.metrics import score
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.params import parse_vehicle
 
 PAPER = {"switching": (0.274, 0.059, 0.086), "fusion": (0.462, 0.076, 0.124)}
@@ -67,7 +67,7 @@ def _one_seed(config, estimator: str, case: Case, seed: int) -> tuple[float, flo
 
 
 def _statistics(config, estimator: str, case: Case, seeds: int,
-                cluster: Cluster | None = None) -> np.ndarray:
+                cluster: DaskPool | None = None) -> np.ndarray:
     """(max, mean, RMSE) of |delta beta| in degrees for seeds 1..N, one row per seed; spread over
     ``cluster`` when given."""
     jobs = [(config, estimator, case, seed) for seed in range(1, seeds + 1)]
@@ -109,9 +109,9 @@ def beyond_paper_table(vehicle_text: str, source: str, name: str, seeds: int) ->
 def table(vehicle_text: str, source: str, name: str, seeds: int,
           scheduler: str | None = None) -> list[str]:
     """The Table 3 reproduction (and its outlier and bias variants) as markdown lines, the runs
-    spread over the cluster of ``scheduler`` (harness.cluster)."""
+    spread over the cluster of ``scheduler`` (harness.jobs.pool)."""
     lines = []
-    with Cluster(scheduler) as cluster:
+    with DaskPool(scheduler) as cluster:
         for title, case in CASES:
             lines += _case_table(vehicle_text, source, name, seeds, title, case, cluster)
     return lines

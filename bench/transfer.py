@@ -15,8 +15,8 @@ import argparse
 
 from bench import VEHICLES
 from bench.tuning import CARS, HOLDOUT, HOLDOUT_SEEDS, SEED, TRAINING, TRIALS
-from vsegen.harness.tuning import DEGREES, objective_value, settings_text, tune
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.tune.search import DEGREES, objective_value, settings_text, tune
 from vsegen.model.estimators import build
 from vsegen.model.params import parse_vehicle
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 import argparse
 
 from bench import VEHICLES
-from vsegen.harness.scenarios import Case
-from vsegen.harness.tuning import DEGREES, objective_value, tune
-from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.tune.search import DEGREES, objective_value, tune
 from vsegen.model.params import parse_vehicle
 
 CARS = ("c_class", "rwd_saloon")

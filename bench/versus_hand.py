@@ -15,10 +15,10 @@ from bench import BENCHMARKS, DEFAULT_VEHICLE
 from bench.document import write_section
 from bench.measure import generated_driver, hand_driver, write_inputs
 from vsegen.codegen.generate import render
-from vsegen.harness.logs import Log
-from vsegen.harness.scenarios import Case
-from vsegen.harness.targets import available, build_for_target, target_for
-from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.target.toolchains import available, build_for_target, target_for
 from vsegen.model.estimators import build
 from vsegen.model.params import parse_vehicle
 

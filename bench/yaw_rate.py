@@ -15,9 +15,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from bench.figures import save_figure
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import Case
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.params import parse_vehicle
 
 NAME = "arx_dual_kf"

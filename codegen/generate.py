@@ -1,15 +1,13 @@
-"""Generate, write and check the C folder of one estimator for one vehicle.
+"""The C folder of one estimator for one vehicle, as text.
 
 ``render(config, name)`` returns {file name: text}; the text depends only on the vehicle
 configuration, the templates, and the vsegen and CasADi versions (no time stamps, no paths), so
-regeneration is byte-identical. ``check`` compares with a folder and returns unified diffs.
+regeneration is byte-identical. codegen never touches the file system: writing the folder and
+comparing it with a checked-in one is the harness's (``harness.project.files``).
 """
 
 from __future__ import annotations
 
-import difflib
-import os
-import tempfile
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -175,42 +173,3 @@ def _comment(text: str, style: str) -> str:
     if style == "hash":
         return "".join(f"# {line}".rstrip() + "\n" for line in lines)
     return "<!--\n" + "\n".join(lines) + "\n-->\n"
-
-
-def write(files: dict[str, str], folder: Path) -> None:
-    """Replace ``folder``'s content by ``files`` (each written to a temporary name, then renamed)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    for stale in folder.iterdir():
-        if stale.is_file() and stale.name not in files:
-            stale.unlink()
-    for name, text in files.items():
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{name}.")
-        with os.fdopen(fd, "w", newline="\n") as handle:
-            handle.write(text)
-        publish(tmp, folder / name)
-
-
-def publish(tmp: str, path: Path) -> None:
-    """Rename the finished temporary file ``tmp`` to ``path`` with the mode a plain ``open`` would
-    have given it (0666 less the umask; mkstemp makes files 0600)."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, path)
-
-
-def check(files: dict[str, str], folder: Path, label: str) -> list[str]:
-    """Unified diffs between ``folder`` and ``files`` (empty if identical). ``label`` names the
-    folder in the diff headers."""
-    diffs = []
-    present = {p.name for p in folder.iterdir() if p.is_file()} if folder.is_dir() else set()
-    for name in sorted(set(files) | present):
-        old = (folder / name).read_text() if name in present else ""
-        new = files.get(name, "")
-        if old != new:
-            diffs.append("".join(difflib.unified_diff(
-                old.splitlines(keepends=True), new.splitlines(keepends=True),
-                fromfile=f"{label}/{name}" if name in present else "/dev/null",
-                tofile=f"{label}/{name} (regenerated)" if name in files else "/dev/null",
-            )))
-    return diffs

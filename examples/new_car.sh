@@ -13,7 +13,7 @@ truth="$repo/vehicles/rwd_saloon.toml"
 python3 - "$repo/vehicles/c_class.toml" my_car.toml <<'PY'
 import sys
 from pathlib import Path
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.project.vehicles import with_settings
 text = with_settings(Path(sys.argv[1]).read_text(), "vehicle", mass=1780.0, yaw_inertia=3050.0,
                      cg_to_front_axle=1.30, cg_to_rear_axle=1.65, wheelbase=2.95, wheel_radius=0.335,
                      track_width=1.60, cg_height=0.56)

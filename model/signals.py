@@ -107,6 +107,9 @@ HOLDING_REASON = Signal("holding", "-", "2 while holding at low speed, 1 on an i
 INPUT = {entry.name: entry for entry in INPUTS}
 REQUIRED_INPUTS = tuple(entry.name for entry in INPUTS if entry.required)
 OPTIONAL_INPUTS = tuple(entry.name for entry in INPUTS if not entry.required)
+LOG_COLUMN_UNITS = {**{entry.name: entry.signal.unit for entry in INPUTS},
+                    **{signal.name: signal.unit for signal in TRUTH}}
+"""Every column a log may have (inputs, then ground truth) with its SI unit."""
 
 
 def inputs(*names: str) -> tuple[Signal, ...]:

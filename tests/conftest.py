@@ -7,7 +7,8 @@ from pathlib import Path
 import pytest
 from locations import DEFAULT_VEHICLE
 
-from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.jobs.memo import clear_all
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
 from vsegen.model.params import VehicleConfig, parse_vehicle
 
 
@@ -45,3 +46,12 @@ def write_vehicle(tmp_path: Path, vehicle_text: str):
         return path
 
     return write
+
+
+@pytest.fixture
+def cleared_memos():
+    """Every per-process memo (simulated logs, truth runs, compiled estimators) empty before and
+    after the test."""
+    clear_all()
+    yield
+    clear_all()

@@ -15,8 +15,8 @@ from elftools.elf.elffile import ELFFile
 from locations import VEHICLES
 
 from vsegen.codegen.generate import render
-from vsegen.harness.targets import TARGETS
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.target.toolchains import TARGETS
 from vsegen.model.estimators import build
 
 pya2l = pytest.importorskip("pya2l")

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from vsegen.harness.build import compile_estimator
-from vsegen.harness.logs import Log
-from vsegen.harness.scenarios import Case
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.host.build import compile_estimator
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model import status
 
 NAME = "arx_dual_kf"
@@ -141,7 +141,7 @@ def test_low_speed_pauses_the_parameter_filter(config):
 
 
 def test_a_log_without_mz_runs_as_with_zero_moment(config):
-    from vsegen.harness.run import run_estimator
+    from vsegen.harness.host.run_log import run_estimator
 
     log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0)
     assert "mz" not in log
@@ -157,7 +157,7 @@ def test_filtered_yaw_rate_beats_the_gyro(variant, case, exogenous, max_lag):
     """§4 acceptance: RMSE(x) < RMSE(gyro); the cross-correlation with the truth peaks at lag
     0 +- 1 sample with the steer angle as input (E2). The patent's form (mz only) cannot explain
     steer-induced yaw and lags by 2 samples (20 ms) on these manoeuvres: measured, not hidden."""
-    from vsegen.harness.run import run_estimator
+    from vsegen.harness.host.run_log import run_estimator
 
     config = variant(f"estimator.{NAME}", exogenous=exogenous)
     log = case.simulate(config, 100.0)

@@ -9,12 +9,12 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from vsegen.harness.build import compile_estimator
-from vsegen.harness.compare import as_seen_by
+from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.reference import REFERENCES
-from vsegen.harness.reference.run import run_reference
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.verify import verify_estimator
+from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.verify.compare import as_seen_by
+from vsegen.harness.verify.equivalence import verify_estimator
 from vsegen.model import status, three_dof, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import baked

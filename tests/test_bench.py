@@ -10,12 +10,12 @@ import pytest
 
 from bench.document import section_of, with_section
 from bench.measure import HERE, hand_raw_parameters
-from vsegen.harness.build import build_library
-from vsegen.harness.compare import TOLERANCES, difference
+from vsegen.harness.host.build import build_library
+from vsegen.harness.project.vehicles import with_settings
 from vsegen.harness.reference import kf2dof as reference
-from vsegen.harness.reference.run import run_reference
-from vsegen.harness.scenarios import VERIFICATION_SET
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.harness.verify.compare import TOLERANCES, difference
 from vsegen.model.params import parse_vehicle
 
 WRAPPER = """

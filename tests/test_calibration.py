@@ -10,13 +10,13 @@ import pytest
 from locations import VEHICLES
 
 from vsegen.codegen.generate import render
-from vsegen.harness.build import load_estimator, load_tuning_estimator
-from vsegen.harness.compare import TOLERANCES, difference
+from vsegen.harness.host.build import load_estimator, load_tuning_estimator
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import REFERENCES
 from vsegen.harness.reference import kf2dof as reference
-from vsegen.harness.reference.run import run_reference
-from vsegen.harness.scenarios import Case
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.verify.compare import TOLERANCES, difference
 from vsegen.model.calibration import calibratable, calibration_values
 from vsegen.model.calibration_checks import unchecked_rules
 from vsegen.model.estimators import SCHEMAS, build

@@ -11,11 +11,11 @@ from asammdf import MDF, Signal
 from click.testing import CliRunner
 from locations import VEHICLES
 
-from vsegen.harness.channels import read_channel_map
 from vsegen.harness.cli import main
-from vsegen.harness.logs import read_estimates, read_log, write_log
-from vsegen.harness.mdf import read_mdf
-from vsegen.harness.scenarios import Case
+from vsegen.harness.logs.channels import read_channel_map
+from vsegen.harness.logs.mdf import read_mdf
+from vsegen.harness.logs.table import read_estimates, read_log, write_log
+from vsegen.harness.sim.scenarios import Case
 
 MAP = """[columns.delta]
 channel = "SteerWhlAng"
@@ -80,7 +80,7 @@ def test_an_mdf4_log_runs_through_a_channel_map_on_a_causal_grid(tmp_path, confi
 def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc):
     write_log(dlc, tmp_path / "si.csv")
     logger = {"t": dlc["t"], **{name: dlc[c] * k for c, (name, k) in LOGGER.items()}}
-    from vsegen.harness.logs import Log
+    from vsegen.harness.logs.table import Log
 
     write_log(Log(logger, "logger.csv"), tmp_path / "logger.csv")
     (tmp_path / "map.toml").write_text(MAP)

@@ -151,9 +151,9 @@ def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
     from click.testing import CliRunner
 
     from vsegen.harness.cli import main
-    from vsegen.harness.logs import write_log
-    from vsegen.harness.scenarios import Case
-    from vsegen.harness.vehicles import load_vehicle
+    from vsegen.harness.logs.table import write_log
+    from vsegen.harness.project.vehicles import load_vehicle
+    from vsegen.harness.sim.scenarios import Case
 
     config = load_vehicle(REPO / "vehicles" / "c_class.toml")
     write_log(Case.of("sine_steer").simulate(config, 200.0, 1), tmp_path / "fast.csv")
@@ -184,7 +184,7 @@ def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path):
     from click.testing import CliRunner
 
     from vsegen.harness.cli import main
-    from vsegen.harness.logs import read_estimates
+    from vsegen.harness.logs.table import read_estimates
 
     runner = CliRunner()
     log, est = str(tmp_path / "dlc.csv"), str(tmp_path / "est.csv")

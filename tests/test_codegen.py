@@ -16,10 +16,12 @@ import numpy as np
 import pytest
 from locations import GENERATED
 
-from vsegen.codegen.generate import check, render, write
+from vsegen.codegen.generate import render
 from vsegen.codegen.kernel import function_span, kernel_options
-from vsegen.harness.build import WARNING_FLAGS
-from vsegen.harness.targets import ALLOWED, TARGETS, TargetError, available, build_for_target
+from vsegen.harness.host.build import WARNING_FLAGS
+from vsegen.harness.project.files import folder_diffs as check
+from vsegen.harness.project.files import write_folder as write
+from vsegen.harness.target.toolchains import ALLOWED, TARGETS, TargetError, available, build_for_target
 from vsegen.model.estimators import DEFINITIONS, build
 
 COMPILERS = ["gcc", "clang"]
@@ -178,9 +180,9 @@ def test_check_reports_a_stale_file_with_a_diff(tmp_path, files):
 def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, files):
     """make and cmake build the library and example; the example's output on a log equals the
     harness's run of the same C (so a user can check the C without Python)."""
-    from vsegen.harness.build import load_estimator
-    from vsegen.harness.logs import write_log
-    from vsegen.harness.scenarios import Case
+    from vsegen.harness.host.build import load_estimator
+    from vsegen.harness.logs.table import write_log
+    from vsegen.harness.sim.scenarios import Case
     from vsegen.model.estimators import build
 
     _require("make")
@@ -308,7 +310,7 @@ def test_a_guarded_step_runs_no_hold_rule_work_on_an_active_sample(vehicle_text)
     """kf2dof without its monitors: the active kernel has no select (no ``?:``: the holds of
     rejected inputs and the hold rule's choices between held and updated values are gone) and
     does not read the holding flag; the held kernel computes no Kalman update (no division)."""
-    from vsegen.harness.vehicles import with_settings
+    from vsegen.harness.project.vehicles import with_settings
     from vsegen.model.params import parse_vehicle
     text = with_settings(vehicle_text, "estimator.kf2dof", residual_window=0.0, linear_range=0.0)
     config = parse_vehicle(text, "c_class.toml", "c_class")

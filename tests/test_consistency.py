@@ -1,4 +1,4 @@
-"""The consistency monitor (model.consistency) and the "never silently wrong" rule (harness.score)."""
+"""The consistency monitor (model.consistency) and the "never silently wrong" rule (harness.score.metrics.metrics)."""
 
 from __future__ import annotations
 
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from locations import VEHICLES
 
-from vsegen.harness.build import compile_estimator
-from vsegen.harness.logs import Log
-from vsegen.harness.run import run_estimator
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.score import SILENT_DURATION, silent_error_time
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.host.build import compile_estimator
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.model import consistency
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.status import BEYOND_LINEAR_RANGE, DEAD_RECKONING, MODEL_INCONSISTENT

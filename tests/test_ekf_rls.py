@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import scipy.signal
 
-from vsegen.harness.build import compile_estimator
-from vsegen.harness.scenarios import Case
+from vsegen.harness.host.build import compile_estimator
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model import filters, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.estimators import ekf_rls

@@ -10,13 +10,13 @@ import pytest
 from locations import DEFAULT_VEHICLE, VEHICLES
 
 from vsegen.codegen.generate import render
-from vsegen.harness.build import compile_estimator, load_estimator
-from vsegen.harness.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
+from vsegen.harness.host.build import compile_estimator, load_estimator
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import kf2dof as reference
-from vsegen.harness.reference.run import run_reference
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.vehicles import load_vehicle
-from vsegen.harness.verify import verify, verify_estimator
+from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.verify.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
+from vsegen.harness.verify.equivalence import verify, verify_estimator
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.params import parse_vehicle
 from vsegen.model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
@@ -153,6 +153,6 @@ def test_ekf_rls_rounding_gain_follows_its_stiffness_rate(config):
 
 
 def test_reference_never_imports_casadi():
-    code = ("import sys; import harness.reference, harness.reference.run; "
+    code = ("import sys; import harness.reference, harness.reference.loop; "
             "assert 'casadi' not in sys.modules, 'casadi imported'")
     subprocess.run([sys.executable, "-c", code], check=True)

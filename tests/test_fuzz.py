@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from vsegen.codegen.generate import render
-from vsegen.harness.fuzz import fuzz_estimator
 from vsegen.harness.reference import blocks
 from vsegen.harness.reference import kf2dof as reference
+from vsegen.harness.verify.fuzz import fuzz_estimator
 from vsegen.model.estimators import DEFINITIONS
 
 STEPS = 1_000_000

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from vsegen.harness.build import compile_estimator
+from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.reference import kf2dof as reference
 from vsegen.model import status
 

@@ -15,9 +15,9 @@ from scipy.signal import lsim
 from vsegen.harness.cli import main
 from vsegen.harness.identify import identify
 from vsegen.harness.identify.vehicle_file import identified_vehicle_file
-from vsegen.harness.logs import TRUTH, Log, write_log
-from vsegen.harness.scenarios import Case
-from vsegen.harness.vehicles import load_vehicle, with_settings
+from vsegen.harness.logs.table import TRUTH, Log, write_log
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.estimators import underived_warning
 from vsegen.model.params import parse_vehicle

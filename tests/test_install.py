@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 from locations import REPO
 
-from vsegen.harness.channels import read_channel_map
-from vsegen.harness.paths import Project, ProjectError, project
-from vsegen.harness.starter import MAPPED_BY_DEFAULT, StarterError, init_project
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.logs.channels import read_channel_map
+from vsegen.harness.project.paths import Project, ProjectError, project
+from vsegen.harness.project.starter import MAPPED_BY_DEFAULT, StarterError, init_project
+from vsegen.harness.project.vehicles import load_vehicle
 
 
 @pytest.fixture(scope="module")
@@ -31,8 +31,11 @@ def test_the_wheel_installs_everything_under_one_vsegen_namespace(wheel):
     names = zipfile.ZipFile(wheel).namelist()
     top = {name.split("/")[0] for name in names}
     assert {t for t in top if not t.endswith(".dist-info")} == {"vsegen"}
-    for needed in ("vsegen/harness/cli.py", "vsegen/model/estimators/kf2dof.py", "vsegen/codegen/templates/step.c.j2",
-                   "vsegen/codegen/misra_baseline.json", "vsegen/harness/runner.c.j2", "vsegen/vehicles/c_class.toml"):
+    for needed in ("vsegen/harness/cli/__init__.py", "vsegen/model/estimators/kf2dof.py",
+                   "vsegen/codegen/templates/step.c.j2", "vsegen/harness/target/misra_baseline.json",
+                   "vsegen/harness/host/runner.c.j2", "vsegen/harness/verify/fuzz.c.j2",
+                   "vsegen/harness/target/pil_main.c.j2", "vsegen/harness/target/boards/mps2.ld",
+                   "vsegen/vehicles/c_class.toml"):
         assert needed in names
 
 

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from vsegen.codegen.generate import render, write
+from vsegen.codegen.generate import render
+from vsegen.harness.project.files import write_folder as write
 
 ARM = shutil.which("arm-none-eabi-gcc")
 

@@ -1,6 +1,8 @@
-"""The import layers: model -> codegen -> harness -> bench (each may import only the layers before
-it), and the NumPy reference imports neither CasADi nor the symbolic model nor the code generator,
-so it stays an independent check of both."""
+"""The import contract. Layers: model -> codegen -> harness -> bench, each importing only the layers
+before it. Inside harness, the stages of the flow in order: each stage (a sub-package) imports
+only itself and the stages before it. The NumPy reference imports neither CasADi nor the symbolic
+model nor the code generator, so it stays an independent check of both. harness/ has no module at
+its top level but its ``__init__``."""
 
 from __future__ import annotations
 
@@ -11,40 +13,70 @@ import pytest
 from locations import REPO
 
 LAYERS = ("model", "codegen", "harness", "bench")
+STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "identify", "tune", "verify",
+          "target", "cli")
+"""harness's stages in flow order: the NumPy reference first (it imports nothing of harness), then
+the project's files, job pools, logs, the truth simulation, the host build, scoring, identification,
+tuning, verification, the target stage and the command line on top."""
 REFERENCE = Path("harness") / "reference"
 NOT_IN_REFERENCE = ("casadi", "model", "codegen")
 
 
-def layer(module: str) -> str:
-    """The layer or top-level package of ``module``: "model" for vsegen.model.params."""
-    return module.removeprefix("vsegen.").split(".")[0]
-
-
-def imported_packages(path: Path) -> set[str]:
-    """Layers and top-level packages of every module ``path`` imports (absolute imports)."""
+def imported_modules(path: Path) -> set[str]:
+    """Every module ``path`` imports by absolute name, with the ``vsegen.`` prefix removed."""
     names = set()
     for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
-            names.update(layer(alias.name) for alias in node.names)
+            names.update(alias.name.removeprefix("vsegen.") for alias in node.names)
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            names.add(layer(node.module))
+            module = node.module.removeprefix("vsegen.")
+            names.add(module)
+            if module in ("harness",):              # from vsegen.harness import cli
+                names.update(f"{module}.{alias.name}" for alias in node.names)
     return names
 
 
-def sources(layer: str) -> list[Path]:
-    return sorted((REPO / layer).rglob("*.py"))
+def layer(module: str) -> str:
+    """The layer or top-level package of ``module``: "model" for model.params."""
+    return module.split(".")[0]
 
 
-@pytest.mark.parametrize("layer", LAYERS)
-def test_a_layer_imports_only_the_layers_before_it(layer):
-    later = set(LAYERS[LAYERS.index(layer) + 1:])
-    offences = {str(path.relative_to(REPO)): sorted(imported_packages(path) & later)
-                for path in sources(layer)}
+def stage(module: str) -> str | None:
+    """The harness stage of ``module`` ("logs" for harness.logs.mdf), None outside harness."""
+    parts = module.split(".")
+    return parts[1] if parts[0] == "harness" and len(parts) > 1 else None
+
+
+def sources(folder: str) -> list[Path]:
+    return sorted((REPO / folder).rglob("*.py"))
+
+
+@pytest.mark.parametrize("name", LAYERS)
+def test_a_layer_imports_only_the_layers_before_it(name):
+    later = set(LAYERS[LAYERS.index(name) + 1:])
+    offences = {str(path.relative_to(REPO)): sorted({layer(m) for m in imported_modules(path)} & later)
+                for path in sources(name)}
     assert {k: v for k, v in offences.items() if v} == {}
 
 
+@pytest.mark.parametrize("name", STAGES)
+def test_a_stage_imports_only_itself_and_the_stages_before_it(name):
+    allowed = set(STAGES[:STAGES.index(name) + 1])
+    offences = {str(path.relative_to(REPO)): sorted({stage(m) for m in imported_modules(path)} - allowed - {None})
+                for path in sources(f"harness/{name}")}
+    assert {k: v for k, v in offences.items() if v} == {}
+
+
+def test_every_harness_module_belongs_to_a_stage():
+    top_level = sorted(p.name for p in (REPO / "harness").iterdir() if p.suffix == ".py" and p.name != "__init__.py")
+    packages = sorted(p.name for p in (REPO / "harness").iterdir() if (p / "__init__.py").is_file())
+    assert top_level == []
+    assert packages == sorted(STAGES)
+
+
 def test_the_reference_imports_neither_casadi_nor_the_model():
-    offences = {str(path.relative_to(REPO)): sorted(imported_packages(path) & set(NOT_IN_REFERENCE))
+    offences = {str(path.relative_to(REPO)): sorted({layer(m) for m in imported_modules(path)}
+                                                    & set(NOT_IN_REFERENCE))
                 for path in sorted((REPO / REFERENCE).rglob("*.py"))}
     assert {k: v for k, v in offences.items() if v} == {}
 
@@ -52,5 +84,8 @@ def test_the_reference_imports_neither_casadi_nor_the_model():
 def test_the_check_sees_an_offending_import(tmp_path):
     offender = tmp_path / "bad.py"
     offender.write_text("import numpy as np\nfrom casadi import SX\nimport model.params\n"
-                        "from . import sibling\nfrom vsegen.codegen import kernel\n")
-    assert imported_packages(offender) == {"numpy", "casadi", "model", "codegen"}
+                        "from . import sibling\nfrom vsegen.codegen import kernel\n"
+                        "from vsegen.harness.cli.common import UserError\nfrom vsegen.harness import tune\n")
+    modules = imported_modules(offender)
+    assert {layer(m) for m in modules} == {"numpy", "casadi", "model", "codegen", "harness"}
+    assert {stage(m) for m in modules} - {None} == {"cli", "tune"}

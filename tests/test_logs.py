@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vsegen.harness.logs import LogError, read_log, write_log
-from vsegen.harness.scenarios import Case
+from vsegen.harness.logs.table import LogError, read_log, write_log
+from vsegen.harness.sim.scenarios import Case
 
 
 def test_round_trip_is_exact(tmp_path, config):
@@ -109,7 +109,7 @@ def test_compressed_logs_are_read_by_their_suffix(tmp_path, suffix, compress):
 def test_written_files_get_the_mode_the_umask_allows(tmp_path):
     import os
 
-    from vsegen.harness.logs import Log
+    from vsegen.harness.logs.table import Log
 
     previous = os.umask(0o022)
     try:

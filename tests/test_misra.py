@@ -10,7 +10,7 @@ from collections import Counter
 import pytest
 
 from vsegen.codegen.generate import render
-from vsegen.harness import misra
+from vsegen.harness.target import misra
 
 
 @pytest.fixture(scope="module")

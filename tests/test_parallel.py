@@ -8,27 +8,28 @@ import numpy as np
 import pytest
 from rich.console import Console
 
-from vsegen.harness import parallel
-from vsegen.harness.parallel import WorkerCountError, Workers, worker_count
-from vsegen.harness.progress import RunProgress
-from vsegen.harness.scenarios import Case, log_cache
-from vsegen.harness.vehicles import load_vehicle
-from vsegen.harness.verify import verify
+from vsegen.harness.jobs import pool as parallel
+from vsegen.harness.jobs.memo import clear_all
+from vsegen.harness.jobs.pool import ProcessPool, WorkerCountError, worker_count
+from vsegen.harness.jobs.progress import RunProgress
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.sim import log_cache
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.verify.equivalence import verify
 
 CASE = Case.of("step_steer", duration=2.0)
 
 
 @pytest.fixture
-def empty_cache(tmp_path, monkeypatch):
+def empty_cache(tmp_path, monkeypatch, cleared_memos):
     monkeypatch.setenv("VSEGEN_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
     return tmp_path / "cache" / "logs"
 
 
 def test_a_simulated_log_is_stored_once_and_read_back_exactly(config, empty_cache, monkeypatch):
     first = CASE.simulate(config, 100.0, seed=3)
     (entry,) = empty_cache.glob("*.npz")
-    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
+    clear_all()
     monkeypatch.setattr(Case, "_simulate", lambda *args: pytest.fail("simulated again"))
     again = CASE.simulate(config, 100.0, seed=3)
     assert list(again.columns) == list(first.columns) and again.notes == first.notes
@@ -54,7 +55,7 @@ def test_a_damaged_entry_is_simulated_again(config, empty_cache, monkeypatch):
     first = CASE.simulate(config, 100.0, seed=4)
     (entry,) = empty_cache.glob("*.npz")
     entry.write_bytes(b"not a zip file")
-    monkeypatch.setattr("vsegen.harness.scenarios._MEMO", {})
+    clear_all()
     again = CASE.simulate(config, 100.0, seed=4)
     np.testing.assert_array_equal(again["ay"], first["ay"])
     assert entry.read_bytes()[:2] == b"PK"
@@ -70,9 +71,9 @@ def test_a_vehicle_configuration_pickles_to_an_equal_one(config):
 def test_workers_return_what_the_serial_run_returns_in_job_order(config):
     cases = (CASE, Case.of("sine_steer", duration=2.0))
     jobs = ("kf2dof", "switching")
-    serial = verify(config, jobs, cases, workers=Workers(1))
+    serial = verify(config, jobs, cases, workers=ProcessPool(1))
     finished = []
-    with Workers(2) as pool:
+    with ProcessPool(2) as pool:
         spread = verify(config, jobs, cases, workers=pool, on_done=finished.append)
     assert [(r.estimator, r.case) for r in spread] == [(r.estimator, r.case) for r in serial]
     assert sorted(id(r) for r in finished) == sorted(id(r) for r in spread)
@@ -88,8 +89,8 @@ def test_worker_count_comes_from_the_environment(monkeypatch):
 
 
 def test_few_jobs_run_in_this_process(monkeypatch):
-    monkeypatch.setattr(Workers, "_executor", lambda self: pytest.fail("started a pool"))
-    with Workers(2) as pool:
+    monkeypatch.setattr(ProcessPool, "_started", lambda self: pytest.fail("started a pool"))
+    with ProcessPool(2) as pool:
         assert pool.map(pow, [(2, 3)] * (parallel.MIN_PARALLEL_JOBS - 1)) == [8, 8, 8]
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.model.params import ParameterError, parse_vehicle
 
 
@@ -92,7 +92,7 @@ def test_other_sample_time(config):
 
 
 def test_with_settings_edits_one_table_only(vehicle_text):
-    from vsegen.harness.vehicles import with_settings
+    from vsegen.harness.project.vehicles import with_settings
 
     text = with_settings(vehicle_text, "estimator.switching", threshold=2.0, prefilter="bessel")
     config = parse_vehicle(text, "variant.toml", "c_class")

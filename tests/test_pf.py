@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from vsegen.harness import verify
-from vsegen.harness.build import compile_estimator
+from vsegen.harness.host.build import compile_estimator
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import REFERENCES, normals
+from vsegen.harness.reference.loop import run_reference
 from vsegen.harness.reference.particle import _resample
 from vsegen.harness.reference.pcg32 import MASK, MULTIPLIER, Stream
-from vsegen.harness.reference.run import run_reference
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.vehicles import load_vehicle
-from vsegen.harness.verify import _flip_sets, prepared, verify_estimator
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.verify import equivalence as verify
+from vsegen.harness.verify.equivalence import _flip_sets, prepared, verify_estimator
 from vsegen.model import status
 from vsegen.model import ziggurat as zig
 from vsegen.model.estimators import build, pf
@@ -417,8 +417,8 @@ def test_the_beta_output_and_the_speed_rule(config):
 
 def test_speeds_are_scored_against_the_truth(config):
     """``vsegen score`` reports v_x as well as v_y and beta for an estimator that gives them."""
-    from vsegen.harness.run import run_estimator
-    from vsegen.harness.score import score
+    from vsegen.harness.host.run_log import run_estimator
+    from vsegen.harness.score.metrics import score
 
     log = Case.of("dlc", speed_kmh=80.0).simulate(config, 100.0, 1)
     scores = {s.signal: s for s in score(log, run_estimator(config, pf.IMPROVED, log))}

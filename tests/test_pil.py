@@ -14,10 +14,10 @@ import pytest
 from locations import DEFAULT_VEHICLE, REPO
 
 from vsegen.codegen.generate import render
-from vsegen.harness import pil
-from vsegen.harness.scenarios import VERIFICATION_SET
-from vsegen.harness.vehicles import load_vehicle, with_settings
-from vsegen.harness.verify import against_reference, case_inputs, prepared
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.harness.target import emulator as pil
+from vsegen.harness.verify.equivalence import against_reference, case_inputs, prepared
 from vsegen.model.params import parse_vehicle
 
 pytestmark = pytest.mark.skipif(bool(pil.available()), reason=pil.available() or "")

@@ -8,11 +8,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from vsegen.harness.plant import tyre
-from vsegen.harness.plant.two_track import INPUT, STATE, build_plant, equations
 from vsegen.harness.reference import blocks
-from vsegen.harness.scenarios.driver import SpeedHold
-from vsegen.harness.scenarios.simulate import simulate
+from vsegen.harness.sim import tyre
+from vsegen.harness.sim.driver import SpeedHold
+from vsegen.harness.sim.simulate import simulate
+from vsegen.harness.sim.two_track import INPUT, STATE, build_plant, equations
 
 RATE = 100.0
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from locations import VEHICLES
 
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import LONG_DOUBLE, REFERENCES
-from vsegen.harness.vehicles import load_vehicle
 from vsegen.model.estimators import DEFINITIONS, MODULES, SCHEMAS, build
 
 

@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vsegen.harness.logs import REQUIRED, TRUTH
-from vsegen.harness.plant.two_track import GRAVITY
-from vsegen.harness.scenarios import SCENARIOS, Case, ScenarioError, parse_option, sensors
+from vsegen.harness.logs.table import REQUIRED, TRUTH
+from vsegen.harness.sim import sensor_model as sensors
+from vsegen.harness.sim.scenarios import SCENARIOS, Case, ScenarioError, parse_option
+from vsegen.harness.sim.two_track import GRAVITY
 
 STABLE_NAMES = {"dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook"}
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from vsegen.harness.logs import LogError, read_log
+from vsegen.harness.logs.table import LogError, read_log
 from vsegen.model import signals
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.guard import LIMIT_KEYS

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from vsegen.codegen.generate import render
-from vsegen.harness.build import compile_estimator, load_estimator
-from vsegen.harness.scenarios import Case
+from vsegen.harness.host.build import compile_estimator, load_estimator
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model import status
 from vsegen.model.calibration import baked
 from vsegen.model.estimators import build
@@ -99,7 +99,7 @@ def test_reference_time_out_and_low_speed(config, estimator, compiled):
 def test_roll_compensation_recovers_the_cg_acceleration(config, estimator, compiled, vehicle_text):
     """With the car's roll gradient the prefiltered a_y matches vx r in a steady turn; with 0
     (the paper's literal a_y) it carries the gravity component of body roll."""
-    from vsegen.harness.vehicles import with_settings
+    from vsegen.harness.project.vehicles import with_settings
     from vsegen.model.params import parse_vehicle
 
     literal = parse_vehicle(with_settings(vehicle_text, "estimator.switching", roll_gradient=0.0),
@@ -127,7 +127,7 @@ def switching_signal(est, states):
 
 
 def with_option(vehicle_text, key, value, table="switching"):
-    from vsegen.harness.vehicles import with_settings
+    from vsegen.harness.project.vehicles import with_settings
     from vsegen.model.params import parse_vehicle
 
     config = parse_vehicle(with_settings(vehicle_text, f"estimator.{table}", **{key: value}),
@@ -150,7 +150,7 @@ def test_options_are_equivalent_to_the_reference(vehicle_text, params, table, ke
     """A7/A10 beyond the paper, and the yaw-rate check the shipped file does not use: the C matches
     the reference step by step and in the mode sequence, on the HIL-like scenario, the continuous
     DLC and the fishhook (the yaw-rate check rejects samples there)."""
-    from vsegen.harness.verify import verify_estimator
+    from vsegen.harness.verify.equivalence import verify_estimator
 
     config = with_option(vehicle_text, key, value, table)
     cases = (Case.of("hil_sine", duration=20.0), Case.of("continuous_dlc"), Case.of("fishhook"))
@@ -165,7 +165,7 @@ def test_options_are_equivalent_to_the_reference(vehicle_text, params, table, ke
 def test_options_are_equivalent_to_the_reference_in_float(vehicle_text, table, key, value):
     """The same options in float (and calibratable float): the C matches the reference within the
     float tolerance."""
-    from vsegen.harness.verify import verify_estimator
+    from vsegen.harness.verify.equivalence import verify_estimator
 
     config = with_option(vehicle_text, key, value, table)
     cases = (Case.of("continuous_dlc"), Case.of("fishhook", bias=True))
@@ -196,7 +196,7 @@ def test_the_yaw_acceleration_check_keeps_genuine_samples_at_the_limit(vehicle_t
 def test_the_kinematic_dwell_bound_is_equivalent_to_the_reference_in_every_form(vehicle_text, real, params):
     """Beyond the paper: with kinematic_max_dwell the C matches the reference, including the samples
     where the bound hands over to the KF (step steer and fishhook hold |a_y| above the threshold)."""
-    from vsegen.harness.verify import verify_estimator
+    from vsegen.harness.verify.equivalence import verify_estimator
 
     config = with_option(vehicle_text, "kinematic_max_dwell", 1.0)
     for result in verify_estimator(config, "switching", (Case.of("step_steer"), Case.of("fishhook")),

@@ -15,12 +15,12 @@ import pytest
 from click.testing import CliRunner
 from locations import VEHICLES
 
-from vsegen.harness.build import compile_estimator, load_tuning_estimator
 from vsegen.harness.cli import main
-from vsegen.harness.logs import Log, write_log
-from vsegen.harness.scenarios import Case
-from vsegen.harness.tuning import dimensions, tune
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.host.build import compile_estimator, load_tuning_estimator
+from vsegen.harness.logs.table import Log, write_log
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.tune.search import dimensions, tune
 from vsegen.model.calibration import calibration_values
 from vsegen.model.params import parse_vehicle
 

@@ -9,10 +9,10 @@ from click.testing import CliRunner
 from locations import VEHICLES
 
 from vsegen.harness.cli import main
-from vsegen.harness.logs import Log, write_log
-from vsegen.harness.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.unit_sanity import check_units
-from vsegen.harness.vehicles import load_vehicle
+from vsegen.harness.logs.table import Log, write_log
+from vsegen.harness.logs.units import check_units
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 
 MISTAKES = [
     ("r", 57.29578, "column 'r' looks like deg/s"),

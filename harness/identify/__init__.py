@@ -22,7 +22,7 @@ from vsegen.harness.identify.estimates import (
     sensor_offsets_and_noise,
     stability_factor,
 )
-from vsegen.harness.logs import Log
+from vsegen.harness.logs.table import Log
 from vsegen.model.params import VehicleConfig
 
 FALLBACK_NOISE = {"gyro_noise": 0.017453, "ay_noise": 0.3, "ax_noise": 0.3}

@@ -13,9 +13,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from vsegen.harness.identify import segments
 from vsegen.harness.identify.estimates import Z95, Estimate, Refusal, Selection, fit, interval, select
-from vsegen.harness.logs import Log, runs
+from vsegen.harness.logs import segments
+from vsegen.harness.logs.table import Log, runs
 from vsegen.model.bicycle import GRAVITY, stability_factor
 
 SETTLE = 0.5

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from vsegen.harness.identify import Identification
 from vsegen.harness.identify.estimates import Estimate
-from vsegen.harness.vehicles import with_settings
+from vsegen.harness.project.vehicles import with_settings
 from vsegen.model.estimators import DEFINITIONS
 from vsegen.model.params import VehicleConfig, parse_vehicle
 from vsegen.model.schema import rounded

@@ -19,4 +19,4 @@ REFERENCES: dict[str, ModuleType | unscented.Variant | particle.ParticleFilter] 
     "pf_adaptive": particle.ParticleFilter("pf_adaptive", improved=False),
     "pf_improved": particle.ParticleFilter("pf_improved", improved=True)}
 LONG_DOUBLE = frozenset(name for name, ref in REFERENCES.items() if isinstance(ref, unscented.Variant))
-"""References that compute in long double, the unscented filters' (``harness.compare.for_estimator``)."""
+"""References that compute in long double, the unscented filters' (``harness.verify.compare.for_estimator``)."""

@@ -1,0 +1,5 @@
+"""``python -m vsegen.harness.cli``: the vsegen command line."""
+
+from vsegen.harness.cli import main
+
+main()

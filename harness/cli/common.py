@@ -1,0 +1,118 @@
+"""What every ``vsegen`` command shares: one-line user errors (exit status 2), the common options,
+the vehicle and estimator choice, and reading a user's log."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import click
+from rich.console import Console
+
+from vsegen.harness.logs.table import LogError, read_log
+from vsegen.harness.project.paths import ProjectError, project
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.sim.scenarios import ScenarioError
+from vsegen.model.estimators import DEFINITIONS, underived_warning
+from vsegen.model.params import ParameterError, VehicleConfig
+
+console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
+
+
+class UserError(click.ClickException):
+    """One-line error for the user, exit status 2."""
+
+    exit_code = 2
+
+    def show(self, file=None) -> None:
+        click.echo(f"vsegen: error: {self.message}", err=True)
+
+
+def user_errors(command):
+    """Turn the user-facing errors of a command into one line and exit status 2."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except (ParameterError, LogError, ScenarioError, ProjectError) as exc:
+            raise UserError(str(exc)) from None
+
+    return wrapper
+
+
+REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), default=None,
+                           help="C floating-point type. Default: the vehicle file's [codegen] real.")
+PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratable"]), default=None,
+                             help="Parameters as constants or a const calibration struct. "
+                                  "Default: the vehicle file's [codegen] params.")
+def window_options(command):
+    """--from and --to: the part of the log (s, in its own time) to use."""
+    command = click.option("--to", "stop", type=float, default=None, help="Use the log up to this time (s).")(command)
+    return click.option("--from", "start", type=float, default=None, help="Use the log from this time (s).")(command)
+
+
+CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), default=None,
+                               help="Channel map TOML: logger channel names, units and factors of the log columns.")
+UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=True,
+                                 help="Skip the physics check of the log's units (a_y against r v_x, "
+                                      "delta against l r / v_x).")
+VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=None,
+                              help="Vehicle TOML. Default: the project's only vehicle file, else its "
+                                   "vehicles/c_class.toml.")
+
+
+def vehicle_config(path: Path | None) -> VehicleConfig:
+    """The vehicle ``--vehicle`` names, else the project's default one."""
+    return load_vehicle(path or project().default_vehicle())
+
+
+def chosen_estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str]:
+    for name in names:
+        if name not in DEFINITIONS:
+            raise UserError(f"unknown estimator '{name}': expected one of {', '.join(DEFINITIONS)}")
+        if name not in config.estimators:
+            raise UserError(f"{config.source}: no [estimator.{name}] table: expected one to use '{name}'")
+    return list(names) or [n for n in DEFINITIONS if n in config.estimators]
+
+
+def read_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
+              window: tuple[float | None, float | None] = (None, None),
+              unit_check: VehicleConfig | None = None):
+    """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, cut to the
+    time ``window`` (s), saying on stderr (a line each) when it was put on a uniform grid (MDF4
+    channels: at ``sample_time``, a number or a function giving it, called only for MDF4) and where
+    it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the signals' physics is
+    checked for wrong units (``harness.logs.units``)."""
+    from vsegen.harness.logs.channels import read_channel_map
+    from vsegen.harness.logs.mdf import SUFFIXES, read_mdf
+    from vsegen.harness.logs.units import check_units
+
+    mapping = read_channel_map(channels)
+    if path.suffix.lower() in SUFFIXES:
+        log = read_mdf(path, mapping, sample_time() if callable(sample_time) else sample_time)
+    else:
+        log = read_log(path, channels={c.channel: (c.name, c.scale) for c in mapping.columns.values()})
+    for key in ("resampled", "gaps"):
+        if key in log.notes:
+            click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
+    log = log.window(*window)
+    if unit_check is not None:
+        check_units(log, unit_check.vehicle["wheelbase"])
+    return log
+
+
+def warn_underived(config: VehicleConfig, name: str) -> None:
+    """Say (stderr, one line) when ``name``'s car-specific settings were not derived for this car."""
+    warning = underived_warning(config, name)
+    if warning:
+        click.echo(f"vsegen: {warning}", err=True)
+
+
+def display(path: Path) -> str:
+    try:
+        return str(path.resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)

@@ -1,0 +1,93 @@
+"""`vsegen generate`: the C of each estimator into the project's generated/ (or check it is up to date)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from vsegen.codegen import generate as codegen
+from vsegen.harness.cli.common import (
+    PARAMS_OPTION,
+    REAL_OPTION,
+    chosen_estimators,
+    console,
+    display,
+    user_errors,
+    warn_underived,
+)
+from vsegen.harness.project.files import folder_diffs, write_folder
+from vsegen.harness.project.paths import project
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.model.params import VehicleConfig
+
+
+def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
+           params: str | None) -> list[tuple[str, str, str]]:
+    """(real, params, folder name) to generate: the one asked for, or the vehicle file's default
+    and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS)."""
+    chosen = (real or config.codegen["real"], params or config.codegen["params"])
+    if real or params or out.resolve() != project().generated:
+        return [(*chosen, name)]
+    return codegen.forms_to_write(name, chosen)
+
+
+def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
+    """Folders ``out/<vehicle>/<form>`` that no generation produced (e.g. of a removed estimator
+    or vehicle file)."""
+    if not out.is_dir():
+        return []
+    return sorted(folder for vehicle in out.iterdir() if vehicle.is_dir()
+                  for folder in vehicle.iterdir() if folder.is_dir() and folder.resolve() not in expected)
+
+
+def _up_to_date(files: dict[str, str], folder: Path) -> bool:
+    """Whether ``folder`` holds exactly ``files``; prints the diffs if not."""
+    diffs = folder_diffs(files, folder, display(folder))
+    for diff in diffs:
+        click.echo(diff, nl=False)
+    if not diffs:
+        console.print(f"up to date  {display(folder)}")
+    return not diffs
+
+
+@click.command()
+@click.option("--vehicle", "vehicles", multiple=True, type=click.Path(path_type=Path),
+              help="Vehicle TOML (repeatable). Default: every file in the project's vehicles/.")
+@click.option("--estimator", "estimators", multiple=True,
+              help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="Folder that receives <vehicle>/<estimator>/. Default: the project's generated/.")
+@click.option("--check", "check_only", is_flag=True,
+              help="Do not write: compare with --out and print a unified diff of what would change.")
+@REAL_OPTION
+@PARAMS_OPTION
+@user_errors
+def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path | None,
+             check_only: bool, real: str | None, params: str | None) -> None:
+    """Generate the C of each estimator (or check that --out is up to date)."""
+    stale, expected = [], set()
+    out = out or project().generated
+    for path in vehicles or project().required_vehicle_files():
+        config = load_vehicle(path)
+        for name in chosen_estimators(config, estimators):
+            warn_underived(config, name)
+            for form_real, form_params, folder_name in _forms(config, name, out, real, params):
+                folder = out / config.name / folder_name
+                expected.add(folder.resolve())
+                files = codegen.render(config, name, form_real, form_params)
+                if check_only and not _up_to_date(files, folder):
+                    stale.append(display(folder))
+                elif not check_only:
+                    write_folder(files, folder)
+                    console.print(f"generated   {display(folder)}  ({', '.join(sorted(files))})")
+    if check_only and not vehicles and not estimators:   # the whole tree: no folder left over
+        for folder in _stray_folders(out, expected):
+            click.echo(f"vsegen: {display(folder)}: no vehicle file or estimator generates this folder "
+                       f"(remove it)", err=True)
+            stale.append(display(folder))
+    if stale:
+        click.echo(f"vsegen: generated code is stale in {', '.join(stale)}: run `vsegen generate`",
+                   err=True)
+        sys.exit(1)

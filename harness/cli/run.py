@@ -1,0 +1,61 @@
+"""`vsegen run`: an estimator over a log, its estimates written as CSV or MDF4."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from vsegen.harness.cli.common import (
+    CHANNELS_OPTION,
+    UNIT_CHECK_OPTION,
+    VEHICLE_OPTION,
+    chosen_estimators,
+    console,
+    read_user_log,
+    user_errors,
+    vehicle_config,
+    warn_underived,
+    window_options,
+)
+from vsegen.harness.logs.table import write_log
+
+
+@click.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Input log: CSV (plain, .gz, .bz2, .xz) or MDF4 (.mf4, .mdf).")
+@click.option("--estimator", required=True, help="Estimator name.")
+@VEHICLE_OPTION
+@click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
+              help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
+@click.option("--out", type=click.Path(path_type=Path), required=True,
+              help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
+@CHANNELS_OPTION
+@UNIT_CHECK_OPTION
+@window_options
+@user_errors
+def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out: Path, channels: Path | None,
+        no_unit_check: bool, start: float | None, stop: float | None) -> None:
+    """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
+    from vsegen.harness.host.run_log import run_estimator
+
+    config = vehicle_config(vehicle)
+    chosen_estimators(config, (estimator,))
+    warn_underived(config, estimator)
+    log = read_user_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
+    if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
+        click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
+                   f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
+                   f"settings keep their meaning in time); generate for that rate to flash the same code", err=True)
+    with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
+        estimates = run_estimator(config, estimator, log, backend)
+    if out.suffix.lower() == ".mf4":
+        from vsegen.harness.logs.mdf import write_mdf
+
+        write_mdf(estimates, out)
+    else:
+        write_log(estimates, out)
+    flagged = int(np.count_nonzero(estimates["status"]))
+    console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, "
+                  f"{flagged} with status != 0)")

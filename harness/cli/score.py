@@ -1,0 +1,72 @@
+"""`vsegen score` and `vsegen plot`: estimates against the log's ground truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+from rich.table import Table
+
+from vsegen.harness.cli.common import (
+    CHANNELS_OPTION,
+    UserError,
+    console,
+    read_user_log,
+    user_errors,
+    window_options,
+)
+from vsegen.harness.logs.table import read_estimates
+
+
+@click.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Log CSV with ground truth.")
+@click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
+              help="Estimates CSV from `vsegen run`.")
+@CHANNELS_OPTION
+@window_options
+@user_errors
+def score(log_path: Path, est_path: Path, channels: Path | None, start: float | None, stop: float | None) -> None:
+    """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
+    from vsegen.harness.score.metrics import score as compute
+
+    log = read_user_log(log_path, channels, lambda: read_estimates(est_path).sample_time, (start, stop))
+    scores = compute(log, read_estimates(est_path))
+    table = Table(title=f"{est_path} against {log_path}")
+    for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
+        table.add_column(column, justify="left" if column == "signal" else "right")
+    for s in scores:
+        table.add_row(f"{s.signal} ({s.unit})", str(s.samples), f"{s.max:.3f}", f"{s.mean:.3f}",
+                      f"{s.rmse:.3f}")
+    console.print(table)
+    if "off_course" in log and np.any(log["off_course"] > 0):
+        first = log["t"][np.argmax(log["off_course"] > 0)]
+        console.print(f"warning: the run left the course or spun from t = {first:.2f} s "
+                      f"(column off_course); these scores include those samples")
+
+
+@click.command()
+@click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
+              help="Log CSV with ground truth.")
+@click.option("--est", "est_paths", type=click.Path(path_type=Path), multiple=True, required=True,
+              help="Estimates CSV (repeatable).")
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="PNG to write.")
+@CHANNELS_OPTION
+@window_options
+@user_errors
+def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None, start: float | None,
+         stop: float | None) -> None:
+    """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style); without a
+    reference in the log, the estimates and their status."""
+    from vsegen.harness.score.plot import plot as draw
+
+    log = read_user_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time, (start, stop))
+    estimates = {}
+    for path in est_paths:
+        est = read_estimates(path)
+        if len(est) != len(log):
+            raise UserError(f"{path}: {len(est)} samples: expected {len(log)} like {log_path}")
+        estimates[path.stem] = est
+    draw(log, estimates, out, title=log_path.name)
+    console.print(f"wrote {out}")

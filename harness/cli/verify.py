@@ -1,0 +1,95 @@
+"""`vsegen verify`: the generated C against the NumPy reference, step by step, and the difference
+table it shares with `vsegen pil`."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+from rich.table import Table
+
+from vsegen.harness.cli.common import (
+    PARAMS_OPTION,
+    REAL_OPTION,
+    VEHICLE_OPTION,
+    chosen_estimators,
+    console,
+    user_errors,
+    vehicle_config,
+)
+from vsegen.harness.jobs.progress import RunProgress
+from vsegen.harness.sim.scenarios import VERIFICATION_SET
+
+
+@click.command()
+@VEHICLE_OPTION
+@click.option("--estimator", "estimators", multiple=True,
+              help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
+@click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
+@REAL_OPTION
+@PARAMS_OPTION
+@user_errors
+def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
+           params: str | None) -> None:
+    """Compile the generated C and compare it step by step with the NumPy reference."""
+    from vsegen.harness.verify.equivalence import verify as verify_all
+
+    config = vehicle_config(vehicle)
+    real = real or config.codegen["real"]
+    params = params or config.codegen["params"]
+    names = chosen_estimators(config, estimators)
+    with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
+        results = verify_all(config, names, seed=seed, real=real, params=params,
+                             on_done=lambda result: progress.done(result.estimator, result.ok))
+    table = difference_table(f"generated C vs NumPy reference, vehicle {config.name}, "
+                              f"T = {config.sample_time} s, {real}, {params} parameters", results)
+    console.print(table)
+    explain_differences(real, any(r.flips for r in results))
+    failed = [r for r in results if not r.ok]
+    if failed:
+        click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
+        sys.exit(1)
+    console.print(f"verify passed: {len(results)} runs, every output within tolerance")
+
+
+def difference_table(title: str, results, extra_rows=None) -> Table:
+    """The verify table of ``results`` (harness.verify.equivalence.CaseResult); ``extra_rows(i)`` gives more
+    rows (cells) after the ``i``-th result."""
+    table = Table(title=title)
+    for column in ("estimator", "scenario", "samples", "signal", "max |diff|", "max rel diff",
+                   "tolerance", "result"):
+        table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
+    for i, result in enumerate(results):
+        stepwise = () if result.stepwise is result.states else (result.stepwise,)
+        for diff in (*result.outputs, result.states, *stepwise):
+            tolerance = "identical" if diff.integer else f"{diff.tolerance:.0e}"
+            table.add_row(result.estimator, result.case, str(result.samples), diff.name,
+                          f"{diff.max_abs:.2e}", "-" if diff.integer else f"{diff.max_rel:.2e}",
+                          tolerance, "ok" if diff.ok else "FAIL")
+        if result.flips:
+            table.add_row(result.estimator, result.case, str(result.samples),
+                          "resampling flips", str(result.flips), "-", "explained", "ok")
+        for row in (extra_rows(i) if extra_rows else ()):
+            table.add_row(result.estimator, result.case, str(result.samples), *row)
+        table.add_section()
+    return table
+
+
+def explain_differences(real: str, flips: bool) -> None:
+    """The notes under a difference table."""
+    from vsegen.harness.verify.compare import PEAK_FRACTION, TOLERANCES
+    from vsegen.harness.verify.equivalence import FLIP_MARGIN
+
+    tolerance = TOLERANCES[real]
+    console.print(f"relative difference = |c - ref| / max(|c|, |ref|, {tolerance.floor:g} x the "
+                  f"signal's scale, {PEAK_FRACTION:g} x peak |signal|); tolerance "
+                  f"{tolerance.relative:.0e} for {real}, wider where an estimator amplifies its "
+                  "reference's rounding (the unscented filters, ekf_rls's stiffness rate, "
+                  "arx_dual_kf's random-walk parameters; column 'tolerance'; harness/compare.py)")
+    if flips:
+        console.print("resampling flips: steps of a float particle filter whose resampling chose "
+                      "another particle than the reference because a point lay within float "
+                      f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; each matches the "
+                      "reference's step with that point moved across the weight (every step is "
+                      "checked from the C's own state)")

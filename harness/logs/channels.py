@@ -1,0 +1,102 @@
+"""Channel maps: which logger channel holds which log column, in which unit.
+
+A channel map is a TOML file with one table per log column (docs/conventions.md):
+
+    [columns.delta]
+    channel = "SteerWhlAng"   # the logger's channel name
+    unit = "deg"              # from UNITS; converted to the column's SI unit
+    factor = 0.0625           # optional, applied first (e.g. 1 / steering ratio)
+
+A column the map does not name is read from a channel of its own name, in SI units. Units must
+match the column's kind (an angle for delta, a speed for vx, ...): a map that gives km/h for the
+yaw rate is refused in one line.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from vsegen.harness.logs.table import LogError
+from vsegen.harness.project.files import read_user_text
+from vsegen.model import signals
+
+UNITS: dict[str, tuple[str, float]] = {
+    "rad": ("angle", 1.0), "deg": ("angle", math.pi / 180.0),
+    "m/s": ("speed", 1.0), "km/h": ("speed", 1.0 / 3.6), "mph": ("speed", 0.44704),
+    "rad/s": ("angular rate", 1.0), "deg/s": ("angular rate", math.pi / 180.0),
+    "rpm": ("angular rate", 2.0 * math.pi / 60.0),
+    "m/s^2": ("acceleration", 1.0), "g": ("acceleration", 9.80665),
+    "N*m": ("moment", 1.0), "-": ("ratio", 1.0),
+}
+"""The unit vocabulary: name -> (kind, factor to the kind's SI unit)."""
+SI_KIND = {"rad": "angle", "m/s": "speed", "rad/s": "angular rate", "m/s^2": "acceleration",
+           "N*m": "moment", "-": "ratio"}
+COLUMNS = signals.LOG_COLUMN_UNITS
+
+
+@dataclass(frozen=True)
+class Column:
+    """Where one log column comes from."""
+
+    name: str
+    channel: str
+    scale: float
+    """Multiplies the channel's values: factor x the unit's factor to SI."""
+
+
+@dataclass(frozen=True)
+class ChannelMap:
+    columns: dict[str, Column]
+    source: str = "<default>"
+
+    def column(self, name: str) -> Column:
+        """The map's entry for ``name``, or a channel of that name in SI units."""
+        return self.columns.get(name, Column(name, name, 1.0))
+
+
+def read_channel_map(path: Path | None) -> ChannelMap:
+    """The channel map in ``path`` (None: every column from a channel of its own name, SI units);
+    LogError with one line (file, line, key, expected) on a mistake."""
+    if path is None:
+        return ChannelMap({})
+    text = read_user_text(path, LogError, "channel map (TOML)")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise LogError(f"{path}: not valid TOML: {exc}") from None
+    unknown = set(data) - {"columns"}
+    if unknown:
+        raise LogError(f"{path}: unknown table [{sorted(unknown)[0]}]: expected only [columns.<name>] tables")
+    columns = {}
+    for name, entry in data.get("columns", {}).items():
+        where = f"{path}:{_line(text, name)}: [columns.{name}]"
+        if name not in COLUMNS:
+            raise LogError(f"{where}: unknown column: expected one of {', '.join(COLUMNS)}")
+        if not isinstance(entry, dict) or not isinstance(entry.get("channel"), str) or not entry["channel"]:
+            raise LogError(f"{where} channel: expected the logger's channel name as a string")
+        extra = set(entry) - {"channel", "unit", "factor"}
+        if extra:
+            raise LogError(f"{where} {sorted(extra)[0]}: unknown key: expected channel, unit, factor")
+        unit = entry.get("unit", COLUMNS[name])
+        if unit not in UNITS:
+            raise LogError(f"{where} unit = {unit!r}: expected one of {', '.join(UNITS)}")
+        kind, to_si = UNITS[unit]
+        if kind != SI_KIND[COLUMNS[name]]:
+            raise LogError(f"{where} unit = {unit!r}: expected a unit of {SI_KIND[COLUMNS[name]]} "
+                           f"(the column is in {COLUMNS[name]})")
+        factor = entry.get("factor", 1.0)
+        if isinstance(factor, bool) or not isinstance(factor, (int, float)) or not math.isfinite(factor) \
+                or factor == 0:
+            raise LogError(f"{where} factor = {factor!r}: expected a finite non-zero number")
+        columns[name] = Column(name, entry["channel"], float(factor) * to_si)
+    return ChannelMap(columns, str(path))
+
+
+def _line(text: str, name: str) -> int:
+    for number, line in enumerate(text.splitlines(), start=1):
+        if line.strip().replace(" ", "") == f"[columns.{name}]":
+            return number
+    return 1

@@ -1,0 +1,1 @@
+"""The score stage: estimates against ground truth (tables and plots)."""

@@ -1,0 +1,90 @@
+"""Accuracy of estimates against ground truth, in the format of seed 000's Table 3.
+
+e = estimate - truth over the samples that have ground truth; max |e|, mean |e| and RMSE.
+Reports show beta and r in degrees (deg, deg/s), vx and vy in m/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, LogError
+
+SIGNALS = (  # estimate column, truth column, report unit, factor from SI
+    ("beta", "beta_ref", "deg", 180.0 / np.pi),
+    ("vx", "vx_ref", "m/s", 1.0),
+    ("vy", "vy_ref", "m/s", 1.0),
+    ("r", "r_ref", "deg/s", 180.0 / np.pi),
+)
+
+
+@dataclass(frozen=True)
+class Score:
+    signal: str
+    unit: str
+    samples: int
+    max: float
+    mean: float
+    rmse: float
+
+
+def errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """e over the samples where both are finite."""
+    keep = np.isfinite(estimate) & np.isfinite(truth)
+    return estimate[keep] - truth[keep]
+
+
+def score(log: Log, estimates: Log) -> list[Score]:
+    """Scores of every estimated signal that has ground truth in ``log``."""
+    if len(log) != len(estimates) or not np.allclose(log["t"], estimates["t"], rtol=0, atol=1e-9):
+        raise LogError(f"{estimates.source}:2: column 't': expected the same time stamps as "
+                       f"{log.source} ({len(log)} samples)")
+    if "beta_ref" not in log:
+        raise LogError(f"{log.source}:1: missing column 'beta_ref': expected ground truth to score")
+    scores = []
+    for name, truth, unit, factor in SIGNALS:
+        if name in estimates and truth in log:
+            e = errors(estimates[name], log[truth]) * factor
+            if e.size:
+                scores.append(Score(name, unit, e.size, float(np.abs(e).max()),
+                                    float(np.abs(e).mean()), float(np.sqrt(np.mean(e * e)))))
+    return scores
+
+
+SILENT_LIMIT = np.deg2rad(2.0)
+"""rad: a sideslip error beyond this must be flagged by the status ("never silently wrong")."""
+SILENT_DURATION = 0.5
+"""s: the longest an error beyond :data:`SILENT_LIMIT` may last with status 0."""
+
+
+def silent_error_time(log: Log, estimates: Log, limit: float = SILENT_LIMIT) -> tuple[float, float]:
+    """(longest stretch, its start) in s of consecutive samples with |beta - beta_ref| > ``limit``
+    (rad) and status 0, before the car spins (|beta_ref| > 15 deg from then on is not scored): the
+    "never silently wrong" rule asks this to stay within :data:`SILENT_DURATION`. A sample with a
+    non-finite estimate counts as wrong."""
+    spun = np.maximum.accumulate(np.abs(log["beta_ref"]) > SPIN_SIDESLIP)
+    error = np.abs(estimates["beta"] - log["beta_ref"])
+    silent = (~(error <= limit)) & (estimates["status"] == 0) & ~spun
+    longest, start, run_start = 0.0, float("nan"), None
+    t = log["t"]
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    for k, bad in enumerate(np.append(silent, False)):
+        if bad and run_start is None:
+            run_start = k
+        elif not bad and run_start is not None:
+            length = t[k - 1] - t[run_start] + step
+            if length > longest:
+                longest, start = length, float(t[run_start])
+            run_start = None
+    return longest, start
+
+
+def score_case(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:
+    """(the run's notes, per estimator its scores against the truth) of scenario ``case``
+    (``harness.sim.scenarios.Case``) with sensor-noise ``seed``, each estimator's generated C run over
+    the log: one job of a Monte-Carlo sweep on the cluster (workers need only vsegen installed)."""
+    log = case.simulate(config, 1.0 / config.sample_time, seed)
+    return dict(log.notes), {name: score(log, run_estimator(config, name, log)) for name in names}

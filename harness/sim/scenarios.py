@@ -1,0 +1,137 @@
+"""Scenarios: named manoeuvres that produce logs (harness.logs.table.Log) with ground truth.
+
+``SCENARIOS[name]`` has a ``simulate(config, rate_hz, seed, **options)`` and the defaults of its
+options; the names are stable (scripts rely on them). ``VERIFICATION_SET`` is the list of
+(scenario, options) every estimator is checked on by ``vsegen verify``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from vsegen.harness.jobs.memo import Memo
+from vsegen.harness.logs.table import Log
+from vsegen.harness.sim import manoeuvres
+from vsegen.harness.sim.log_cache import cached_log, log_key
+from vsegen.model.params import ParameterError, VehicleConfig
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    description: str
+    simulate: Callable[..., Log]
+    defaults: dict[str, Any] = field(default_factory=dict)
+
+
+_NOISE = {"bias": False}
+SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
+    Scenario("dlc", "ISO 3888-1 double lane change, path-following driver, speed held",
+             manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False, **_NOISE,
+                              "yaw_moment": 0.0}),
+    Scenario("continuous_dlc", "seed 000: three DLCs back to back, friction 0.85 -> 0.5 -> 0.35",
+             manoeuvres.continuous_dlc,
+             {"speed_kmh": 120.0, "mu_sequence": "0.85,0.5,0.35", "switch_times": "9,18",
+              "switch_by": "time", "duration": 30.0, "outliers": False, **_NOISE,
+              "yaw_moment": 0.0}),
+    Scenario("step_steer", "seed 001: front wheels stepped to 0.05 rad, speed held",
+             manoeuvres.step_steer, {"speed_kmh": 80.0, "mu": 1.0, "delta": 0.05, "t_step": 1.0,
+                                     "duration": 6.0, **_NOISE}),
+    Scenario("sine_steer", "seed 003: sinusoidal steering, speed held", manoeuvres.sine_steer,
+             {"speed_kmh": 80.0, "mu": 1.0, "amplitude": 0.02, "frequency": 0.5, "duration": 10.0,
+              **_NOISE, "yaw_moment": 0.0}),
+    Scenario("fishhook", "seed 002: NHTSA-style fishhook", manoeuvres.fishhook,
+             {"speed_kmh": 96.0, "mu": 0.8, "amplitude": 0.06, "duration": 7.0, **_NOISE}),
+    Scenario("hil_sine", "seed 000 HIL-like: pedal held (vx rising from 12.5 m/s), sine steering "
+             "of growing amplitude", manoeuvres.hil_sine,
+             {"mu": 0.85, "v_start": 12.5, "v_end": 30.0, "speed_tau": 15.0, "frequency": 0.25,
+              "ay_start": 0.1, "ay_end": 0.7, "duration": 40.0, "outliers": False, **_NOISE}),
+    Scenario("low_speed", "slow down to a stop, reverse briefly, drive off again (low-speed hold)",
+             manoeuvres.low_speed),
+    Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range samples in every input",
+             manoeuvres.invalid_inputs),
+)}
+
+
+class ScenarioError(ValueError):
+    """An unknown scenario or option; the message is one line."""
+
+
+def parse_option(scenario: str, text: str) -> tuple[str, Any]:
+    """``key=value`` for ``scenario``, typed like the option's default."""
+    defaults = SCENARIOS[scenario].defaults
+    key, sep, value = text.partition("=")
+    if not sep or key not in defaults:
+        known = ", ".join(f"{k}={v}" for k, v in defaults.items()) or "none"
+        raise ScenarioError(f"scenario '{scenario}': unknown option '{text}': expected key=value "
+                            f"with a key of: {known}")
+    default = defaults[key]
+    try:
+        if isinstance(default, bool):
+            if value.lower() not in ("true", "false", "1", "0", "yes", "no"):
+                raise ValueError
+            return key, value.lower() in ("true", "1", "yes")
+        return key, type(default)(value)
+    except ValueError:
+        raise ScenarioError(f"scenario '{scenario}': option {key} = {value!r}: expected a "
+                            f"{type(default).__name__} like {default!r}") from None
+
+
+@dataclass(frozen=True)
+class Case:
+    """One scenario with its options, as verified and scored."""
+
+    scenario: str
+    options: tuple[tuple[str, Any], ...] = ()
+
+    @staticmethod
+    def of(scenario: str, **options: Any) -> Case:
+        return Case(scenario, tuple(sorted(options.items())))
+
+    @property
+    def label(self) -> str:
+        text = ",".join(f"{k}={v}" for k, v in self.options)
+        return f"{self.scenario}({text})" if text else self.scenario
+
+    def simulate(self, config: VehicleConfig, rate_hz: float, seed: int = 1,
+                 progress: Callable[[float], None] | None = None) -> Log:
+        """The log of this case, simulated once per truth car, rate and seed: memoised in
+        memory and kept on disk (``harness.sim.log_cache``); each call gets its own copy."""
+        scenario = SCENARIOS[self.scenario]
+        options = {**scenario.defaults, **dict(self.options)}
+        key = log_key(config, self.scenario, options, rate_hz, seed)
+        log = LOGS.get(key, lambda: cached_log(key, lambda: self._simulate(config, rate_hz, seed, progress)))
+        return Log({k: v.copy() for k, v in log.columns.items()}, log.source, dict(log.notes))
+
+    def _simulate(self, config, rate_hz, seed, progress) -> Log:
+        scenario = SCENARIOS[self.scenario]
+        try:
+            return scenario.simulate(config, rate_hz, seed, progress=progress,
+                                     **{**scenario.defaults, **dict(self.options)})
+        except ValueError as exc:
+            if isinstance(exc, (ScenarioError, ParameterError)):
+                raise
+            raise ScenarioError(f"scenario {self.label}: {exc}") from None
+
+
+LOGS = Memo(size=64)
+"""Simulated logs of this process by cache key."""
+
+
+VERIFICATION_SET: tuple[Case, ...] = (
+    Case.of("dlc", speed_kmh=80.0),
+    Case.of("dlc", speed_kmh=120.0),
+    Case.of("dlc", speed_kmh=120.0, outliers=True),
+    Case.of("continuous_dlc"),
+    Case.of("step_steer"),
+    Case.of("sine_steer"),
+    Case.of("fishhook"),
+    Case.of("dlc", speed_kmh=120.0, mu=0.5),
+    Case.of("hil_sine", mu=0.85),
+    Case.of("dlc", speed_kmh=80.0, yaw_moment=1000.0),
+    Case.of("sine_steer", yaw_moment=1000.0),
+    Case.of("low_speed"),
+    Case.of("invalid_inputs"),
+)

@@ -1,0 +1,148 @@
+"""MISRA C:2012 findings of generated code (cppcheck's MISRA addon), their justifications, and the
+baseline the count must not exceed.
+
+What the templates and shims control is fixed (see codegen/kernel.py and the templates); what
+remains comes from CasADi's code generator or from public-API declarations, and each rule left has
+a justification below. ``vsegen misra`` writes the deviation report (docs/misra.md) and, with
+``--update-baseline``, the baseline; the tests fail when a count grows or a rule has no
+justification. The kernel source is checked in its double, baked form (:func:`estimator_findings`).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import tempfile
+from collections import Counter
+from pathlib import Path
+
+from vsegen.codegen.generate import EXAMPLE
+
+BASELINE = Path(__file__).resolve().with_name("misra_baseline.json")
+
+JUSTIFICATIONS = {
+    "misra-c2012-2.4": "The anonymous enum of state indices in the public header is for the "
+                       "application; the library itself does not use it.",
+    "misra-c2012-2.5": "Public macros (status bits, sample time, vector sizes, parameter hash) are "
+                       "declared for the application and are not used inside the library.",
+    "misra-c2012-10.3": "CasADi's straight-line code assigns comparison results (exact 0/1) and the "
+                        "constant 0 to casadi_real temporaries; every such value is exact in the "
+                        "real type.",
+    "misra-c2012-12.3": "CasADi declares its temporaries in one declaration (casadi_real a0, a1, ...), "
+                        "which the checker reports as a comma operator; none is evaluated.",
+    "misra-c2012-20.10": "CasADi's symbol-prefix macro (CASADI_PREFIX) pastes tokens with ##; its "
+                         "expansion is fixed and reviewed (the prefixed names in the kernel).",
+}
+_FINDING = re.compile(r"^(?P<file>[^:]+):\d+:\d+: (?P<rule>[\w.-]+)$")
+
+
+def findings(files: dict[str, str]) -> Counter:
+    """Counter of (file, rule) for the library files of one generated folder."""
+    names = sorted(n for n in files if n.endswith((".c", ".h")) and n != EXAMPLE)
+    with tempfile.TemporaryDirectory(prefix="vsegen-misra-") as tmp:
+        for name in names:
+            (Path(tmp) / name).write_text(files[name])
+        result = subprocess.run(
+            ["cppcheck", "--addon=misra", "--std=c99", "--quiet",
+             "--template={file}:{line}:{column}: {id}", *names],
+            cwd=tmp, capture_output=True, text=True)
+    counts: Counter = Counter()
+    for line in (result.stdout + result.stderr).splitlines():
+        match = _FINDING.match(line.strip())
+        if match:
+            counts[(match["file"], match["rule"])] += 1
+    return counts
+
+
+VARIANTS = (("double", "baked"), ("double", "calibratable"), ("float", "baked"),
+            ("float", "calibratable"))
+"""Every generated form of an estimator; the first is the one whose kernel source is checked."""
+
+
+def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
+    """(form, findings) for every form of estimator ``name``: all library files of the first
+    form, and the template files (with the kernel's header) of the others. The kernel sources of
+    the other forms differ only in literal types and the parameter vector, and cppcheck needs
+    about a minute for each of the unscented filters' kernels."""
+    from vsegen.codegen.generate import render
+
+    results = []
+    for index, (real, params) in enumerate(VARIANTS):
+        files = render(config, name, real, params)
+        if index:
+            files = {n: t for n, t in files.items() if n != f"vse_{name}_kernel.c"}
+        results.append((f"{real}, {params}", findings(files)))
+    return results
+
+
+def distinct_code(estimators: list[tuple]) -> list[tuple]:
+    """The (config, name) pairs whose code can differ in structure: the first of each estimator
+    and set of choice settings (strings, e.g. discretisation or longitudinal_force). Two vehicles
+    with the same choices generate the same statements with other numbers, which MISRA does not
+    judge differently; checking both only doubled the scan."""
+    seen, kept = set(), []
+    for config, name in estimators:
+        choices = tuple(sorted((k, v) for k, v in config.settings(name).items() if isinstance(v, str)))
+        if (name, choices) not in seen:
+            seen.add((name, choices))
+            kept.append((config, name))
+    return kept
+
+
+def all_findings(estimators: list[tuple]) -> list[list[tuple[str, Counter]]]:
+    """:func:`estimator_findings` of every (config, name) pair, spread over worker processes
+    (cppcheck runs one process per folder)."""
+    from vsegen.harness.jobs.pool import ProcessPool
+
+    with ProcessPool() as workers:
+        return workers.map(estimator_findings, estimators)
+
+
+def by_rule(counts: Counter) -> dict[str, int]:
+    """Total per rule, sorted by rule."""
+    totals: Counter = Counter()
+    for (_, rule), count in counts.items():
+        totals[rule] += count
+    return dict(sorted(totals.items()))
+
+
+def in_source_checkout() -> bool:
+    """Whether the baseline belongs to a vsegen source checkout (it may be updated there only)."""
+    return (BASELINE.parents[2] / "pyproject.toml").is_file()
+
+
+def load_baseline() -> dict[str, int]:
+    return json.loads(BASELINE.read_text())
+
+
+def write_baseline(per_rule: dict[str, int]) -> None:
+    BASELINE.write_text(json.dumps(per_rule, indent=2, sort_keys=True) + "\n")
+
+
+def regressions(per_rule: dict[str, int], baseline: dict[str, int]) -> list[str]:
+    """Rules whose count grew past the baseline, or that have no justification."""
+    problems = [f"{rule}: {count} findings, baseline {baseline.get(rule, 0)}"
+                for rule, count in per_rule.items() if count > baseline.get(rule, 0)]
+    problems += [f"{rule}: no justification in harness/target/misra.py"
+                 for rule in per_rule if rule not in JUSTIFICATIONS]
+    return problems
+
+
+def report(sections: list[tuple[str, Counter]]) -> str:
+    """The deviation report (Markdown): per generated folder, per file and rule, the count and
+    the justification."""
+    lines = ["# MISRA C:2012 deviation report", "",
+             "Generated by `vsegen misra` (cppcheck's MISRA addon on every generated library file; "
+             "the host example is not checked). Every remaining finding is listed with its "
+             "justification; the count per rule may not grow past `codegen/misra_baseline.json` "
+             "(checked by the tests).", ""]
+    for title, counts in sections:
+        lines += [f"## {title}", "", "| file | rule | count | justification |", "|---|---|---|---|"]
+        for (file, rule), count in sorted(counts.items()):
+            lines.append(f"| `{file}` | {rule.removeprefix('misra-c2012-')} | {count} | "
+                         f"{JUSTIFICATIONS.get(rule, '**not justified**')} |")
+        lines += ["", f"Total: {sum(counts.values())} findings, of which "
+                      f"{sum(c for (f, _), c in counts.items() if '_kernel' not in f)} in template "
+                      "code.", ""]
+    return "\n".join(lines)

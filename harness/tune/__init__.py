@@ -1,0 +1,1 @@
+"""The tune stage: an estimator's numeric settings searched on logs with ground truth."""
