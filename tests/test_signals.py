@@ -3,23 +3,23 @@ the guard, the log reader, the vehicle-file schema and the docs all take theirs 
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
 from vsegen.harness.logs.table import LogError, read_log
+from vsegen.harness.project import reference_docs
 from vsegen.model import signals
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.guard import LIMIT_KEYS
 from vsegen.model.schema import INPUT_LIMITS
+from vsegen.model.status import STATUS_BITS
 
-DOCS = Path(__file__).resolve().parents[1] / "docs" / "conventions.md"
 
-
-def test_the_docs_show_the_catalogue():
-    text = DOCS.read_text()
-    assert signals.markdown_table() in text, "regenerate the log table of docs/conventions.md"
-    assert signals.status_table() in text, "regenerate the status table of docs/conventions.md"
+def test_the_signal_page_shows_every_column_and_status_bit():
+    page = reference_docs.signals_page()
+    for name in ("t", *signals.LOG_COLUMN_UNITS):
+        assert f"| `{name}` | " in page
+    for name, (value, meaning) in STATUS_BITS.items():
+        assert f"| {value} | {name} | " in page and meaning.split("|")[0] in page
 
 
 @pytest.mark.parametrize("name", list(DEFINITIONS))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import os
 import shutil
 import subprocess
@@ -19,3 +20,28 @@ def test_ruff_is_clean():
     result = subprocess.run([ruff, "check", "--no-cache", "."], cwd=REPO, capture_output=True,
                             text=True)
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+LONGEST_FUNCTION = 80
+"""Lines a function of model/, codegen/ or harness/ may have at most: a longer one is split into its
+sections (as the estimators' builders are: initialisation, prediction, update, monitors)."""
+
+
+def long_functions(path) -> list[str]:
+    """``name (lines)`` of every function in ``path`` longer than LONGEST_FUNCTION lines."""
+    tree = ast.parse(path.read_text(), str(path))
+    return [f"{node.name} ({node.end_lineno - node.lineno + 1})" for node in ast.walk(tree)
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and node.end_lineno - node.lineno + 1 > LONGEST_FUNCTION]
+
+
+def test_no_function_is_longer_than_80_lines():
+    found = {str(path.relative_to(REPO)): long_functions(path)
+             for folder in ("model", "codegen", "harness") for path in sorted((REPO / folder).rglob("*.py"))}
+    assert {k: v for k, v in found.items() if v} == {}
+
+
+def test_the_length_check_sees_a_long_function(tmp_path):
+    path = tmp_path / "long.py"
+    path.write_text("def short():\n    pass\n\n\ndef long():\n" + "    x = 1\n" * LONGEST_FUNCTION)
+    assert long_functions(path) == [f"long ({LONGEST_FUNCTION + 1})"]

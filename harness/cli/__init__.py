@@ -18,7 +18,7 @@ def main() -> None:
     """vsegen: vehicle state estimators, from CasADi to standalone C, proven equal to NumPy."""
 
 
-for command in (project.init, project.list_, simulate.simulate, identify.identify, tune.tune, generate.generate,
-                verify.verify, run.run, score.score, score.plot, target.pil_command, target.size, target.misra,
-                target.a2l):
+for command in (project.init, project.list_, project.docs, simulate.simulate, identify.identify, tune.tune,
+                generate.generate, verify.verify, run.run, score.score, score.plot, target.pil_command,
+                target.size, target.misra, target.a2l):
     main.add_command(command)

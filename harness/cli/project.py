@@ -1,7 +1,9 @@
-"""`vsegen init` (a starter project for the user's own car) and `vsegen list`."""
+"""`vsegen init` (a starter project for the user's own car), `vsegen list` and `vsegen docs` (the
+reference pages generated from the code)."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -12,6 +14,8 @@ from vsegen.harness.cli.common import (
     display,
     user_errors,
 )
+from vsegen.harness.project import reference_docs
+from vsegen.harness.project.files import file_diff, write_text_atomic
 from vsegen.harness.project.paths import project, shipped_vehicle_names
 from vsegen.harness.sim.scenarios import SCENARIOS
 from vsegen.model.estimators import DEFINITIONS
@@ -51,3 +55,28 @@ def list_() -> None:
     else:
         console.print(f"vehicles:   none in this project ({display(project().vehicles)}); shipped with vsegen: "
                       f"{', '.join(shipped_vehicle_names())} (`vsegen init DIR` starts a project)")
+
+
+@click.command()
+@click.option("--out", type=click.Path(path_type=Path), default=None,
+              help="Folder to write the pages into. Default: the project's docs/.")
+@click.option("--check", "check_only", is_flag=True,
+              help="Do not write: compare with --out and print a unified diff of what would change.")
+@user_errors
+def docs(out: Path | None, check_only: bool) -> None:
+    """Write the reference pages generated from the code: vehicle-file.md (every key, unit, default,
+    check and meaning) and signals.md (log columns, status bits)."""
+    out = out or project().reports
+    pages = reference_docs.pages()
+    if check_only:
+        stale = [diff for name, text in pages.items() if (diff := file_diff(out / name, text, display(out / name)))]
+        for diff in stale:
+            click.echo(diff, nl=False)
+        if stale:
+            click.echo(f"vsegen: reference pages are stale in {display(out)}: run `vsegen docs`", err=True)
+            sys.exit(1)
+        console.print(f"up to date  {', '.join(display(out / name) for name in pages)}")
+        return
+    for name, text in pages.items():
+        write_text_atomic(out / name, text)
+        console.print(f"wrote {display(out / name)}")

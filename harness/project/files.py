@@ -80,20 +80,24 @@ def write_folder(files: dict[str, str], folder: Path) -> None:
 
 
 def folder_diffs(files: dict[str, str], folder: Path, label: str) -> list[str]:
-    """Unified diffs between ``folder`` and ``files`` ({name: text}; empty if identical). ``label``
-    names the folder in the diff headers."""
-    diffs = []
+    """Unified diffs between ``folder`` and ``files`` ({name: text}; empty if identical), files of
+    ``folder`` that ``files`` lacks included. ``label`` names the folder in the diff headers."""
     present = {p.name for p in folder.iterdir() if p.is_file()} if folder.is_dir() else set()
-    for name in sorted(set(files) | present):
-        old = (folder / name).read_text() if name in present else ""
-        new = files.get(name, "")
-        if old != new:
-            diffs.append("".join(difflib.unified_diff(
-                old.splitlines(keepends=True), new.splitlines(keepends=True),
-                fromfile=f"{label}/{name}" if name in present else "/dev/null",
-                tofile=f"{label}/{name} (regenerated)" if name in files else "/dev/null",
-            )))
-    return diffs
+    diffs = [file_diff(folder / name, files.get(name), f"{label}/{name}") for name in sorted(set(files) | present)]
+    return [diff for diff in diffs if diff]
+
+
+def file_diff(path: Path, text: str | None, label: str) -> str:
+    """The unified diff from ``path``'s content to ``text`` ('' if equal; ``text`` None: the file
+    should not exist). ``label`` names the file in the diff headers."""
+    old = path.read_text() if path.is_file() else ""
+    new = "" if text is None else text
+    if old == new:
+        return ""
+    return "".join(difflib.unified_diff(
+        old.splitlines(keepends=True), new.splitlines(keepends=True),
+        fromfile=label if path.is_file() else "/dev/null",
+        tofile=f"{label} (regenerated)" if text is not None else "/dev/null"))
 
 
 def _publish(tmp: str, path: Path) -> None:

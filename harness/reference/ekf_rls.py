@@ -117,8 +117,6 @@ def step(config, state, u):
     delta, vx, ax, r = inputs["delta"], inputs["vx"], inputs["ax"], inputs["r"]
     ay = blocks.roll_corrected(inputs["ay"], s["roll_gradient"])
     vx = min(max(vx, s["vx_min"]), config.limits["vx_max"])
-    m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
-    L = a + b
 
     # filtered yaw acceleration s / (tau_d s + 1), Tustin (scipy)
     (b0, b1), (_, a1) = blocks.tustin((1.0, 0.0), (s["derivative_time_constant"], 1.0), T)
@@ -129,47 +127,8 @@ def step(config, state, u):
     xe = np.array([x["beta_ekf"], x["r_ekf"]])
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
-    # the stiffness regression y = A X: forces [21, 22] and loads [23]
-    new = {}
-    regressor = s["stiffness_regressor"]
-    if regressor == "kinematic_slip":  # its own integral method; everything low-passed alike
-        seeded = s["weighting"] == "stiffness_rate" and x["indicator"] <= s["indicator_low"]
-        beta_kin = _integral(x["beta"] if seeded else x["beta_kin"], T, vx, ax, ay, r)
-        share = 1.0 - math.exp(-T / s["derivative_time_constant"])
-        raw = {"ax_f": ax, "ay_f": ay, "r_f": r, "delta_f": delta, "beta_f": beta_kin}
-        new = {"beta_kin": beta_kin, **{k: x[k] + share * (raw[k] - x[k]) for k in raw}}
-        beta_s, r_s, delta_s, ay_s = new["beta_f"], new["r_f"], new["delta_f"], new["ay_f"]
-        r_dot_s = (new["r_f"] - x["r_f"]) / T
-        fl, fr, rl, rr = _loads(v, new["ax_f"], new["ay_f"])
-    else:
-        beta_s, r_s, delta_s, ay_s, r_dot_s = x_pred[0], x_pred[1], delta, ay, r_dot
-        fl, fr, rl, rr = _loads(v, ax, ay)
-    fyf = (b * m * ay_s + iz * r_dot_s) / (L * math.cos(delta_s))
-    fyr = (a * m * ay_s - iz * r_dot_s) / L
-    if regressor == "literal":        # side coefficients (load-proportional split), alpha_eq [18]
-        fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
-              "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
-        y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
-        A = abs(delta - L * r / vx) * np.eye(2)
-    else:                         # per axle: the EKF prior's (B2) or the kinematic slip angles
-        y = np.array([fyf / (fl + fr), fyr / (rl + rr)])
-        A = np.diag([delta_s - beta_s - a * r_s / vx, -beta_s + b * r_s / vx])
-
-    # RLS [30-33]
-    X = np.array([x["c0_1"], x["c0_2"]])
-    P = blocks.unpacked([x[k] for k in RLS_P], 2)
-    if min(abs(A[0, 0]), abs(A[1, 1])) >= s["slip_min"]:
-        tau = s["forgetting_factor"] ** (T / 0.001)
-        K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
-        X = X + K @ (y - A @ X)
-        P = (np.eye(2) - K @ A) @ P / tau
-        P = P * min(1.0, s["rls_covariance_max"] / np.trace(P))
-    c0 = _c0_nominal(v)
-    X = np.clip(X, s["stiffness_min"] * c0, s["stiffness_max"] * c0)
-    if s["stiffness"] == "rls":
-        cf, cr = _axles(s["stiffness_regressor"], X[0], X[1], (fl, fr, rl, rr))
-    else:
-        cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
+    new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
+    X, P, cf, cr = _rls(s, v, T, x, y, A, loads)
 
     # EKF with the previous stiffness [13-15]
     Pe = blocks.unpacked([x[k] for k in EKF_P], 2)
@@ -200,3 +159,54 @@ def step(config, state, u):
             "holding": 0.0}
     return (np.array([new[k] for k in names]),
             np.array([beta, xe[0], beta_int, xe[1], weight, cf, cr, float(status)]))
+
+
+def _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot):
+    """The stiffness regression y = A X: forces [21, 22] and loads [23]. Returns (the kinematic-slip
+    filters' next values, or {}; y; A; the four wheel loads)."""
+    m, iz, a, b = v["mass"], v["yaw_inertia"], v["cg_to_front_axle"], v["cg_to_rear_axle"]
+    L = a + b
+    new = {}
+    regressor = s["stiffness_regressor"]
+    if regressor == "kinematic_slip":  # its own integral method; everything low-passed alike
+        seeded = s["weighting"] == "stiffness_rate" and x["indicator"] <= s["indicator_low"]
+        beta_kin = _integral(x["beta"] if seeded else x["beta_kin"], T, vx, ax, ay, r)
+        share = 1.0 - math.exp(-T / s["derivative_time_constant"])
+        raw = {"ax_f": ax, "ay_f": ay, "r_f": r, "delta_f": delta, "beta_f": beta_kin}
+        new = {"beta_kin": beta_kin, **{k: x[k] + share * (raw[k] - x[k]) for k in raw}}
+        beta_s, r_s, delta_s, ay_s = new["beta_f"], new["r_f"], new["delta_f"], new["ay_f"]
+        r_dot_s = (new["r_f"] - x["r_f"]) / T
+        fl, fr, rl, rr = _loads(v, new["ax_f"], new["ay_f"])
+    else:
+        beta_s, r_s, delta_s, ay_s, r_dot_s = x_pred[0], x_pred[1], delta, ay, r_dot
+        fl, fr, rl, rr = _loads(v, ax, ay)
+    fyf = (b * m * ay_s + iz * r_dot_s) / (L * math.cos(delta_s))
+    fyr = (a * m * ay_s - iz * r_dot_s) / L
+    if regressor == "literal":        # side coefficients (load-proportional split), alpha_eq [18]
+        fy = {"fl": fyf * fl / (fl + fr), "fr": fyf * fr / (fl + fr),
+              "rl": fyr * rl / (rl + rr), "rr": fyr * rr / (rl + rr)}
+        y = np.abs([(fy["fl"] + fy["rl"]) / (fl + rl), (fy["fr"] + fy["rr"]) / (fr + rr)])
+        A = abs(delta - L * r / vx) * np.eye(2)
+    else:                         # per axle: the EKF prior's (B2) or the kinematic slip angles
+        y = np.array([fyf / (fl + fr), fyr / (rl + rr)])
+        A = np.diag([delta_s - beta_s - a * r_s / vx, -beta_s + b * r_s / vx])
+    return new, y, A, (fl, fr, rl, rr)
+
+
+def _rls(s, v, T, x, y, A, loads):
+    """RLS [30-33] on excited samples, clamped to the stiffness band: (X, P, C_f, C_r)."""
+    X = np.array([x["c0_1"], x["c0_2"]])
+    P = blocks.unpacked([x[k] for k in RLS_P], 2)
+    if min(abs(A[0, 0]), abs(A[1, 1])) >= s["slip_min"]:
+        tau = s["forgetting_factor"] ** (T / 0.001)
+        K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
+        X = X + K @ (y - A @ X)
+        P = (np.eye(2) - K @ A) @ P / tau
+        P = P * min(1.0, s["rls_covariance_max"] / np.trace(P))
+    c0 = _c0_nominal(v)
+    X = np.clip(X, s["stiffness_min"] * c0, s["stiffness_max"] * c0)
+    if s["stiffness"] == "rls":
+        cf, cr = _axles(s["stiffness_regressor"], X[0], X[1], loads)
+    else:
+        cf, cr = v["cornering_stiffness_front"], v["cornering_stiffness_rear"]
+    return X, P, cf, cr

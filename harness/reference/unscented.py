@@ -120,18 +120,7 @@ class Variant:
 
         new = {**dict(zip(STATE, X_new)), **dict(zip(COVARIANCE, blocks.packed(P_new)))}
         if self.adaptive:                                                  # (15a), (15b), §2.10
-            f = LD(s["forgetting_factor"])
-            d = (1 - f) / (1 - LD(x["fading"]))
-            q_new = (1 - d) * q + d * (X_new - (mean - q))
-            gain = K @ eps
-            bracket = np.outer(gain, gain) + P_new - spread
-            Q_new = np.diag((1 - d) * Q + d * bracket)
-            if s["noise_safeguard"] == "floor":
-                Q_new = np.maximum(Q_new, 1e-3 * np.array(s["process_noise"], dtype=LD))
-            Q_new = np.minimum(Q_new, np.array(s["process_noise_max"], dtype=LD))
-            new.update({**{f"qmean_{n}": q_new[i] for i, n in enumerate(STATE)},
-                        **{f"qvar_{n}": Q_new[i] for i, n in enumerate(STATE)},
-                        "fading": LD(x["fading"]) * f})
+            new.update(self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps))
         new["holding"] = 0.0
         status |= COVARIANCE_REPAIRED if repaired else 0
         status |= blocks.beyond_linear_range(inputs["ay"], s)
@@ -152,6 +141,21 @@ class Variant:
         return (np.array([new[k] for k in state_names], dtype=float),
                 np.array(output, dtype=float))
 
+
+    @staticmethod
+    def _sage_husa(s, x, q, Q, mean, spread, X_new, P_new, gain) -> dict:
+        """(15a), (15b) with the floor and the cap: the next noise mean, variances and fading."""
+        f = LD(s["forgetting_factor"])
+        d = (1 - f) / (1 - LD(x["fading"]))
+        q_new = (1 - d) * q + d * (X_new - (mean - q))
+        bracket = np.outer(gain, gain) + P_new - spread
+        Q_new = np.diag((1 - d) * Q + d * bracket)
+        if s["noise_safeguard"] == "floor":
+            Q_new = np.maximum(Q_new, 1e-3 * np.array(s["process_noise"], dtype=LD))
+        Q_new = np.minimum(Q_new, np.array(s["process_noise_max"], dtype=LD))
+        return {**{f"qmean_{n}": q_new[i] for i, n in enumerate(STATE)},
+                **{f"qvar_{n}": Q_new[i] for i, n in enumerate(STATE)},
+                "fading": LD(x["fading"]) * f}
 
 def _inverse3(A):
     """Inverse of a 3 x 3 matrix by its adjugate, in the matrix's precision (LAPACK has no

@@ -157,7 +157,7 @@ def build(params: Parameters) -> Estimator:
     theta_names = regressors(params.numeric.settings(NAME))
     n = len(theta_names)
     R, Q = settings["measurement_noise"], settings["model_noise"]
-    P_theta0, Q_theta = parameter_covariances(params)
+    _, Q_theta = parameter_covariances(params)
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
 
     state, s = states.symbols("state")
@@ -212,25 +212,34 @@ def build(params: Parameters) -> Estimator:
     output = outputs.pack({"r": x_n, **{k: theta_out[i] for i, k in enumerate(theta_names)},
                            "gain": gain, "status": code})
 
-    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
-    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
-    theta0 = prior(params, vx0)
-    P0 = kalman.pack_symmetric(ca.SX.eye(2) * R)
-    P_theta0_packed = kalman.pack_symmetric(P_theta0)
-    init_state = states.pack({
-        "x_1": first["r"], "x_2": first["r"],
-        **{k: P0[i] for i, k in enumerate(kalman.packed_names("P", HISTORY))},
-        **{k: theta0[i] for i, k in enumerate(theta_names)},
-        **{k: P_theta0_packed[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
-        "mz_prev": first["mz"],
-        **({"delta_prev": first["delta"]} if n == 4 else {}),
-        "holding": holding,
-    })
+    init_state = _initial_state(params, states, theta_names, u)
     init, step = make_functions(NAME, INPUTS, states, outputs, inputs, state, init_state,
                                 next_state, output, params)
     return Estimator(NAME, "yaw rate from an ARX model with a dual Kalman filter (seed 004)",
                      INPUTS, states, outputs, init, SingleStep(step), params,
                      notes(params), rounding_gain=PARAMETER_WALK_GAIN)
+
+
+def _initial_state(params: Parameters, states: Layout, theta_names: tuple[str, ...], u: dict) -> ca.SX:
+    """The state at the first sample: both history entries at r_0 with P = R I, the parameters at
+    their prior for v_x,0 with P_theta,0, the previous inputs at sample 0."""
+    config = params.config
+    settings = config.settings(NAME)
+    vx_min = settings["vx_min"]
+    first, holding = first_sample(u, config.limits, vx_min, settings["vx_resume"])
+    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
+    theta0 = prior(params, vx0)
+    P0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["measurement_noise"])
+    P_theta0_packed = kalman.pack_symmetric(parameter_covariances(params)[0])
+    return states.pack({
+        "x_1": first["r"], "x_2": first["r"],
+        **{k: P0[i] for i, k in enumerate(kalman.packed_names("P", HISTORY))},
+        **{k: theta0[i] for i, k in enumerate(theta_names)},
+        **{k: P_theta0_packed[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
+        "mz_prev": first["mz"],
+        **({"delta_prev": first["delta"]} if len(theta_names) == 4 else {}),
+        "holding": holding,
+    })
 
 
 def notes(params: Parameters) -> dict[str, str]:

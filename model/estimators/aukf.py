@@ -29,7 +29,8 @@ X(t_0) = [26.6667, 0, ...] is its test speed), P_0, q_0 = 0, Q_0 from the vehicl
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from typing import Any
 
 import casadi as ca
 
@@ -222,67 +223,123 @@ def build_plain(params: Parameters) -> Estimator:
     return _build(params, PLAIN_NAME, adaptive=False)
 
 
+@dataclass(frozen=True)
+class _Symbols:
+    """What every section of one build reads: the layouts, the symbols and the input guard."""
+
+    params: Parameters
+    name: str
+    adaptive: bool
+    settings: Any
+    inputs_layout: Layout
+    states: Layout
+    outputs: Layout
+    state: ca.SX
+    kept: dict
+    inputs: ca.SX
+    u: dict
+    guard: Any
+    monitored: bool
+
+
+@dataclass(frozen=True)
+class _Filter:
+    """The filter's values at the start of a step: the state entries ``s`` (after a low-speed
+    restart), the estimate x, its covariance P and the process-noise mean q and variances Q."""
+
+    s: dict
+    x: ca.SX
+    P: ca.SX
+    q: ca.SX
+    Q: ca.SX
+
+
 def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     config = params.config
     settings = config.settings(name)
-    inputs_layout, states, outputs = layouts(params.numeric.settings(name), adaptive,
-                                             params.numeric.vehicle)
-    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
-    weights = unscented.Weights(N, settings["ut_alpha"], settings["ut_beta"], settings["ut_kappa"])
-    model = process_model(params, name)
-    Q0 = ca.vertcat(*settings["process_noise"])
-    R = ca.diag(ca.vertcat(*settings["measurement_noise"]))
-    H = ca.SX.zeros(3, N)
-    for row, column in enumerate(MEASURED):
-        H[row, column] = 1
-
-    monitored = consistency.enabled(params.numeric.settings(name))
+    inputs_layout, states, outputs = layouts(params.numeric.settings(name), adaptive, params.numeric.vehicle)
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
-    guard = input_guard(u, config.limits, vx_min, vx_resume, kept["holding"])
-    active = guard.active
+    sym = _Symbols(params, name, adaptive, settings, inputs_layout, states, outputs, state, kept, inputs, u,
+                   input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["holding"]),
+                   consistency.enabled(params.numeric.settings(name)))
+    init_state = _initial_state(sym)
+    start = _restarted_after_low_speed(sym, init_state)
+    return _step(sym, init_state, start)
 
-    # ---- initialisation -------------------------------------------------------------------------
-    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
-    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
+
+def _initial_state(sym: _Symbols) -> ca.SX:
+    """The state at the first sample: [vx_0, 0, ...], P_0, q_0 = 0, Q_0, the monitor at rest."""
+    config, settings = sym.params.config, sym.settings
+    first, holding = first_sample(sym.u, config.limits, settings["vx_min"], settings["vx_resume"])
+    vx0 = ca.fmin(ca.fmax(first["vx"], settings["vx_min"]), config.limits["vx_max"])
+    Q0 = ca.vertcat(*settings["process_noise"])
     P0 = settings["initial_covariance"]
-    init_state = states.pack({
+    return sym.states.pack({
         "u": vx0, **{n: ca.SX(0) for n in X_NAMES[1:]},
         **dict(zip(COVARIANCE, ca.vertsplit(kalman.pack_symmetric(ca.diag(ca.vertcat(*P0)))))),
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
-            "fading": ca.SX(settings["forgetting_factor"])} if adaptive else {}),
-        **consistency.initial_entries(monitored),
+            "fading": ca.SX(settings["forgetting_factor"])} if sym.adaptive else {}),
+        **consistency.initial_entries(sym.monitored),
         "holding": 2 * holding,
     })
-    # the first sample after a low-speed hold (holding = 2) restarts the filter from itself
-    start = ca.if_else(kept["holding"] > 1.5, init_state, state)
-    s = {name: start[i] for i, name in enumerate(states.names)}
+
+
+def _restarted_after_low_speed(sym: _Symbols, init_state: ca.SX) -> _Filter:
+    """The filter this step starts from: the first sample after a low-speed hold (holding = 2)
+    restarts the filter from itself, any other continues from the state."""
+    start = ca.if_else(sym.kept["holding"] > 1.5, init_state, sym.state)
+    s = {name: start[i] for i, name in enumerate(sym.states.names)}
     x = ca.vertcat(*[s[n] for n in X_NAMES])
     P = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in COVARIANCE]), N)
-    if adaptive:
+    if sym.adaptive:
         q = ca.vertcat(*[s[f"qmean_{n}"] for n in X_NAMES])
         Q = ca.vertcat(*[s[f"qvar_{n}"] for n in X_NAMES])
     else:
-        q, Q = ca.SX.zeros(N), Q0
+        q, Q = ca.SX.zeros(N), ca.vertcat(*sym.settings["process_noise"])
+    return _Filter(s, x, P, q, Q)
+
+
+def _step(sym: _Symbols, init_state: ca.SX, f: _Filter) -> Estimator:
+    """Prediction (10)-(12), update (13)-(14), Sage-Husa (15a)-(15b), monitors, the estimator."""
+    params, name, settings, u, active = sym.params, sym.name, sym.settings, sym.u, sym.guard.active
+    config = params.config
+    model = process_model(params, name)
+    weights = unscented.Weights(N, settings["ut_alpha"], settings["ut_beta"], settings["ut_kappa"])
 
     # ---- prediction (10)-(12): inputs are used only while active, so hold them harmlessly -------
     delta = hold(u["delta"], active, 0)
     cos_delta, sin_delta = ca.cos(delta), ca.sin(delta)
     wheels = [hold(u[n], active, 0) * config.vehicle["wheel_radius"]
               for n in signals.WHEEL_SPEEDS] if model.wheel_speeds else None
-    L, repaired = unscented.cholesky_repaired(P)
+    L, repaired = unscented.cholesky_repaired(f.P)
     offsets = unscented.sigma_offsets(L, weights)
-    shared = ca.vertcat(x, delta, cos_delta, sin_delta, *(wheels or []))
+    shared = ca.vertcat(f.x, delta, cos_delta, sin_delta, *(wheels or []))
     each = pair_function(model, name, params)
     results = ca.SX.sym("pairs", 2 * N * N)            # per pair of points: odd, even (N each)
     pairs = [(results[2 * N * k:2 * N * k + N], results[2 * N * k + N:2 * N * (k + 1)])
              for k in range(N)]
-    centre = ca.vertcat(*model.step([x[i] for i in range(N)], delta, cos_delta, sin_delta, wheels))
+    centre = ca.vertcat(*model.step([f.x[i] for i in range(N)], delta, cos_delta, sin_delta, wheels))
     propagated, spread = unscented.statistics(centre, pairs, weights)
-    x_pred = propagated + q
+    x_pred = propagated + f.q
 
-    # ---- update (13)-(14) -------------------------------------------------------------------------
+    x_new, P_new, innovation, correction = _update(settings, u, active, x_pred, spread, f.Q)
+    extra = _sage_husa(sym, f, propagated, spread, x_new, P_new, correction) if sym.adaptive else {}
+    next_state, output = _finish(sym, init_state, f, x_new, P_new, innovation, repaired, extra)
+    repeated, next_state, output = make_repeated(name, sym.state, sym.inputs, offsets, shared, each,
+                                                 results, ca.cse(next_state), ca.cse(output), params)
+    init, step = make_functions(name, sym.inputs_layout, sym.states, sym.outputs, sym.inputs, sym.state,
+                                init_state, next_state, output, params)
+    return _estimator(sym, init, replace(repeated, step=step))
+
+
+def _update(settings, u, active, x_pred: ca.SX, spread: ca.SX, Q: ca.SX):
+    """Measurement update (13)-(14): (x, P, prior innovation, correction K innovation)."""
+    R = ca.diag(ca.vertcat(*settings["measurement_noise"]))
+    H = ca.SX.zeros(3, N)
+    for row, column in enumerate(MEASURED):
+        H[row, column] = 1
     z = ca.vertcat(hold(u["ax"], active, 0),
                    roll_corrected(hold(u["ay"], active, 0), settings["roll_gradient"]),
                    hold(u["r"], active, 0))
@@ -296,39 +353,46 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     # a sum of positive semi-definite terms, with none of the cancellation of the printed form
     I_KH = ca.SX.eye(N) - ca.mtimes(K, H)
     P_new = ca.mtimes([I_KH, spread, I_KH.T]) + ca.mtimes([K, R, K.T]) + ca.diag(Q)
+    return x_new, P_new, innovation, correction
 
-    # ---- Sage-Husa (15a)-(15b) --------------------------------------------------------------------
-    extra = {}
-    if adaptive:
-        f = settings["forgetting_factor"]
-        d = (1 - f) / (1 - s["fading"])
-        q_new = (1 - d) * q + d * (x_new - propagated)
-        bracket = correction * correction + ca.diag(P_new) - ca.diag(spread)
-        Q_new = (1 - d) * Q + d * bracket
-        if params.numeric.settings(name)["noise_safeguard"] == "floor":
-            Q_new = ca.fmax(Q_new, Q_FLOOR * Q0)
-        Q_new = ca.fmin(Q_new, ca.vertcat(*settings["process_noise_max"]))
-        extra = {**{f"qmean_{n}": q_new[i] for i, n in enumerate(X_NAMES)},
-                 **{f"qvar_{n}": Q_new[i] for i, n in enumerate(X_NAMES)},
-                 "fading": s["fading"] * f}
+
+def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, correction) -> dict:
+    """Sage-Husa (15a)-(15b): the next noise mean and variances (floored, capped) and fading."""
+    settings = sym.settings
+    forgetting = settings["forgetting_factor"]
+    d = (1 - forgetting) / (1 - f.s["fading"])
+    q_new = (1 - d) * f.q + d * (x_new - propagated)
+    bracket = correction * correction + ca.diag(P_new) - ca.diag(spread)
+    Q_new = (1 - d) * f.Q + d * bracket
+    if sym.params.numeric.settings(sym.name)["noise_safeguard"] == "floor":
+        Q_new = ca.fmax(Q_new, Q_FLOOR * ca.vertcat(*settings["process_noise"]))
+    Q_new = ca.fmin(Q_new, ca.vertcat(*settings["process_noise_max"]))
+    return {**{f"qmean_{n}": q_new[i] for i, n in enumerate(X_NAMES)},
+            **{f"qvar_{n}": Q_new[i] for i, n in enumerate(X_NAMES)},
+            "fading": f.s["fading"] * forgetting}
+
+
+def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, repaired, extra: dict):
+    """(next state, output): the update, the hold, or a restart (beyond the spec: the innovation
+    monitor's first firing or an estimate outside the plausible envelope), and the status."""
+    settings, u, guard, kept, states = sym.settings, sym.u, sym.guard, sym.kept, sym.states
+    active = guard.active
 
     def keep(value, key):
         return ca.if_else(active, value, kept[key])
 
-    # beyond the spec: a monitor of the innovations; the sample it first fires restarts the filter
     suspect = rising = ca.SX(0)
-    if monitored:
-        check = consistency.monitor(s, innovation, settings, config.sample_time)
+    if sym.monitored:
+        check = consistency.monitor(f.s, innovation, settings, sym.params.config.sample_time)
         suspect = ca.logic_and(active, check.suspect)
         rising = ca.logic_and(active, check.first)
-        extra.update(check.updates)
-
+        extra = {**extra, **check.updates}
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, "holding": ca.SX(0)})
     held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
     restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
-                           **({e.name: extra[e.name] for e in consistency.STATES} if monitored else {}),
+                           **({e.name: extra[e.name] for e in consistency.STATES} if sym.monitored else {}),
                            "holding": ca.SX(0)})
     restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), rising))
     x_out = ca.if_else(restarted, restart[:N], x_new)
@@ -337,31 +401,30 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
             + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
             + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
                          status.BEYOND_LINEAR_RANGE, 0))
-    output = outputs.pack({
+    output = sym.outputs.pack({
         "beta": ca.if_else(active, ca.atan2(x_out[1], x_out[0]), 0),
         **{out: keep(x_out[X_NAMES.index(n)], n) for out, n in
            (("vx", "u"), ("vy", "v"), ("r", "gamma"), ("yaw_moment", "moment"), ("ax", "ax"),
             ("ay", "ay"))},
         "status": code,
     })
-
-    # beyond the spec: an estimate outside the plausible envelope restarts the filter here
     next_state = ca.if_else(active, ca.if_else(restarted, restart, updated), held)
-    repeated, next_state, output = make_repeated(name, state, inputs, offsets, shared, each,
-                                                 results, ca.cse(next_state), ca.cse(output), params)
-    init, step = make_functions(name, inputs_layout, states, outputs, inputs, state, init_state,
-                                next_state, output, params)
-    variant = "adaptive UKF (Sage-Husa process noise)" if adaptive else "UKF"
-    numeric = params.numeric.settings(name)
+    return next_state, output
+
+
+def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:
+    """The Estimator with its description and the UT weights it reports."""
+    variant = "adaptive UKF (Sage-Husa process noise)" if sym.adaptive else "UKF"
+    numeric = sym.params.numeric.settings(sym.name)
     ut = unscented.Weights(N, numeric["ut_alpha"], numeric["ut_beta"], numeric["ut_kappa"])
-    return Estimator(name, f"speeds, yaw rate and sideslip: {variant} on the 3-DOF HSRI model "
-                           "(seed 002)", inputs_layout, states, outputs, init, replace(repeated, step=step),
-                     params,
+    return Estimator(sym.name, f"speeds, yaw rate and sideslip: {variant} on the 3-DOF HSRI model "
+                               "(seed 002)", sym.inputs_layout, sym.states, sym.outputs, init, repeated,
+                     sym.params,
                      {"longitudinal_force": numeric["longitudinal_force"],
                       "sigma_points": f"{2 * N + 1}, weights W_m0 = {ut.mean0:.7g}, "
                                       f"W_i = {ut.other:.7g}; the C propagates the {N} pairs "
                                       "in a loop"},
-                     rounding_gain=rounding_gain(ut, params.numeric, name))
+                     rounding_gain=rounding_gain(ut, sym.params.numeric, sym.name))
 
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}

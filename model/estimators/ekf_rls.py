@@ -35,6 +35,7 @@ Hold rule (model.guard): while not active every state is kept and beta = 0.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import casadi as ca
 
@@ -281,51 +282,92 @@ def kinematic_slip_signals(s, T, time_constant, seed_from_fused, vx, ax, ay, r_m
     return {"beta_kin": beta_kin, **{n: s[n] + share * (value - s[n]) for n, value in raw.items()}}
 
 
+@dataclass(frozen=True)
+class _Measured:
+    """One sample's inputs as the filters use them: held where implausible, a_y roll-corrected,
+    v_x clamped to [vx_min, vx_max]."""
+
+    delta: ca.SX
+    ax: ca.SX
+    ay: ca.SX
+    r: ca.SX
+    vx: ca.SX
+
+
+@dataclass(frozen=True)
+class _Stiffness:
+    """The stiffness section's results: the filtered yaw acceleration, the EKF model f and its
+    Jacobian at the previous stiffness, the kinematic-slip filters' next values (regressor
+    "kinematic_slip" only), the RLS's next estimate and covariance and the axle stiffnesses."""
+
+    r_dot: ca.SX
+    f: ca.SX
+    jacobian: ca.SX
+    kinematic: dict
+    X_next: ca.SX
+    P_rls_next: ca.SX
+    c_front: ca.SX
+    c_rear: ca.SX
+
+
 def build(params: Parameters) -> Estimator:
     """The ekf_rls estimator ([vehicle], [inputs], [estimator.ekf_rls])."""
     config = params.config
-    vehicle, T = config.vehicle, config.sample_time
-    settings = config.settings(NAME)
-    choices = params.numeric.settings(NAME)
-    regressor = choices["stiffness_regressor"]
+    settings, choices = config.settings(NAME), params.numeric.settings(NAME)
     layout = states(choices)
-    monitored = consistency.enabled(choices)
-    vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
-    c_front_nom = vehicle["cornering_stiffness_front"]
-    c_rear_nom = vehicle["cornering_stiffness_rear"]
-    c0_nom = nominal_c0(vehicle)
-    d1, d2 = settings["indicator_low"], settings["indicator_high"]
-
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    guard, decisions = symbolic(input_guard(u, config.limits, vx_min, vx_resume, s["holding"]))
-    ok, active = guard.plausible, guard.active
+    guard, decisions = symbolic(input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
+                                            s["holding"]))
+    ok = guard.plausible
     delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
-    ay = roll_corrected(ay_measured, settings["roll_gradient"])
+    vx_min = settings["vx_min"]
     vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
+    measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
+    stiffness = _stiffness(config, settings, choices, s, measured)
+    ekf = _ekf(config, settings, s, stiffness, measured.r)
+    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf)
+    init_state = _initial_state(config, settings, choices, layout, u, stiffness.kinematic)
+    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
+                                   next_state, output, params, decisions)
+    per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
+    return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
+                           "method by the stiffness rate (seed 001)",
+                     INPUTS, layout, OUTPUTS, init, structure, params,
+                     notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
+                            "stiffness_regressor": choices["stiffness_regressor"],
+                            "forgetting_factor_per_sample": f"{per_sample:.6g}"},
+                     rounding_gain=rounding_gain(params.numeric.vehicle, choices,
+                                                 params.numeric.sample_time))
 
-    # ---- stiffness: filtered r_dot, forces, loads, RLS ------------------------------------------
+
+def _stiffness(config, settings, choices, s: dict, m: _Measured) -> _Stiffness:
+    """Filtered r_dot, the axle forces' regression (per ``stiffness_regressor``), wheel loads and
+    the RLS update of the load-normalised stiffness, excited samples only, clamped."""
+    vehicle, T = config.vehicle, config.sample_time
+    regressor = choices["stiffness_regressor"]
+    c0_nom = nominal_c0(vehicle)
     n_dot, d_dot = filters.tustin_derivative(settings["derivative_time_constant"], T)
-    r_dot = n_dot * (r_m - s["r_last"]) - d_dot * s["r_dot"]
+    r_dot = n_dot * (m.r - s["r_last"]) - d_dot * s["r_dot"]
     x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
-    f, jacobian = ekf_model(vehicle, x, delta, vx, s["c_front"], s["c_rear"])
+    f, jacobian = ekf_model(vehicle, x, m.delta, m.vx, s["c_front"], s["c_rear"])
     kinematic = {}
     if regressor == "kinematic_slip":
-        seed_from_fused = s["indicator"] <= d1 if choices["weighting"] == "stiffness_rate" else 0
+        seed_from_fused = s["indicator"] <= settings["indicator_low"] if choices["weighting"] == "stiffness_rate" else 0
         kinematic = kinematic_slip_signals(s, T, settings["derivative_time_constant"],
-                                           seed_from_fused, vx, ax, ay, r_m, delta)
+                                           seed_from_fused, m.vx, m.ax, m.ay, m.r, m.delta)
         loads = wheel_loads(vehicle, kinematic["ax_f"], kinematic["ay_f"])
-        y, A, excitation = axle_regression(vehicle, kinematic["delta_f"], vx, kinematic["ay_f"],
+        y, A, excitation = axle_regression(vehicle, kinematic["delta_f"], m.vx, kinematic["ay_f"],
                                            kinematic["r_f"], (kinematic["r_f"] - s["r_f"]) / T,
                                            kinematic["beta_f"], loads)
     elif regressor == "ekf_slip":
-        loads = wheel_loads(vehicle, ax, ay)
+        loads = wheel_loads(vehicle, m.ax, m.ay)
         prior = x + T * f
-        y, A, excitation = axle_regression(vehicle, delta, vx, ay, prior[1], r_dot, prior[0],
+        y, A, excitation = axle_regression(vehicle, m.delta, m.vx, m.ay, prior[1], r_dot, prior[0],
                                            loads)
     else:
-        loads = wheel_loads(vehicle, ax, ay)
-        y, A, excitation = side_regression(vehicle, delta, vx, ay, r_m, r_dot, loads)
+        loads = wheel_loads(vehicle, m.ax, m.ay)
+        y, A, excitation = side_regression(vehicle, m.delta, m.vx, m.ay, m.r, r_dot, loads)
     X = ca.vertcat(s["c0_1"], s["c0_2"])
     P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
     forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
@@ -337,30 +379,40 @@ def build(params: Parameters) -> Estimator:
     if choices["stiffness"] == "rls":
         c_front, c_rear = axle_stiffness(regressor, X_next, loads)
     else:
-        c_front, c_rear = ca.SX(c_front_nom), ca.SX(c_rear_nom)
+        c_front, c_rear = ca.SX(vehicle["cornering_stiffness_front"]), ca.SX(vehicle["cornering_stiffness_rear"])
+    return _Stiffness(r_dot, f, jacobian, kinematic, X_next, P_rls_next, c_front, c_rear)
 
-    # ---- EKF with the previous sample's stiffness (B7) ------------------------------------------
+
+def _ekf(config, settings, s: dict, k: _Stiffness, r_m: ca.SX):
+    """The EKF step with the previous sample's stiffness (B7): (x, P, yaw-rate innovation)."""
+    T = config.sample_time
+    x = ca.vertcat(s["beta_ekf"], s["r_ekf"])
     x_pred, P_pred = kalman.ekf_predict(
-        x + T * f, kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _EKF]), 2),
-        ca.SX.eye(2) + T * jacobian, matrix(settings["process_noise"]) * T)
-    x_ekf, P_ekf, innovation = kalman.update_joseph(x_pred, P_pred, r_m, ca.horzcat(0, 1),
-                                           ca.SX.zeros(1, 1), ca.SX(0),
-                                           settings["measurement_noise"])
+        x + T * k.f, kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _EKF]), 2),
+        ca.SX.eye(2) + T * k.jacobian, matrix(settings["process_noise"]) * T)
+    return kalman.update_joseph(x_pred, P_pred, r_m, ca.horzcat(0, 1), ca.SX.zeros(1, 1), ca.SX(0),
+                                settings["measurement_noise"])
 
-    # ---- weight, integral method re-seeded from the fused beta, fusion ---------------------------
-    rate = ca.fmax(ca.fabs(c_front - s["c_front"]) / (T * c_front_nom),
-                   ca.fabs(c_rear - s["c_rear"]) / (T * c_rear_nom))
+
+def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measured, k: _Stiffness, ekf):
+    """(next state, output): the stiffness-rate weight, the integral method re-seeded from the
+    fused beta, their fusion, the optional consistency monitor and the hold."""
+    vehicle, T = config.vehicle, config.sample_time
+    x_ekf, P_ekf, innovation = ekf
+    active = guard.active
+    rate = ca.fmax(ca.fabs(k.c_front - s["c_front"]) / (T * vehicle["cornering_stiffness_front"]),
+                   ca.fabs(k.c_rear - s["c_rear"]) / (T * vehicle["cornering_stiffness_rear"]))
     indicator = s["indicator"] + (1 - ca.exp(-T / settings["indicator_time_constant"])) * (
         rate - s["indicator"])
-    weight = fusion_weight(choices["weighting"], indicator, d1, d2)
-    beta_int = integral_step(s["beta"], T, vx, ax, ay, r_m)
+    weight = fusion_weight(choices["weighting"], indicator, settings["indicator_low"], settings["indicator_high"])
+    beta_int = integral_step(s["beta"], T, m.vx, m.ax, m.ay, m.r)
     beta = (1 - weight) * x_ekf[0] + weight * beta_int
 
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
     code, monitor = guard.status, {}
-    if monitored:   # beyond the paper: the consistency monitor of the EKF's yaw-rate innovation
+    if consistency.enabled(choices):   # beyond the paper: the monitor of the EKF's yaw-rate innovation
         check = consistency.monitor(s, innovation, settings, T)
         monitor = {n: keep(value, n) for n, value in check.updates.items()}
         # ... which concerns the output only while the EKF carries most of it (lambda < 1/2)
@@ -369,54 +421,49 @@ def build(params: Parameters) -> Estimator:
     next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
-        "c0_1": keep(X_next[0], "c0_1"), "c0_2": keep(X_next[1], "c0_2"),
-        **{n: keep(P_rls_next[i], n) for i, n in enumerate(_RLS)},
-        "c_front": keep(c_front, "c_front"), "c_rear": keep(c_rear, "c_rear"),
-        "r_last": keep(r_m, "r_last"), "r_dot": keep(r_dot, "r_dot"),
+        "c0_1": keep(k.X_next[0], "c0_1"), "c0_2": keep(k.X_next[1], "c0_2"),
+        **{n: keep(k.P_rls_next[i], n) for i, n in enumerate(_RLS)},
+        "c_front": keep(k.c_front, "c_front"), "c_rear": keep(k.c_rear, "c_rear"),
+        "r_last": keep(m.r, "r_last"), "r_dot": keep(k.r_dot, "r_dot"),
         "indicator": keep(indicator, "indicator"), "beta": keep(beta, "beta"),
         "holding": ca.if_else(active, 0, 1),
-        **{n: keep(value, n) for n, value in kinematic.items()},
+        **{n: keep(value, n) for n, value in k.kinematic.items()},
         **monitor,
     })
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, beta, 0), "beta_ekf": ca.if_else(active, x_ekf[0], 0),
         "beta_int": ca.if_else(active, beta_int, 0), "r": keep(x_ekf[1], "r_ekf"),
-        "weight": ca.if_else(active, weight, 0), "c_front": keep(c_front, "c_front"),
-        "c_rear": keep(c_rear, "c_rear"), "status": code,
+        "weight": ca.if_else(active, weight, 0), "c_front": keep(k.c_front, "c_front"),
+        "c_rear": keep(k.c_rear, "c_rear"), "status": code,
     })
+    return next_state, output
 
-    # ---- initialisation (§2.7) -------------------------------------------------------------------
-    first, holding = first_sample(u, config.limits, vx_min, vx_resume)
+
+def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic: dict) -> ca.SX:
+    """The state at the first sample (§2.7): EKF at [0, r_0] with P_0, RLS at the nominal
+    stiffness, the filters at sample 0."""
+    vehicle = config.vehicle
+    c0_nom = nominal_c0(vehicle)
+    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"])
     ay0 = roll_corrected(first["ay"], settings["roll_gradient"])
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])
     if choices["stiffness"] == "rls":
-        c_front0, c_rear0 = axle_stiffness(regressor, (c0_nom, c0_nom),
+        c_front0, c_rear0 = axle_stiffness(choices["stiffness_regressor"], (c0_nom, c0_nom),
                                            wheel_loads(vehicle, first["ax"], ay0))
     else:
-        c_front0, c_rear0 = ca.SX(c_front_nom), ca.SX(c_rear_nom)
+        c_front0, c_rear0 = ca.SX(vehicle["cornering_stiffness_front"]), ca.SX(vehicle["cornering_stiffness_rear"])
     kinematic0 = {"beta_kin": ca.SX(0), "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                   "delta_f": first["delta"], "beta_f": ca.SX(0)}
-    init_state = layout.pack({
+    return layout.pack({
         "beta_ekf": ca.SX(0), "r_ekf": first["r"],
         **{n: P0[i] for i, n in enumerate(_EKF)},
         "c0_1": c0_nom, "c0_2": c0_nom, **{n: P_rls0[i] for i, n in enumerate(_RLS)},
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
-        **consistency.initial_entries(monitored),
+        **consistency.initial_entries(consistency.enabled(choices)),
     })
-    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
-                                   next_state, output, params, decisions)
-    per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
-    return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
-                           "method by the stiffness rate (seed 001)",
-                     INPUTS, layout, OUTPUTS, init, structure, params,
-                     notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
-                            "stiffness_regressor": regressor,
-                            "forgetting_factor_per_sample": f"{per_sample:.6g}"},
-                     rounding_gain=rounding_gain(params.numeric.vehicle, choices,
-                                                 params.numeric.sample_time))
 
 
 DEFINITIONS = (Definition(NAME, build, SCHEMA, {
