@@ -26,7 +26,7 @@ NAME = "ekf_rls"
 RATE_HZ = 1000.0
 PAPER = {("dlc", 1.0): (0.0016, 0.00043), ("dlc", 0.5): (0.00202, 0.00044),
          ("step_steer", 1.0): (0.00035, 0.00004), ("step_steer", 0.5): (0.00082, 0.00016)}
-"""Seed 001 Tables 3-4, fused method: (max |e|, std e) in rad (001-stiffness-rate-fusion.md §4)."""
+"""Seed 001 Tables 3-4, fused method: (max |e|, std e) in rad (docs/methods.md, seed 001 §4)."""
 CASES = tuple(Case.of(s, speed_kmh=80.0, mu=mu) if s == "dlc" else Case.of(s, mu=mu)
               for s, mu in PAPER)
 MIN_SLIP = 0.002

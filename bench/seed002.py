@@ -1,6 +1,6 @@
 """Seed 002 reproduction: the UKF and the adaptive UKF (Sage-Husa) on the paper's electric vehicle
 (vehicles/ev_seed002.toml), ISO 3888-1 DLC and fishhook at 96 km/h on μ 0.8, with the paper's
-initial values and P, Q, R (002-aukf-sage-husa.md §3, §4). The paper publishes no numbers, only
+initial values and P, Q, R (docs/methods.md, seed 002 §3, §4). The paper publishes no numbers, only
 that the AUKF beats the UKF; this prints RMSE and max |e| of u, v, γ and β for both on the same
 noise realisations, and draws Figs. 4 and 6 style plots (estimates against the truth).
 

@@ -3,7 +3,7 @@
 State x = [vy, r] (m/s, rad/s), input u = delta (front road-wheel angle, rad), measurement
 y = [ay, r] (m/s^2, rad/s); vx (m/s) is a time-varying parameter. ISO 8855 axes, cornering stiffness
 positive (F_y = C*alpha, alpha_f = delta - (vy + a*r)/vx, alpha_r = -(vy - b*r)/vx).
-See shared/methods/README.md, "2-DOF linear bicycle model".
+See docs/methods.md, "Signs and the bicycle model".
 """
 
 from __future__ import annotations

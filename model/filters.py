@@ -1,6 +1,6 @@
 """Signal-processing building blocks (symbolic where they run per step, numeric where they are
 designed at generation time): second-order prefilter, median of a window, reliability check
-against a reference with hold-last-valid. Specified in shared/methods/000-switch-sideslip.md
+against a reference with hold-last-valid. Specified in docs/methods.md, seed 000
 §2.2, §2.3 and §2.6.
 """
 

@@ -1,6 +1,6 @@
 """The input guard shared by all estimators: plausibility, low-speed hysteresis, status.
 
-Rule (design.md, "Generated C"; shared/methods/README.md, "Low speed / invalid input"):
+Rule (docs/methods.md, "Low speed and invalid inputs"):
 
 * an input is *plausible* when |value| <= its limit from ``[inputs]``. The comparison is false for
   NaN and +-Inf, so one test rejects non-finite and out-of-range values alike (do not compile the C

@@ -1,6 +1,6 @@
 """Pair arithmetic: a function at x + s and x - s, split so that nothing cancels.
 
-With the paper's UT spread (alpha = 0.001, shared/methods/002-aukf-sage-husa.md C6) the sigma
+With the paper's UT spread (alpha = 0.001, docs/methods.md, seed 002 C6) the sigma
 points x +- s differ from the centre x by about 2.4e-3 standard deviations, and the UT weights are
 about +-1e6. The mean needs F(x + s) + F(x - s) - 2 F(x), a second-order quantity: computed from
 the values F(x +- s), the rounding of F (a yaw moment of thousands of N*m) is multiplied by 1e6 -

@@ -1,4 +1,4 @@
-"""What estimators undo of body-fixed sensors (design.md, "Conventions")."""
+"""What estimators undo of body-fixed sensors (docs/conventions.md, "Units and signs")."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Seed 002's process model: planar 3-DOF vehicle with four-wheel kinematics, HSRI tyres and load
-transfer, Euler at T (shared/methods/002-aukf-sage-husa.md §2.1-§2.7, all reconstructed).
+transfer, Euler at T (docs/methods.md, seed 002 §2.1-§2.7, all reconstructed).
 
 State X = [u, v, gamma, Gamma, a_x, a_y] (m/s, m/s, rad/s, N*m, m/s^2, m/s^2), ISO axes; wheels
 fl, fr, rl, rr; only the front wheels steer. The function is written with +, -, *, / and

@@ -1,4 +1,4 @@
-"""The scaled unscented transform, symbolic and loop-free (shared/methods/002-aukf-sage-husa.md
+"""The scaled unscented transform, symbolic and loop-free (docs/methods.md, seed 002
 §2.8, §2.11 and C5, C6).
 
 * Weights (11): W_m0 = tau/(n+tau), W_c0 = W_m0 + 1 - alpha^2 + beta, W_i = 1/(2(n+tau)),

@@ -1,4 +1,4 @@
-"""Signs and numbers of the 2-DOF model: the worked example of 000-switch-sideslip.md §6."""
+"""Signs and numbers of the 2-DOF model: the worked example of docs/methods.md ("Signs and the bicycle model")."""
 
 from __future__ import annotations
 

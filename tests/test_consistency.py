@@ -1,4 +1,4 @@
-"""The consistency monitor (model.consistency) and the "never silently wrong" rule (harness.score.metrics.metrics)."""
+"""The consistency monitor (model.consistency) and the "never silently wrong" rule (harness.score.metrics)."""
 
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ def run_open_loop(config, speed, steer, duration, mu=1.0, torques=None):
 
 
 def test_zero_slip_slope_matches_vehicle_file(config):
-    """shared/methods A4: the [vehicle] axle stiffness is the plant tyres' zero-slip slope."""
+    """docs/methods.md, seed 000 A4: the [vehicle] axle stiffness is the plant tyres' zero-slip slope."""
     plant = build_plant(config.vehicle, config.plant, 1e-3)
     alpha = ca.SX.sym("alpha")
     for load, stiffness in zip(plant.static_loads(), ("cornering_stiffness_front",

@@ -30,7 +30,7 @@ from vsegen.harness.sim.scenarios import SCENARIOS, Case, parse_option
 @user_errors
 def simulate(scenario: str, vehicle: Path | None, options: tuple[str, ...], seed: int, rate: float,
              out: Path, no_truth: bool) -> None:
-    """Simulate SCENARIO on the truth plant and write its log (design.md format)."""
+    """Simulate SCENARIO on the truth plant and write its log (the format of docs/conventions.md)."""
     if scenario not in SCENARIOS:
         raise UserError(f"unknown scenario '{scenario}': expected one of {', '.join(SCENARIOS)}")
     if not rate > 0:

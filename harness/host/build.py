@@ -24,7 +24,7 @@ from vsegen.model.estimators import build
 from vsegen.model.params import VehicleConfig
 
 WARNING_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror")
-"""The generated code must compile cleanly with these (design.md, "Generated C")."""
+"""The generated code must compile cleanly with these (docs/integration.md)."""
 LIBRARY_FLAGS = ("-O2", "-fPIC", "-shared")
 
 

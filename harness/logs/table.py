@@ -1,4 +1,4 @@
-"""Logs: the CSV format of design.md ("Log format"), for simulated and recorded logs alike.
+"""Logs: the CSV format of docs/conventions.md ("Log format"), for simulated and recorded logs alike.
 
 A :class:`Log` is a set of equally long float columns with a constant sample time. The reader
 rejects bad files with :class:`LogError`, one line naming the file, the line, the column and what
@@ -54,7 +54,7 @@ class LogError(ValueError):
 
 @dataclass
 class Log:
-    """Columns of a log by name, in file order: float arrays for the known columns (design.md),
+    """Columns of a log by name, in file order: float arrays for the known columns (docs/signals.md),
     text arrays for unknown ones; all of one length."""
 
     columns: dict[str, np.ndarray]

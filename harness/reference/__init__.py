@@ -1,6 +1,6 @@
-"""Independent NumPy reference estimators, written from shared/methods/, never importing casadi.
+"""Independent NumPy reference estimators, written from docs/methods.md, never importing casadi.
 
-Each reference module offers the estimator shape of design.md on NumPy vectors with the same
+Each reference module offers the estimator shape of docs/architecture.md on NumPy vectors with the same
 named layouts as the symbolic model: ``names(config) -> (inputs, states, outputs)``,
 ``init(config, u0) -> state`` and ``step(config, state, u) -> (state, output)``; the harness
 checks the layout names agree.

@@ -1,4 +1,4 @@
-"""Reference arx_dual_kf (shared/methods/004-arx-dual-kf-yaw-rate.md §2, §3 and §5 defaults):
+"""Reference arx_dual_kf (docs/methods.md, seed 004 §2, §3 and §5 defaults):
 ARX(2) yaw-rate model, KF1 in companion form on [x_n, x_n-1], KF2 on the ARX parameters with
 R_theta = K1^2 R, the E5 safeguards (excitation, low speed, root projection), priors from the
 ZOH bicycle model at the first speed (§2.5). NumPy/SciPy only."""

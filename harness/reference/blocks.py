@@ -1,5 +1,5 @@
 """Reference building blocks in plain NumPy/SciPy: the bicycle model, discretisation, the Kalman
-filter and the shared input-hold rule (shared/methods/README.md; 000-switch-sideslip.md §2.5, §2.10).
+filter and the shared input-hold rule (docs/methods.md: the common rule; seed 000 §2.5, §2.10).
 """
 
 from __future__ import annotations

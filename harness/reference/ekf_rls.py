@@ -1,4 +1,4 @@
-"""Reference ekf_rls (shared/methods/001-stiffness-rate-fusion.md §2, §3 and §5 defaults):
+"""Reference ekf_rls (docs/methods.md, seed 001 §2, §3 and §5 defaults):
 filtered yaw acceleration, axle forces and wheel loads, RLS of the left/right normalised
 stiffness (or per axle against the EKF prior's or a kinematic slip angle), the EKF in beta form
 (Euler, y = r), the stiffness-rate weight and the integral method re-seeded from the fused beta.

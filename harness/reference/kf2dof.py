@@ -1,4 +1,4 @@
-"""Reference kf2dof: 2-DOF bicycle model + linear Kalman filter (000-switch-sideslip.md §2.5,
+"""Reference kf2dof: 2-DOF bicycle model + linear Kalman filter (docs/methods.md, seed 000 §2.5,
 §2.8-2.10, run alone), the project's hold rule, ZOH prediction with the previous sample's inputs.
 """
 

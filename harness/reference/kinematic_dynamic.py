@@ -1,5 +1,5 @@
 """Reference kinematic/dynamic sideslip machinery shared by seed 000's switching and fusion
-estimators (000-switch-sideslip.md §2.2, §2.3, §2.6, §2.9, §2.10), in NumPy/SciPy."""
+estimators (docs/methods.md, seed 000 §2.2, §2.3, §2.6, §2.9, §2.10), in NumPy/SciPy."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Reference pf_improved and pf_adaptive (shared/methods/003-improved-pf-velocity.md §2 with the
+"""Reference pf_improved and pf_adaptive (docs/methods.md, seed 003 §2 with the
 §3/§5 defaults): particle state [v_x, v_y, a_x, a_y, r], the corrected transition (14)-(15)
 (G = 0: the adaptive PF of ref. [17]), adaptive process noise (16), Gaussian likelihood of (13)
 (D2: also v_x), the weighted mean before resampling (17) and systematic resampling (D4), with the

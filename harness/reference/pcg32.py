@@ -6,7 +6,7 @@ s' = a s + c (mod 2^64), a = 6364136223846793005, c = 2 seq + 1, whose output fr
 is the XSH RR permutation: x = ((s >> 18) ^ s) >> 27 (32 bits), rotated right by s >> 59.
 Seeding ``pcg32_srandom_r(init, seq)``: s = 0, step, s += init, step.
 
-On top (003-improved-pf-velocity.md D5): uniforms in [0, 1) of 53 bits from two outputs
+On top (docs/methods.md, seed 003 D5): uniforms in [0, 1) of 53 bits from two outputs
 ((x1 >> 5) 2^26 + (x2 >> 6)) 2^-53, or of 24 bits from one, (x >> 8) 2^-24 (the float C).
 Normal draws from the stream: ``harness.reference.normals``.
 

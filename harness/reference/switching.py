@@ -1,4 +1,4 @@
-"""Reference switching estimator (shared/methods/000-switch-sideslip.md §2.2-2.10, §5 defaults),
+"""Reference switching estimator (docs/methods.md, seed 000 §2.2-2.10, §5 defaults),
 written from the spec: threshold switch on the median-filtered a_y, hand-off both ways ([E25],
 [E26]), kinematic integrator [E14], the KF, and the hold rule (harness.reference.kinematic_dynamic)."""
 

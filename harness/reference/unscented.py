@@ -1,4 +1,4 @@
-"""Reference aukf and ukf (shared/methods/002-aukf-sage-husa.md §2, §3 and §5 defaults): the 3-DOF
+"""Reference aukf and ukf (docs/methods.md, seed 002 §2, §3 and §5 defaults): the 3-DOF
 model with four-wheel kinematics, HSRI tyres and load transfer (1)-(8), the scaled UT (10)-(11),
 the UKF (12)-(14) with the points not redrawn, and (aukf) the sub-optimal Sage-Husa estimator of q
 and Q (15a)-(15b) with the §2.10 safeguard and

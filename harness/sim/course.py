@@ -1,6 +1,6 @@
 """Courses: the driver's target path y(x) and the cone gates a run must stay inside.
 
-ISO 3888-1 double lane change (shared/methods/README.md, "DLC geometry"): sections 15 / 30 / 25 /
+ISO 3888-1 double lane change (docs/methods.md, "Sensors of simulated logs"): sections 15 / 30 / 25 /
 25 / 15 / 15 m (entry lane, change, offset lane, change back, exit lane, run-out), lateral offset
 3.5 m, lane widths 1.1 w + 0.25, 1.2 w + 0.25 and 1.3 w + 0.25 m (w: vehicle width). The target
 path is the centre line, with half-cosine transitions over the change sections.

@@ -1,4 +1,4 @@
-"""The manoeuvres. Each returns a Log at ``rate_hz`` with the columns of design.md, the truth
+"""The manoeuvres. Each returns a Log at ``rate_hz`` with the columns of docs/signals.md, the truth
 columns, and notes saying whether the car stayed inside the cones and did not spin. ``progress``,
 if given, is called with the fraction simulated.
 
@@ -264,7 +264,7 @@ def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress
 def _log(config: VehicleConfig, run: Run, seed: int, outliers: bool, bias: bool,
          hit_cone: np.ndarray, yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
     """The log of ``run``; it has an ``mz`` column (the commanded moment) only when a direct yaw
-    moment was applied (design.md: ``mz`` is optional)."""
+    moment was applied (``mz`` is an optional column)."""
     spun = np.maximum.accumulate(np.abs(run.beta) > SPIN_SIDESLIP)
     moment = ({"mz": np.array([yaw_moment(t) for t in run.t])} if yaw_moment.amplitude else {})
     columns = {"t": run.t, **sensors.measure(config, run, seed, bias, outliers), **moment,

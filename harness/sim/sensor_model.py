@@ -3,7 +3,7 @@
 * the inertial sensors sit on the body at [plant] sensor_position p from the CG (x forward, y left,
   z up), rolled by phi and pitched by theta (harness.sim.two_track: a roll mode or quasi-static
   roll, quasi-static pitch); the body's orientation is yaw psi, pitch theta, roll phi (z-y-x);
-* accelerometers read the specific force in body axes (design.md: a rolled body's lateral
+* accelerometers read the specific force in body axes (docs/conventions.md: a rolled body's lateral
   accelerometer reads the gravity component):
       f = Rx(phi)^T Ry(theta)^T [ax, ay, g] + w' x p + w x (w x p),
       ax_m = ax cos(theta) - g sin(theta),  ay_m = ay cos(phi) + (ax sin(theta) + g cos(theta)) sin(phi)
@@ -11,7 +11,7 @@
   terms (small angles there);
 * the yaw-rate gyro reads the body's z rate, r_m = r cos(theta) cos(phi) - theta' sin(phi);
 * white Gaussian noise (seed 000 Table 2), biases only when asked (the paper assumes compensated
-  biases; shared/methods/README.md);
+  biases; docs/methods.md);
 * wheel speeds from the plant's wheel spin states (a driven wheel spins up under traction), vx as
   an ECU computes it: mean of the non-driven axle's wheel speeds x R_eff (the rear wheels of a
   front-wheel-drive car, the front wheels of a rear-wheel-drive car);
@@ -33,7 +33,7 @@ WHEELS = ("fl", "fr", "rl", "rr")
 
 
 def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bool) -> dict:
-    """The measured log columns (design.md) of ``run``."""
+    """The measured log columns (docs/signals.md) of ``run``."""
     if config.sensors is None:
         raise ParameterError(f"{config.source}: no [sensors] table: expected the sensor model to "
                              f"simulate (see vehicles/c_class.toml)")

@@ -1,6 +1,6 @@
 """Numeric equivalence of two runs: the project's tolerances live here and only here.
 
-Relative difference with a guard near zero (design.md): |a - b| / max(|a|, |b|, floor, g), where
+Relative difference with a guard near zero: |a - b| / max(|a|, |b|, floor, g), where
 g = PEAK_FRACTION x the signal's peak |value| over the run: a signal that passes through zero is not
 held to relative accuracy below 1 % of its own range there. That matters for the open-loop
 kinematic integrator, which integrates ulp-level input differences without contraction (measured:

@@ -1,6 +1,6 @@
 """arx_dual_kf: yaw rate from an ARX model with a dual Kalman filter (seed 004, a patent).
 
-shared/methods/004-arx-dual-kf-yaw-rate.md, §2 with the §3/§5 defaults:
+docs/methods.md, seed 004, §2 with the §3/§5 defaults:
 
 * ARX(2) model x_n = a1 x_n-1 + a2 x_n-2 + b1 u_n-1 (+ b_delta delta_n-1 with
   ``exogenous = "mz_delta"``, E2), u = the direct yaw moment ``mz`` (N*m) [A2];
@@ -13,7 +13,7 @@ shared/methods/004-arx-dual-kf-yaw-rate.md, §2 with the §3/§5 defaults:
 * E5 projection: when a parameter update moves the roots of z^2 - a1 z - a2 outside
   ``stability_radius``, a1 and a2 are rescaled onto it (status PARAMETERS_PROJECTED).
 
-Both filters use the Joseph form of the shared model.kalman update. Invalid inputs (design.md):
+Both filters use the Joseph form of the shared model.kalman update. Invalid inputs (docs/methods.md, the common rule):
 an implausible gyro sample skips both updates (prediction only); an implausible ``mz`` (or
 delta) counts as 0 for this sample; status INVALID_INPUT. The ``mz`` column is optional in a log:
 the harness feeds 0 when it is absent, and the filter then is an adaptive AR(2) smoother of the
@@ -56,7 +56,7 @@ SCHEMA = EstimatorSchema(
         *LOW_SPEED_FIELDS,
     ),
     rules=LOW_SPEED_RULES)
-"""Seed 004's ARX dual Kalman filter (004-arx-dual-kf-yaw-rate.md §3, §5)."""
+"""Seed 004's ARX dual Kalman filter (docs/methods.md, seed 004 §3, §5)."""
 
 INPUTS = Layout(signals.inputs("delta", "vx", "r", "mz"))
 HISTORY = ("x_1", "x_2")

@@ -1,7 +1,7 @@
 """aukf / ukf: speeds, yaw rate and sideslip from an unscented Kalman filter on the 3-DOF HSRI
 model, with (aukf) or without (ukf) the sub-optimal Sage-Husa process-noise estimator (seed 002).
 
-shared/methods/002-aukf-sage-husa.md, §2 with the §3/§5 defaults:
+docs/methods.md, seed 002, §2 with the §3/§5 defaults:
 
 * state X = [u, v, gamma, Gamma, a_x, a_y], process model ``model.three_dof`` (Euler, HSRI tyres,
   load transfer; C2: Gamma, a_x, a_y one step delayed); cornering stiffness per tyre = half the
@@ -88,7 +88,7 @@ UKF_FIELDS: tuple[Field, ...] = (
     consistency.LINEAR_RANGE,
     *LOW_SPEED_FIELDS,
 )
-"""Seed 002's UKF on the 3-DOF HSRI model (002-aukf-sage-husa.md §3, §5)."""
+"""Seed 002's UKF on the 3-DOF HSRI model (docs/methods.md, seed 002 §3, §5)."""
 
 UKF_SCHEMA = EstimatorSchema(fields=UKF_FIELDS, rules=LOW_SPEED_RULES)
 AUKF_SCHEMA = EstimatorSchema(

@@ -1,7 +1,7 @@
 """ekf_rls: sideslip by fusing an EKF whose cornering stiffness is estimated online (RLS) with the
 integral method, weighted by the rate of change of the stiffness (seed 001).
 
-shared/methods/001-stiffness-rate-fusion.md, §2 with the §3/§5 defaults (every equation there is
+docs/methods.md, seed 001, §2 with the §3/§5 defaults (every equation there is
 reconstructed; numbers in brackets are the spec's):
 
 * filtered yaw acceleration r_dot = s/(tau_d s + 1){r}, Tustin; axle forces from a_y and r_dot
@@ -102,7 +102,7 @@ SCHEMA = EstimatorSchema(
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
            above("stiffness_max", "stiffness_min", "a factor")))
-"""Seed 001's EKF with RLS stiffness and stiffness-rate fusion (001-stiffness-rate-fusion.md §3,
+"""Seed 001's EKF with RLS stiffness and stiffness-rate fusion (docs/methods.md, seed 001 §3,
 §5)."""
 REFERENCE_PERIOD = 0.001
 """Sample time (s) at which the paper's forgetting factor applies (B6)."""

@@ -1,6 +1,6 @@
 """kf2dof: sideslip from the linear 2-DOF bicycle model and a Kalman filter.
 
-The dynamic scheme of shared/methods/000-switch-sideslip.md (sections 2.5, 2.8-2.10), alone:
+The dynamic scheme of docs/methods.md, seed 000 (sections 2.5, 2.8-2.10), alone:
 
 * predict from k-1 to k with the inputs of k-1 (zero-order hold): Phi, Gamma of A(vx_k-1), B by the
   configured discretisation; Q_d = Q_c T;

@@ -1,5 +1,5 @@
 """The kinematic/dynamic sideslip machinery of seed 000 shared by the switching and fusion
-estimators: the state layout, the pre-processing (000-switch-sideslip.md §2.2, §2.3, §2.6:
+estimators: the state layout, the pre-processing (docs/methods.md, seed 000 §2.2, §2.3, §2.6:
 prefilter, reliability checks with hold-last-valid and time-out, median), the initial state
 (§2.9) and the hold rule (§2.10). Each estimator adds its schemes. Beyond the paper, a measured
 a_y can be corrected for body roll (``roll_gradient``: body-fixed sensors), for every use of a_y.
@@ -50,7 +50,7 @@ KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
     ROLL_CORRECTION,
 )
-"""Seed 000's pre-processing and switching settings (000-switch-sideslip.md §3)."""
+"""Seed 000's pre-processing and switching settings (docs/methods.md, seed 000 §3)."""
 
 
 def _checks_against(kind: str):

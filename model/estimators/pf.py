@@ -2,7 +2,7 @@
 kinematic model, with (pf_improved) or without (pf_adaptive, the baseline of the paper's ref.
 [17]) the proposal correction (seed 003).
 
-shared/methods/003-improved-pf-velocity.md, §2 with the §3/§5 defaults:
+docs/methods.md, seed 003, §2 with the §3/§5 defaults:
 
 * particle state [v_x, v_y, a_x, a_y, r] plus its weight; a_x, a_y, r random walks, the speeds
   Euler-integrated from (5)-(6) with the particle's own trapezoidal a and r (15);
@@ -96,7 +96,7 @@ PF_FIELDS: tuple[Field, ...] = (
     ROLL_CORRECTION,
     *LOW_SPEED_FIELDS,
 )
-"""Seed 003's particle filter: the adaptive PF of its ref. [17] (003-improved-pf-velocity.md §2,
+"""Seed 003's particle filter: the adaptive PF of its ref. [17] (docs/methods.md, seed 003 §2,
 §3, §5)."""
 
 

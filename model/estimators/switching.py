@@ -1,6 +1,6 @@
 """switching: seed 000's sideslip estimator, switching between a kinematic and a dynamic scheme.
 
-shared/methods/000-switch-sideslip.md, §2.2-2.10 with the §5 defaults:
+docs/methods.md, seed 000, §2.2-2.10 with the §5 defaults:
 
 * shared pre-processing (model.estimators.kinematic_dynamic, the ``select`` kernel): prefilter [E6],
   reliability checks of r against r_ref [E7-E10] and of a_y,b against vx r [E11] with
