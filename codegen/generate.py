@@ -106,9 +106,9 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "casadi_version": ca.__version__,
         "parameter_hash": config.parameter_hash(name),
         "ops": estimator.operation_counts,
-        "status_bits": {bit: status.STATUS_BITS[bit] for bit in (
+        "status_bits": {bit.name: (bit.value, bit.meaning) for bit in status.described((
             *DEFINITIONS[name].status_bits,
-            *(("INVALID_CALIBRATION",) if estimator.parameters.calibratable else ()))},
+            *((status.INVALID_CALIBRATION,) if estimator.parameters.calibratable else ())))},
         "calibration_checks": [(condition(c, real), c.says) for c in
                                calibration_checks(SCHEMAS[name], estimator.parameters.names)],
         "invalid_calibration": literal(float(status.INVALID_CALIBRATION), real),

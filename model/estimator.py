@@ -38,6 +38,7 @@ from typing import Any
 
 import casadi as ca
 
+from vsegen.model import status
 from vsegen.model.calibration import Parameters
 from vsegen.model.guard import Decisions
 from vsegen.model.layout import Layout
@@ -341,7 +342,7 @@ INERTIAL_SIGMAS = {"measurement_noise": Derived(("ax_noise", "ay_noise", "gyro_n
 """Standard deviations of [a_x, a_y, r]."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Definition:
     """Everything the rest of vsegen needs to know about one estimator, declared in its module
     (``model/estimators/<module>.py``) and collected by ``model.estimators``: its name (the
@@ -354,9 +355,9 @@ class Definition:
     build: Callable[[Parameters], Estimator]
     schema: EstimatorSchema
     tunable: Mapping[str, Tunable] = field(default_factory=dict)
-    status_bits: tuple[str, ...] = ("LOW_SPEED", "INVALID_INPUT")
-    """The ``model.status`` bits it can raise (the hold rule's two, and its own); the generated
-    header defines only these."""
+    status_bits: tuple[int, ...] = (status.LOW_SPEED, status.INVALID_INPUT)
+    """The ``model.status`` bits it can raise (the hold rule's two, and its own), as the status
+    constants; the generated header defines only these."""
     derived: Mapping[str, Derived] = field(default_factory=dict)
     """Its car-specific settings and how each follows from identified quantities."""
 

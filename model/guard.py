@@ -37,19 +37,20 @@ class Guard:
 
 
 def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
-                vx_resume: float, holding: ca.SX) -> Guard:
+                vx_resume: float, held_before: ca.SX) -> Guard:
     """Plausibility of every input, activity and status bits for one sample.
 
     Args:
         inputs: the sample's inputs by log column name (must include ``vx``).
         limits: the ``[inputs]`` table.
         vx_min, vx_resume: low-speed limit and resume speed (m/s).
-        holding: 1 if the estimator held at the previous sample, else 0.
+        held_before: non-zero if the estimator held at the previous sample (its ``holding``,
+            ``hold_reason`` or ``low_speed_hold`` state entry), else 0.
     """
     plausible = plausibility(inputs, limits)
     all_plausible = _all(plausible.values())
     vx = inputs["vx"]
-    low_speed = plausible["vx"] * _either(vx < vx_min, (holding > 0) * (vx < vx_resume))
+    low_speed = plausible["vx"] * _either(vx < vx_min, (held_before > 0) * (vx < vx_resume))
     active = all_plausible * (1 - low_speed)
     return Guard(plausible, active, _status(all_plausible, low_speed), low_speed)
 

@@ -99,8 +99,11 @@ TRUTH = (
 
 STATUS = Signal("status", "-", "status bits: an OR of the STATUS values defined in this header (0 = OK)", integer=True)
 HOLDING = Signal("holding", "-", "1 while holding (low speed or invalid input), else 0")
-HOLDING_REASON = Signal("holding", "-", "2 while holding at low speed, 1 on an invalid input, else 0")
-"""State entries of the hold rule: whether (or why) the estimator held at the last sample."""
+HOLD_REASON = Signal("hold_reason", "-", "2 while holding at low speed, 1 on an invalid input, else 0")
+LOW_SPEED_HOLD = Signal("low_speed_hold", "-", "1 while holding at low speed, else 0")
+"""State entries of the hold rule, one meaning per name: whether the estimator held at the last
+sample (``holding``), why (``hold_reason``), or whether it held for low speed (``low_speed_hold``,
+for an estimator that keeps running on an invalid input)."""
 
 INPUT = {entry.name: entry for entry in INPUTS}
 REQUIRED_INPUTS = tuple(entry.name for entry in INPUTS if entry.required)

@@ -227,7 +227,7 @@ def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(conf
     low = (out[:, -1].astype(int) & status.LOW_SPEED) > 0
     assert low.any() and np.all(out[low, 0] == 0.0)
     k = np.flatnonzero(low)[5]
-    holding = est.states.index("holding")
+    holding = est.states.index("hold_reason")
     assert np.array_equal(np.delete(states[k + 1], holding), np.delete(states[k], holding))
     assert states[k + 1, holding] == 2                               # held, marked low speed
     resumed = np.flatnonzero(low[:-1] & ~low[1:])[0] + 1             # restarts from this sample
@@ -288,7 +288,7 @@ def test_an_estimate_outside_the_envelope_restarts_the_filter(config, variant):
     flagged = (out[:, -1].astype(int) & status.FILTER_RESTARTED) > 0
     assert not flagged[:300].any() and flagged[300]
     restart = np.array(est.init(inputs[300])).ravel()
-    restart[est.states.index("holding")] = 0
+    restart[est.states.index("hold_reason")] = 0
     monitor = est.states.index("residual")         # the consistency monitor's mean carries on
     assert states[301][monitor] > 0.0
     restart[monitor] = states[301][monitor]

@@ -17,9 +17,10 @@ from vsegen.harness.reference.loop import run_reference
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.verify.compare import REFERENCE_PRECISION, TOLERANCES, Tolerance, difference, for_estimator
 from vsegen.harness.verify.equivalence import verify, verify_estimator
+from vsegen.model import status
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.params import parse_vehicle
-from vsegen.model.status import INVALID_INPUT, LOW_SPEED, STATUS_BITS
+from vsegen.model.status import INVALID_INPUT, LOW_SPEED
 
 ESTIMATORS = tuple(load_vehicle(DEFAULT_VEHICLE).estimators)
 FORMS = [("float", "baked"), ("double", "calibratable"), ("float", "calibratable")]
@@ -41,7 +42,7 @@ def test_generated_c_equals_the_reference_on_every_scenario(config, name):
 
 @pytest.mark.parametrize("name", ESTIMATORS)
 def test_status_raises_only_the_declared_bits_and_the_header_defines_them(config, name):
-    declared = sum(STATUS_BITS[bit][0] for bit in DEFINITIONS[name].status_bits)
+    declared = sum(DEFINITIONS[name].status_bits)
     estimator, compiled = compile_estimator(config, name)
     seen = 0
     for case in VERIFICATION_SET:
@@ -49,7 +50,7 @@ def test_status_raises_only_the_declared_bits_and_the_header_defines_them(config
         seen |= np.bitwise_or.reduce(outputs[:, estimator.outputs.index("status")].astype(int))
     assert seen & ~declared == 0 and seen & INVALID_INPUT and seen & LOW_SPEED
     header = render(config, name)[f"vse_{name}.h"]
-    defined = {bit for bit in STATUS_BITS if f"_STATUS_{bit} (" in header}
+    defined = {bit.value for bit in status.BITS if f"_STATUS_{bit.name} (" in header}
     assert defined == set(DEFINITIONS[name].status_bits)
 
 

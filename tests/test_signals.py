@@ -7,19 +7,18 @@ import pytest
 
 from vsegen.harness.logs.table import LogError, read_log
 from vsegen.harness.project import reference_docs
-from vsegen.model import signals
+from vsegen.model import signals, status
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.guard import LIMIT_KEYS
 from vsegen.model.schema import INPUT_LIMITS
-from vsegen.model.status import STATUS_BITS
 
 
 def test_the_signal_page_shows_every_column_and_status_bit():
     page = reference_docs.signals_page()
     for name in ("t", *signals.LOG_COLUMN_UNITS):
         assert f"| `{name}` | " in page
-    for name, (value, meaning) in STATUS_BITS.items():
-        assert f"| {value} | {name} | " in page and meaning.split("|")[0] in page
+    for bit in status.BITS:
+        assert f"| {bit.value} | {bit.name} | " in page and bit.meaning.split("|")[0] in page
 
 
 @pytest.mark.parametrize("name", list(DEFINITIONS))
@@ -28,8 +27,9 @@ def test_estimators_read_catalogue_inputs_and_report_the_catalogue_status(config
     for signal in estimator.inputs.signals:
         assert signal == signals.INPUT[signal.name].signal, f"{name}: input {signal.name} redefined"
     assert estimator.outputs.signals[-1] == signals.STATUS
-    holding = [s for s in estimator.states.signals if s.name == "holding"]
-    assert len(holding) == 1
+    hold_entries = [s for s in estimator.states.signals if s in (signals.HOLDING, signals.HOLD_REASON,
+                                                                 signals.LOW_SPEED_HOLD)]
+    assert len(hold_entries) == 1
 
 
 def test_every_input_has_a_limit_in_the_vehicle_schema():
@@ -50,3 +50,16 @@ def test_the_reader_checks_each_catalogued_unit(tmp_path, entry):
     path.write_text(",".join(columns) + "\n" + "\n".join(rows) + "\n")
     with pytest.raises(LogError, match=f"column '{entry.name}'.*{entry.unit_check.hint}"):
         read_log(path)
+
+
+def test_the_reference_writes_the_model_status_bits():
+    """The reference defines its status bits itself (it never imports the model); every one it
+    defines has the model's value, and it defines every bit an estimator declares (the calibration
+    check is C-only)."""
+    from vsegen.harness.reference import blocks
+
+    model_bits = {bit.name: bit.value for bit in status.BITS}
+    reference_bits = {name: getattr(blocks, name) for name in model_bits if hasattr(blocks, name)}
+    assert reference_bits == {name: model_bits[name] for name in reference_bits}
+    declared = {status.BY_VALUE[value].name for d in DEFINITIONS.values() for value in d.status_bits}
+    assert declared <= set(reference_bits)

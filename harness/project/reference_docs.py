@@ -9,10 +9,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from vsegen.model import schema, signals
+from vsegen.model import schema, signals, status
 from vsegen.model.estimators import DEFINITIONS
 from vsegen.model.params import WHEELBASE_TOLERANCE
-from vsegen.model.status import STATUS_BITS
 
 VEHICLE_FILE = "vehicle-file.md"
 SIGNALS = "signals.md"
@@ -91,11 +90,11 @@ def _log_columns_table() -> str:
 
 def _status_table() -> str:
     lines = ["| bit | name | meaning | raised by |", "| --- | --- | --- | --- |"]
-    for name, (value, meaning) in STATUS_BITS.items():
-        raised = [n for n, d in DEFINITIONS.items() if name in d.status_bits]
-        if name == "INVALID_CALIBRATION":
+    for bit in status.BITS:
+        raised = [n for n, d in DEFINITIONS.items() if bit.value in d.status_bits]
+        if bit.value == status.INVALID_CALIBRATION:
             raised = ["every calibratable build"]
-        lines.append(f"| {value} | {name} | {_cell(meaning)} | {', '.join(raised) or '-'} |")
+        lines.append(f"| {bit.value} | {bit.name} | {_cell(bit.meaning)} | {', '.join(raised) or '-'} |")
     return "\n".join(lines)
 
 

@@ -13,7 +13,6 @@ from vsegen.harness.reference import blocks
 
 TABLE = "arx_dual_kf"
 INPUTS = ("delta", "vx", "r", "mz")
-PARAMETERS_PROJECTED = 8
 
 
 def _theta_names(config):
@@ -25,7 +24,7 @@ def names(config):
     theta = _theta_names(config)
     states = ("x_1", "x_2", *blocks.upper_names("P", ("x_1", "x_2")), *theta,
               *blocks.upper_names("Pt", theta), "mz_prev",
-              *(("delta_prev",) if "b_delta" in theta else ()), "holding")
+              *(("delta_prev",) if "b_delta" in theta else ()), "low_speed_hold")
     return INPUTS, states, ("r", *theta, "gain", "status")
 
 
@@ -70,7 +69,7 @@ def step(config, state, u):
     theta_names = _theta_names(config)
     n = len(theta_names)
     _, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                     x["holding"] > 0.5)
+                                     x["low_speed_hold"] > 0.5)
     low = bool(status & blocks.LOW_SPEED)   # only the parameter filter pauses (E5)
     R, Q = s["measurement_noise"], s["model_noise"]
 
@@ -106,12 +105,12 @@ def step(config, state, u):
     if updated and rho > s["stability_radius"]:                               # E5, after (C6)
         scale = s["stability_radius"] / rho
         theta = np.array([a1 * scale, a2 * scale * scale, *theta[2:]])
-        status |= PARAMETERS_PROJECTED
+        status |= blocks.PARAMETERS_PROJECTED
 
     new = {"x_1": x_n, "x_2": s_new[1], "P_x_1_x_1": P_new[0, 0], "P_x_1_x_2": P_new[0, 1],
            "P_x_2_x_2": P_new[1, 1], **dict(zip(theta_names, theta)),
            **dict(zip(blocks.upper_names("Pt", theta_names), blocks.packed(P_theta))),
-           "mz_prev": inputs["mz"] if ok["mz"] else 0.0, "holding": 1.0 if low else 0.0}
+           "mz_prev": inputs["mz"] if ok["mz"] else 0.0, "low_speed_hold": 1.0 if low else 0.0}
     if n == 4:
         new["delta_prev"] = inputs["delta"] if ok["delta"] else 0.0
     return (np.array([new[k] for k in state_names]),

@@ -16,9 +16,16 @@ GRAVITY = 9.81
 """m/s^2, as in the model."""
 LOW_SPEED = 1
 INVALID_INPUT = 2
+REFERENCE_SUSPECT = 4
+PARAMETERS_PROJECTED = 8
+COVARIANCE_REPAIRED = 16
+FILTER_RESTARTED = 32
+KINEMATIC_DWELL_LIMITED = 64
 MODEL_INCONSISTENT = 128
 BEYOND_LINEAR_RANGE = 256
-"""Status bits several estimators raise (model/status.py; the others live with their estimator)."""
+DEAD_RECKONING = 1024
+"""The status bits the references raise, written here once (docs/signals.md); a test compares them
+with the model's."""
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",
             "mz": "mz_max", "omega_fl": "omega_max", "omega_fr": "omega_max",
             "omega_rl": "omega_max", "omega_rr": "omega_max"}
@@ -150,11 +157,11 @@ def plausible(limits: Mapping[str, float], name: str, value: float) -> bool:
     return math.isfinite(value) and abs(value) <= limits[LIMIT_OF[name]]
 
 
-def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float, holding: bool):
+def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float, held_before: bool):
     """(active, status, plausible-by-name) per the project's low-speed / invalid-input rule."""
     ok = {name: plausible(limits, name, value) for name, value in inputs.items()}
     vx = inputs["vx"]
-    low = ok["vx"] and (vx < vx_min or (holding and vx < vx_resume))
+    low = ok["vx"] and (vx < vx_min or (held_before and vx < vx_resume))
     status = (0 if all(ok.values()) else INVALID_INPUT) | (LOW_SPEED if low else 0)
     return all(ok.values()) and not low, status, ok
 

@@ -13,7 +13,6 @@ from vsegen.harness.reference import blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1
-REFERENCE_SUSPECT = 4
 GRAVITY = blocks.GRAVITY
 
 
@@ -150,7 +149,7 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
     """One step of a seed-000 estimator: the hold rule; when active, the shared pre-processing
     (§2.2-2.4) and then ``scheme(x, updates, r_k, ay_f, status, u) -> (next state by name,
     output)``, with ``x`` the state by name, ``updates`` the pre-processing's new entries and
-    ``status`` including REFERENCE_SUSPECT. When not active: the held state and the output
+    ``status`` including blocks.REFERENCE_SUSPECT. When not active: the held state and the output
     [0, 0, r_last, DYN, status]."""
     s = config.settings(table)
     names = state_names(config, table, extra)
@@ -163,5 +162,5 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
-    new, output = scheme(x, updates, r_k, ay_f, status + (REFERENCE_SUSPECT if suspect else 0), u)
+    new, output = scheme(x, updates, r_k, ay_f, status + (blocks.REFERENCE_SUSPECT if suspect else 0), u)
     return np.array([new[k] for k in names]), np.array(output)

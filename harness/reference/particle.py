@@ -29,8 +29,7 @@ KINEMATIC = ("vx", "vy", "ax", "ay", "r")
 PARTICLE = (*KINEMATIC, "weight")
 INPUTS = ("vx", "ax", "ay", "r")
 OUTPUTS = ("beta", "vx", "vy", "n_eff", "sigma_ax", "sigma_ay", "sigma_r", "status")
-HEAD = (*KINEMATIC, "holding", "drift")
-DEAD_RECKONING = 1024
+HEAD = (*KINEMATIC, "hold_reason", "drift")
 WEIGHT_FLOOR = 1e-30
 HOLD, PROPAGATE, SPAWN = 0, 1, 2
 
@@ -99,8 +98,8 @@ class ParticleFilter:
         particles = np.array(state[len(HEAD) + WORDS:], dtype=float).reshape(n, len(PARTICLE))
         inputs = dict(zip(INPUTS, u))
         active, code, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                           head["holding"] > 0.5)
-        mode = (SPAWN if head["holding"] > 1.5 else PROPAGATE) if active else HOLD
+                                           head["hold_reason"] > 0.5)
+        mode = (SPAWN if head["hold_reason"] > 1.5 else PROPAGATE) if active else HOLD
         estimate = np.array([head[k] for k in KINEMATIC])
         z = self._measured(s, inputs) if active else estimate[2:]
         sigma = self._sigmas(s, z, estimate[2:])
@@ -116,7 +115,7 @@ class ParticleFilter:
         n_eff = 1.0 / _total(weights * weights)
         if mode != HOLD:
             estimate = _total(weights[:, None] * particles[:, :len(KINEMATIC)])
-        holding = 0.0 if active else (2.0 if code & blocks.LOW_SPEED else max(head["holding"], 1.0))
+        hold_reason = 0.0 if active else (2.0 if code & blocks.LOW_SPEED else max(head["hold_reason"], 1.0))
         slow = active and estimate[0] < s["vx_min"]
         beta = float(np.arctan2(estimate[1], estimate[0])) if active and not slow else 0.0
         # the bound of the integrated v_y's error (beyond the spec)
@@ -128,13 +127,13 @@ class ParticleFilter:
             drift = head["drift"]
         if (active and not slow and s["drift_acceleration"] + s["drift_yaw_rate"] > 0
                 and drift > np.tan(s["drift_limit"]) * abs(estimate[0])):
-            code |= DEAD_RECKONING
+            code |= blocks.DEAD_RECKONING
         output = [beta, estimate[0], estimate[1], n_eff, *sigma,
                   float(code | (blocks.LOW_SPEED if slow else 0))]
         near: list[tuple[int, int]] = []
         if mode == PROPAGATE and (s["resampling"] == "every_sample" or n_eff < n / 2):
             particles, near = _resample(particles, stream.uniforms(1)[0], margin, flip)
-        new_state = np.concatenate([estimate, [holding, drift], stream.words(), particles.ravel()])
+        new_state = np.concatenate([estimate, [hold_reason, drift], stream.words(), particles.ravel()])
         return new_state, np.array(output, dtype=float), near, decisions
 
     # ---- blocks ---------------------------------------------------------------------------------

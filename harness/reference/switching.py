@@ -8,12 +8,11 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import kinematic_dynamic
+from vsegen.harness.reference import blocks, kinematic_dynamic
 from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS, KIN
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
-KINEMATIC_DWELL_LIMITED = 64
 
 
 def extra(config) -> tuple[str, ...]:
@@ -51,7 +50,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         above = mode == KIN
         if above and (x["kin_samples"] + 0.5) * config.sample_time > s["kinematic_max_dwell"]:
             mode = DYN
-            status += KINEMATIC_DWELL_LIMITED
+            status += blocks.KINEMATIC_DWELL_LIMITED
         new["kin_samples"] = x["kin_samples"] + (1.0 if mode == KIN else 0.0) if above else 0.0
     new["mode"] = mode
     straight = abs(ay_f - offset) < s["offset_band"] and abs(r_k * u[1]) < s["offset_band"]

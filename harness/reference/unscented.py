@@ -24,8 +24,6 @@ STATE = ("u", "v", "gamma", "moment", "ax", "ay")
 COVARIANCE = blocks.upper_names("P", STATE)
 OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
 WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
-COVARIANCE_REPAIRED = 16
-FILTER_RESTARTED = 32
 AIR_DENSITY = 1.2
 N = 6
 ADHESION_FLOOR = 1.0
@@ -48,7 +46,7 @@ class Variant:
                  if self.adaptive else ())
         monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
         return (("delta", "vx", "ax", "ay", "r", *wheels),
-                (*STATE, *COVARIANCE, *extra, *monitor, "holding"), OUTPUTS)
+                (*STATE, *COVARIANCE, *extra, *monitor, "hold_reason"), OUTPUTS)
 
     def init(self, config, u0):
         s = config.settings(self.table)
@@ -67,13 +65,13 @@ class Variant:
         x = dict(zip(state_names, state))
         inputs = dict(zip(input_names, u))
         active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                             x["holding"] > 0.5)
-        if not active:       # hold; holding = 2 marks a low-speed hold, 1 an invalid input
-            held = dict(x, holding=2.0 if status & blocks.LOW_SPEED else 1.0)
+                                             x["hold_reason"] > 0.5)
+        if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
+            held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
             return (np.array([held[k] for k in state_names]),
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
-        if x["holding"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
+        if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)
         P = blocks.unpacked([x[k] for k in COVARIANCE], N).astype(LD)
@@ -121,8 +119,8 @@ class Variant:
         new = {**dict(zip(STATE, X_new)), **dict(zip(COVARIANCE, blocks.packed(P_new)))}
         if self.adaptive:                                                  # (15a), (15b), §2.10
             new.update(self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps))
-        new["holding"] = 0.0
-        status |= COVARIANCE_REPAIRED if repaired else 0
+        new["hold_reason"] = 0.0
+        status |= blocks.COVARIANCE_REPAIRED if repaired else 0
         status |= blocks.beyond_linear_range(inputs["ay"], s)
         first_inconsistent = False
         if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
@@ -133,10 +131,10 @@ class Variant:
         if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
                 or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)
                 or first_inconsistent):
-            new = dict(zip(state_names, self.init(config, u)), holding=0.0,   # restart here
+            new = dict(zip(state_names, self.init(config, u)), hold_reason=0.0,   # restart here
                        **{k: new[k] for k in blocks.MONITOR_STATES if k in new})
             X_new = np.array([new[k] for k in STATE], dtype=LD)
-            status |= FILTER_RESTARTED
+            status |= blocks.FILTER_RESTARTED
         output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]
         return (np.array([new[k] for k in state_names], dtype=float),
                 np.array(output, dtype=float))

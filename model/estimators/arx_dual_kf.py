@@ -82,7 +82,7 @@ def layouts(settings) -> tuple[Layout, Layout]:
         Signal("mz_prev", "N*m", "yaw moment of the previous sample (0 if it was implausible)"),
         *((Signal("delta_prev", "rad", "steer angle of the previous sample"),)
           if "b_delta" in theta else ()),
-        Signal("holding", "-", "1 while the speed is low (parameter updates skipped), else 0"),
+        signals.LOW_SPEED_HOLD,
     ))
     outputs = Layout((
         Signal("r", "rad/s", "filtered yaw rate x_n"),
@@ -162,7 +162,7 @@ def build(params: Parameters) -> Estimator:
 
     state, s = states.symbols("state")
     inputs, u = INPUTS.symbols("input")
-    guard = input_guard(u, config.limits, vx_min, vx_resume, s["holding"])
+    guard = input_guard(u, config.limits, vx_min, vx_resume, s["low_speed_hold"])
     ok = guard.plausible
     gyro_ok = ok["r"]
     adapting = ca.logic_and(gyro_ok, ca.logic_and(ok["vx"], ca.logic_not(guard.low_speed)))
@@ -206,7 +206,7 @@ def build(params: Parameters) -> Estimator:
         **{k: P_theta_next[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
         "mz_prev": mz,
         **({"delta_prev": hold(u["delta"], ok["delta"], 0)} if n == 4 else {}),
-        "holding": ca.if_else(guard.low_speed, 1, 0),
+        "low_speed_hold": ca.if_else(guard.low_speed, 1, 0),
     })
     code = guard.status + ca.if_else(projected, status.PARAMETERS_PROJECTED, 0)
     output = outputs.pack({"r": x_n, **{k: theta_out[i] for i, k in enumerate(theta_names)},
@@ -238,7 +238,7 @@ def _initial_state(params: Parameters, states: Layout, theta_names: tuple[str, .
         **{k: P_theta0_packed[i] for i, k in enumerate(kalman.packed_names("Pt", theta_names))},
         "mz_prev": first["mz"],
         **({"delta_prev": first["delta"]} if len(theta_names) == 4 else {}),
-        "holding": holding,
+        "low_speed_hold": holding,
     })
 
 
@@ -250,7 +250,9 @@ def notes(params: Parameters) -> dict[str, str]:
                                 f"|Phi - expm(A T)|_inf <= {plan.error_bound:.1e}"}
 
 
-DEFINITIONS = (Definition(NAME, build, SCHEMA, {
-    "measurement_noise": Tunable(1e-6, 1e-2), "model_noise": Tunable(1e-7, 1e-3),
-    "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)},
-    ("LOW_SPEED", "INVALID_INPUT", "PARAMETERS_PROJECTED"), GYRO_VARIANCE),)
+DEFINITIONS = (Definition(
+    name=NAME, build=build, schema=SCHEMA,
+    tunable={"measurement_noise": Tunable(1e-6, 1e-2), "model_noise": Tunable(1e-7, 1e-3),
+             "ar_drift": Tunable(1e-9, 1e-3), "input_drift": Tunable(1e-4, 1.0)},
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.PARAMETERS_PROJECTED),
+    derived=GYRO_VARIANCE),)

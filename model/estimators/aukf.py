@@ -19,7 +19,7 @@ docs/methods.md, seed 002, §2 with the §3/§5 defaults:
   overflow).
 
 Hold rule (model.guard, on the logged vx like every estimator): while holding every state is kept
-and beta = 0; ``holding`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
+and beta = 0; ``hold_reason`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
 after a low-speed hold restarts the filter from itself (the speed it stopped with is stale); after
 an invalid input it continues. Beyond the spec, an estimate outside the plausible envelope
 (``restart_speed_error``, ``restart_sideslip``) restarts the filter from the current sample
@@ -142,7 +142,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
         *(consistency.STATES if consistency.enabled(settings) else ()),
-        signals.HOLDING_REASON,
+        signals.HOLD_REASON,
     ))
     outputs = Layout((
         Signal("beta", "rad", "sideslip angle atan2(v, u)"),
@@ -261,7 +261,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
     sym = _Symbols(params, name, adaptive, settings, inputs_layout, states, outputs, state, kept, inputs, u,
-                   input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["holding"]),
+                   input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["hold_reason"]),
                    consistency.enabled(params.numeric.settings(name)))
     init_state = _initial_state(sym)
     start = _restarted_after_low_speed(sym, init_state)
@@ -282,14 +282,14 @@ def _initial_state(sym: _Symbols) -> ca.SX:
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if sym.adaptive else {}),
         **consistency.initial_entries(sym.monitored),
-        "holding": 2 * holding,
+        "hold_reason": 2 * holding,
     })
 
 
 def _restarted_after_low_speed(sym: _Symbols, init_state: ca.SX) -> _Filter:
-    """The filter this step starts from: the first sample after a low-speed hold (holding = 2)
+    """The filter this step starts from: the first sample after a low-speed hold (hold_reason = 2)
     restarts the filter from itself, any other continues from the state."""
-    start = ca.if_else(sym.kept["holding"] > 1.5, init_state, sym.state)
+    start = ca.if_else(sym.kept["hold_reason"] > 1.5, init_state, sym.state)
     s = {name: start[i] for i, name in enumerate(sym.states.names)}
     x = ca.vertcat(*[s[n] for n in X_NAMES])
     P = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in COVARIANCE]), N)
@@ -389,11 +389,11 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
         extra = {**extra, **check.updates}
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
-                           **extra, "holding": ca.SX(0)})
-    held = states.pack({**kept, "holding": ca.if_else(guard.low_speed, 2, 1)})
+                           **extra, "hold_reason": ca.SX(0)})
+    held = states.pack({**kept, "hold_reason": ca.if_else(guard.low_speed, 2, 1)})
     restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
                            **({e.name: extra[e.name] for e in consistency.STATES} if sym.monitored else {}),
-                           "holding": ca.SX(0)})
+                           "hold_reason": ca.SX(0)})
     restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), rising))
     x_out = ca.if_else(restarted, restart[:N], x_new)
     code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
@@ -428,12 +428,13 @@ def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:
 
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
-_UKF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "COVARIANCE_REPAIRED", "FILTER_RESTARTED",
-               "MODEL_INCONSISTENT", "BEYOND_LINEAR_RANGE")
+_UKF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.COVARIANCE_REPAIRED, status.FILTER_RESTARTED,
+               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE)
 _UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
 DEFINITIONS = (
-    Definition(PLAIN_NAME, build_plain, UKF_SCHEMA, _UKF_TUNABLE, _UKF_STATUS, _UKF_DERIVED),
-    Definition(NAME, build_adaptive, AUKF_SCHEMA,
-               {**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)}, _UKF_STATUS,
-               _UKF_DERIVED),
+    Definition(name=PLAIN_NAME, build=build_plain, schema=UKF_SCHEMA, tunable=_UKF_TUNABLE,
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED),
+    Definition(name=NAME, build=build_adaptive, schema=AUKF_SCHEMA,
+               tunable={**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)},
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED),
 )

@@ -466,9 +466,10 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
     })
 
 
-DEFINITIONS = (Definition(NAME, build, SCHEMA, {
-    "process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
-    "forgetting_factor": Tunable(0.95, 0.9999, log=False),
-    "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)},
-    ("LOW_SPEED", "INVALID_INPUT", "MODEL_INCONSISTENT"),
+DEFINITIONS = (Definition(
+    name=NAME, build=build, schema=SCHEMA,
+    tunable={"process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
+             "forgetting_factor": Tunable(0.95, 0.9999, log=False),
+             "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)},
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT),
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)

@@ -102,9 +102,10 @@ def build(params: Parameters) -> Estimator:
                      seed.notes())
 
 
-DEFINITIONS = (Definition(NAME, build, SCHEMA, {
-    "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
-    "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
-    **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
-    (*KINEMATIC_DYNAMIC_STATUS, "MODEL_INCONSISTENT"),
-    {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)
+DEFINITIONS = (Definition(
+    name=NAME, build=build, schema=SCHEMA,
+    tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+             "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
+             **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT),
+    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)

@@ -195,7 +195,8 @@ def build(params: Parameters) -> Estimator:
                      INPUTS, layout, OUTPUTS, init, structure, params, zoh_note(params))
 
 
-DEFINITIONS = (Definition(NAME, build, SCHEMA, {"process_noise": Tunable(1e-4, 1e2),
-                                                "measurement_noise": Tunable(1e-6, 1e1)},
-                          ("LOW_SPEED", "INVALID_INPUT", "MODEL_INCONSISTENT", "BEYOND_LINEAR_RANGE"),
-                          derived={**KF_MEASUREMENT_NOISE, **consistency.derived(CHANNELS)}),)
+DEFINITIONS = (Definition(
+    name=NAME, build=build, schema=SCHEMA,
+    tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1)},
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE),
+    derived={**KF_MEASUREMENT_NOISE, **consistency.derived(CHANNELS)}),)

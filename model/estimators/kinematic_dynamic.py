@@ -26,7 +26,7 @@ INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 _KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
 DYN, KIN = 0, 1
-STATUS_BITS = ("LOW_SPEED", "INVALID_INPUT", "REFERENCE_SUSPECT")
+STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT)
 """What seed 000's estimators can raise: the hold rule's bits and the reliability checks' time-out."""
 
 YAW_RATE_CHECKS = ("reference", "yaw_acceleration")

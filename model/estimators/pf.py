@@ -20,7 +20,7 @@ Functions. Weights are kept as log-scores relative to the best particle, so thei
 and the spec's underflow guard cannot trigger.
 
 Hold rule (model.guard, on the logged v_x like every estimator): an implausible input or low speed
-holds the particles and the random stream (no draws), beta = 0; ``holding`` is 2 for a low-speed
+holds the particles and the random stream (no draws), beta = 0; ``hold_reason`` is 2 for a low-speed
 hold, 1 for an invalid input. The first sample after a low-speed hold draws a new particle set
 from that sample (2.9), as the initialisation does. Active, an estimated v_x below vx_min gives
 beta = 0 and LOW_SPEED (the spec's validity rule). Beyond the spec, a_y is corrected for body roll
@@ -121,10 +121,10 @@ PARTICLE = Layout((*(Signal(n, u, d) for n, u, d in KINEMATIC),
                    Signal("weight", "-", "normalised weight (during a step: log-weight score)")))
 INPUTS = Layout(signals.inputs("vx", "ax", "ay", "r"))
 SHARED = ("mode", "vx", "ax", "ay", "r", "sigma_vx", "sigma_vy", "sigma_ax", "sigma_ay", "sigma_r",
-          "status", "holding")
+          "status", "hold_reason")
 """The per-sample vector every particle sees: the mode (0 hold, 1 propagate, 2 spawn), the
 measurement z (a_y roll-corrected) and the process-noise standard deviations (16); then, for
-``finish``, the guard's status bits and the ``holding`` value the head keeps if the sample holds."""
+``finish``, the guard's status bits and the ``hold_reason`` value the head keeps if the sample holds."""
 HOLD, PROPAGATE, SPAWN = 0, 1, 2
 WEIGHT_FLOOR = 1e-30
 """Weights below this count as this in the log-score of ``resampling = "effective_size"``
@@ -135,7 +135,7 @@ def layouts(count: int) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for ``count`` particles."""
     states = Layout((
         *(Signal(n, u, f"estimate of the {d} (weighted mean)") for n, u, d in KINEMATIC),
-        signals.HOLDING_REASON,
+        signals.HOLD_REASON,
         Signal("drift", "m/s", "bound of the v_y error: 3 sigma of the initial spread, plus the drift "
                                "rate integrated since the particles were drawn"),
         *(Signal(f"rng_{i}", "-", f"PCG32 state bits {63 - 16 * i}..{48 - 16 * i}")
@@ -244,12 +244,12 @@ def initial_drift(settings):
 
 
 def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
-    """The shared vector of one sample: mode, z, the adapted sigmas (16), status, holding."""
+    """The shared vector of one sample: mode, z, the adapted sigmas (16), status, hold_reason."""
     config = params.config
     settings = config.settings(name)
     guard = input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
-                        h["holding"] > 0.5)
-    mode = ca.if_else(guard.active, ca.if_else(h["holding"] > 1.5, SPAWN, PROPAGATE), HOLD)
+                        h["hold_reason"] > 0.5)
+    mode = ca.if_else(guard.active, ca.if_else(h["hold_reason"] > 1.5, SPAWN, PROPAGATE), HOLD)
     z = _measured(params, name, u)
     z = {n: hold(z[n], guard.active, h[n]) for n in MEASURED}   # held: innovation 0, sigma_0
     floor, cap = settings["process_noise"], settings["process_noise_max"]
@@ -258,7 +258,7 @@ def _prepare(params: Parameters, name: str, h, u) -> ca.SX:
              for i, n in enumerate(MEASURED)]
     speed = settings["speed_noise"]
     T = config.sample_time
-    held = ca.if_else(guard.low_speed, 2, ca.fmax(h["holding"], 1))
+    held = ca.if_else(guard.low_speed, 2, ca.fmax(h["hold_reason"], 1))
     return ca.vertcat(mode, hold(u["vx"], guard.active, h["vx"]), z["ax"], z["ay"], z["r"],
                       speed[0] + T * sigma[0], speed[1] + T * sigma[1], *sigma, guard.status,
                       ca.if_else(guard.active, 0, held))
@@ -326,17 +326,18 @@ def _finish(params: Parameters, name: str, h, shared, summary, head: Layout,
         "status": (shared["status"] + ca.if_else(slow, status.LOW_SPEED, 0)
                    + ca.if_else(dead_reckoning, status.DEAD_RECKONING, 0)),
     })
-    return head.pack({**estimate, "holding": shared["holding"], "drift": drift}), output
+    return head.pack({**estimate, "hold_reason": shared["hold_reason"], "drift": drift}), output
 
 
 _PF_TUNABLE = {"measurement_noise": Tunable(0.005, 2.0), "process_noise": Tunable(0.001, 1.0),
                "adaptation_gain_acceleration": Tunable(0.0, 5.0, log=False),
                "adaptation_gain_yaw_rate": Tunable(0.0, 5.0, log=False)}
 _PF_DERIVED = {**ROLL_GRADIENT, **INERTIAL_SIGMAS}
-_PF_STATUS = ("LOW_SPEED", "INVALID_INPUT", "DEAD_RECKONING")
+_PF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.DEAD_RECKONING)
 DEFINITIONS = (
-    Definition(ADAPTIVE, build_adaptive, ADAPTIVE_SCHEMA, _PF_TUNABLE, _PF_STATUS, derived=_PF_DERIVED),
-    Definition(IMPROVED, build_improved, IMPROVED_SCHEMA,
-               {**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)}, _PF_STATUS,
-               derived=_PF_DERIVED),
+    Definition(name=ADAPTIVE, build=build_adaptive, schema=ADAPTIVE_SCHEMA, tunable=_PF_TUNABLE,
+               status_bits=_PF_STATUS, derived=_PF_DERIVED),
+    Definition(name=IMPROVED, build=build_improved, schema=IMPROVED_SCHEMA,
+               tunable={**_PF_TUNABLE, "correction_gain": Tunable(0.0, 1.0, log=False)},
+               status_bits=_PF_STATUS, derived=_PF_DERIVED),
 )

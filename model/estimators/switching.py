@@ -23,7 +23,7 @@ from dataclasses import replace
 
 import casadi as ca
 
-from vsegen.model import signals
+from vsegen.model import signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -228,12 +228,12 @@ def build(params: Parameters) -> Estimator:
                 output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))
 
-    def holding(m, c, v):
+    def held(m, c, v):
         return seed.held(m, v), output(ca.SX(0), ca.SX(0), m["r_last"], ca.SX(DYN), c["status"])
 
     schemes, next_state, out = make_schemes(
         NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch,
-        [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", holding)],
+        [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)],
         params)
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params)
@@ -241,9 +241,10 @@ def build(params: Parameters) -> Estimator:
                      INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
 
 
-DEFINITIONS = (Definition(NAME, build, SCHEMA, {
-    "process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
-    "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
-    **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
-    (*KINEMATIC_DYNAMIC_STATUS, "KINEMATIC_DWELL_LIMITED"),
-    {**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
+DEFINITIONS = (Definition(
+    name=NAME, build=build, schema=SCHEMA,
+    tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+             "threshold": Tunable(0.5, 4.0, log=False), "hysteresis": Tunable(0.0, 1.0, log=False),
+             **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED),
+    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)

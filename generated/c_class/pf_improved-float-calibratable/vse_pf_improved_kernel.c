@@ -186,7 +186,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
  *     drift_acceleration, drift_yaw_rate, drift_limit, roll_gradient, vx_min, vx_resume,
  *     correction_gain_1, correction_gain_2, correction_gain_3
- * res[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * res[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * res[1] shared[12]: 12 entries
  */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -323,7 +323,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_pf_improved_kernel_prepare: 120 operations (CasADi SX instructions)
- * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * arg[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * arg[1] input[4]: vx, ax, ay, r
  * arg[2] params[28]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
  *     measurement_noise_3, initial_spread_1, initial_spread_2, process_noise_1, process_noise_2,
@@ -608,7 +608,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_pf_improved_kernel_finish: 105 operations (CasADi SX instructions)
- * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * arg[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * arg[1] shared[12]: 12 entries
  * arg[2] summary[6]: 6 entries
  * arg[3] params[28]: vx_max, ax_max, ay_max, r_max, measurement_noise_1, measurement_noise_2,
@@ -617,7 +617,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     speed_noise_1, speed_noise_2, adaptation_gain_acceleration, adaptation_gain_yaw_rate,
  *     drift_acceleration, drift_yaw_rate, drift_limit, roll_gradient, vx_min, vx_resume,
  *     correction_gain_1, correction_gain_2, correction_gain_3
- * res[0] head_next[7]: vx, vy, ax, ay, r, holding, drift
+ * res[0] head_next[7]: vx, vy, ax, ay, r, hold_reason, drift
  * res[1] output[8]: beta, vx, vy, n_eff, sigma_ax, sigma_ay, sigma_r, status
  */
 CASADI_SYMBOL_EXPORT int vse_pf_improved_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){

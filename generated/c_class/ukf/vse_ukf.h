@@ -102,7 +102,7 @@ enum {
     VSE_UKF_STATE_P_AY_AY = 26, /* (m/s^2)^2: covariance entry (upper triangle) */
     VSE_UKF_STATE_RESIDUAL = 27, /* -: consistency monitor: mean squared innovation in sensor variances */
     VSE_UKF_STATE_RESIDUAL_HOLD_LEFT = 28, /* -: consistency monitor: samples MODEL_INCONSISTENT stays raised */
-    VSE_UKF_STATE_HOLDING = 29 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
+    VSE_UKF_STATE_HOLD_REASON = 29 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

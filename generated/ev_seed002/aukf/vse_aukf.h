@@ -113,7 +113,7 @@ enum {
     VSE_AUKF_STATE_QVAR_AX = 37, /* (m/s^2)^2: process-noise variance of ax */
     VSE_AUKF_STATE_QVAR_AY = 38, /* (m/s^2)^2: process-noise variance of ay */
     VSE_AUKF_STATE_FADING = 39, /* -: f^(k+1), for the Sage-Husa weight d_k */
-    VSE_AUKF_STATE_HOLDING = 40 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
+    VSE_AUKF_STATE_HOLD_REASON = 40 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

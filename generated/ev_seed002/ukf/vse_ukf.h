@@ -100,7 +100,7 @@ enum {
     VSE_UKF_STATE_P_AX_AX = 24, /* (m/s^2)^2: covariance entry (upper triangle) */
     VSE_UKF_STATE_P_AX_AY = 25, /* (m/s^2)^2: covariance entry (upper triangle) */
     VSE_UKF_STATE_P_AY_AY = 26, /* (m/s^2)^2: covariance entry (upper triangle) */
-    VSE_UKF_STATE_HOLDING = 27 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
+    VSE_UKF_STATE_HOLD_REASON = 27 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

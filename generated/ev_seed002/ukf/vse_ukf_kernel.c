@@ -187,7 +187,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * res[0] state[28]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
- *     P_ay_ay, holding
+ *     P_ay_ay, hold_reason
  */
 CASADI_SYMBOL_EXPORT int vse_ukf_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
@@ -604,7 +604,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] state[28]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
- *     P_ay_ay, holding
+ *     P_ay_ay, hold_reason
  * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
  * res[0] items[36]: 36 entries
  * res[1] shared[13]: 13 entries
@@ -4188,13 +4188,13 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] state[28]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
- *     P_ay_ay, holding
+ *     P_ay_ay, hold_reason
  * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
  * arg[2] results[72]: 72 entries
  * res[0] state_next[28]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
- *     P_ay_ay, holding
+ *     P_ay_ay, hold_reason
  * res[1] output[8]: beta, vx, vy, r, yaw_moment, ax, ay, status
  */
 CASADI_SYMBOL_EXPORT int vse_ukf_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){

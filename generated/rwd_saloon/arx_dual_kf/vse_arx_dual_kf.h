@@ -78,7 +78,7 @@ enum {
     VSE_ARX_DUAL_KF_STATE_PT_A2_B_MZ = 12, /* -: KF2 covariance entry (upper triangle) */
     VSE_ARX_DUAL_KF_STATE_PT_B_MZ_B_MZ = 13, /* -: KF2 covariance entry (upper triangle) */
     VSE_ARX_DUAL_KF_STATE_MZ_PREV = 14, /* N*m: yaw moment of the previous sample (0 if it was implausible) */
-    VSE_ARX_DUAL_KF_STATE_HOLDING = 15 /* -: 1 while the speed is low (parameter updates skipped), else 0 */
+    VSE_ARX_DUAL_KF_STATE_LOW_SPEED_HOLD = 15 /* -: 1 while holding at low speed, else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

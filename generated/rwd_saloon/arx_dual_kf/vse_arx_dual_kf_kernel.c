@@ -464,7 +464,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_arx_dual_kf_kernel_init: 365 operations (CasADi SX instructions)
  * arg[0] input[4]: delta, vx, r, mz
  * res[0] state[16]: x_1, x_2, P_x_1_x_1, P_x_1_x_2, P_x_2_x_2, a1, a2, b_mz, Pt_a1_a1, Pt_a1_a2,
- *     Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, holding
+ *     Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, low_speed_hold
  */
 CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
@@ -891,10 +891,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 /*
  * vse_arx_dual_kf_kernel_step: 402 operations (CasADi SX instructions)
  * arg[0] state[16]: x_1, x_2, P_x_1_x_1, P_x_1_x_2, P_x_2_x_2, a1, a2, b_mz, Pt_a1_a1, Pt_a1_a2,
- *     Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, holding
+ *     Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, low_speed_hold
  * arg[1] input[4]: delta, vx, r, mz
  * res[0] state_next[16]: x_1, x_2, P_x_1_x_1, P_x_1_x_2, P_x_2_x_2, a1, a2, b_mz, Pt_a1_a1,
- *     Pt_a1_a2, Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, holding
+ *     Pt_a1_a2, Pt_a1_b_mz, Pt_a2_a2, Pt_a2_b_mz, Pt_b_mz_b_mz, mz_prev, low_speed_hold
  * res[1] output[6]: r, a1, a2, b_mz, gain, status
  */
 CASADI_SYMBOL_EXPORT int vse_arx_dual_kf_kernel_step(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){

@@ -115,7 +115,7 @@ enum {
     VSE_AUKF_STATE_FADING = 39, /* -: f^(k+1), for the Sage-Husa weight d_k */
     VSE_AUKF_STATE_RESIDUAL = 40, /* -: consistency monitor: mean squared innovation in sensor variances */
     VSE_AUKF_STATE_RESIDUAL_HOLD_LEFT = 41, /* -: consistency monitor: samples MODEL_INCONSISTENT stays raised */
-    VSE_AUKF_STATE_HOLDING = 42 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
+    VSE_AUKF_STATE_HOLD_REASON = 42 /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

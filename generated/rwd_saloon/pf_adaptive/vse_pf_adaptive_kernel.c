@@ -166,7 +166,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 /*
  * vse_pf_adaptive_kernel_init: 66 operations (CasADi SX instructions)
  * arg[0] input[4]: vx, ax, ay, r
- * res[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * res[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * res[1] shared[12]: 12 entries
  */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -291,7 +291,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_pf_adaptive_kernel_prepare: 108 operations (CasADi SX instructions)
- * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * arg[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * arg[1] input[4]: vx, ax, ay, r
  * res[0] shared[12]: 12 entries
  */
@@ -539,10 +539,10 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_pf_adaptive_kernel_finish: 99 operations (CasADi SX instructions)
- * arg[0] head[7]: vx, vy, ax, ay, r, holding, drift
+ * arg[0] head[7]: vx, vy, ax, ay, r, hold_reason, drift
  * arg[1] shared[12]: 12 entries
  * arg[2] summary[6]: 6 entries
- * res[0] head_next[7]: vx, vy, ax, ay, r, holding, drift
+ * res[0] head_next[7]: vx, vy, ax, ay, r, hold_reason, drift
  * res[1] output[8]: beta, vx, vy, n_eff, sigma_ax, sigma_ay, sigma_r, status
  */
 CASADI_SYMBOL_EXPORT int vse_pf_adaptive_kernel_finish(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){

@@ -76,7 +76,7 @@ enum {
     VSE_PF_IMPROVED_STATE_AX = 2, /* m/s^2: estimate of the longitudinal acceleration (weighted mean) */
     VSE_PF_IMPROVED_STATE_AY = 3, /* m/s^2: estimate of the lateral acceleration (weighted mean) */
     VSE_PF_IMPROVED_STATE_R = 4, /* rad/s: estimate of the yaw rate (weighted mean) */
-    VSE_PF_IMPROVED_STATE_HOLDING = 5, /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
+    VSE_PF_IMPROVED_STATE_HOLD_REASON = 5, /* -: 2 while holding at low speed, 1 on an invalid input, else 0 */
     VSE_PF_IMPROVED_STATE_DRIFT = 6, /* m/s: bound of the v_y error: 3 sigma of the initial spread, plus the drift rate integrated since the particles were drawn */
     VSE_PF_IMPROVED_STATE_RNG_0 = 7, /* -: PCG32 state bits 63..48 */
     VSE_PF_IMPROVED_STATE_RNG_1 = 8, /* -: PCG32 state bits 47..32 */
