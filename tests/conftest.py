@@ -1,12 +1,18 @@
-"""Shared fixtures: the default vehicle, its text, and a helper to write variants of it."""
+"""Shared fixtures: the default vehicle, its text, helpers to write variants of it, the vsegen command
+line and a clean slate of the per-process memos."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from locations import DEFAULT_VEHICLE
+from click.testing import CliRunner
+from locations import DEFAULT_VEHICLE, REPO
 
+from vsegen.harness.cli import main
 from vsegen.harness.jobs.memo import clear_all
 from vsegen.harness.project.vehicles import load_vehicle, with_settings
 from vsegen.model.params import VehicleConfig, parse_vehicle
@@ -55,3 +61,39 @@ def cleared_memos():
     clear_all()
     yield
     clear_all()
+
+
+@dataclass(frozen=True)
+class CliRun:
+    """What one vsegen command did: its exit status and its two output streams."""
+
+    exit_code: int
+    stdout: str
+    stderr: str
+
+    @property
+    def output(self) -> str:
+        """Both streams, for an assertion message."""
+        return self.stdout + self.stderr
+
+
+class Vsegen:
+    """The vsegen command line as the tests run it: ``vsegen("run", ...)`` in this process (click's
+    runner: fast, the caches shared; an exception is raised, not turned into an exit status);
+    ``vsegen.process(..., cwd=...)`` in a new Python process started in ``cwd`` (what a user's shell
+    does: the project is found from the working directory)."""
+
+    def __call__(self, *args: str) -> CliRun:
+        result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+        return CliRun(result.exit_code, result.stdout, result.stderr)
+
+    def process(self, *args: str, cwd: Path = REPO, env: dict | None = None) -> CliRun:
+        done = subprocess.run([sys.executable, "-m", "vsegen.harness.cli", *map(str, args)], cwd=cwd, env=env,
+                              capture_output=True, text=True)
+        return CliRun(done.returncode, done.stdout, done.stderr)
+
+
+@pytest.fixture(scope="session")
+def vsegen() -> Vsegen:
+    """The vsegen command line (see :class:`Vsegen`)."""
+    return Vsegen()

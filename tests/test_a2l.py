@@ -7,7 +7,6 @@ from __future__ import annotations
 import shutil
 import struct
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -29,11 +28,6 @@ needs_arm = pytest.mark.skipif(shutil.which(M4F.compiler) is None, reason="arm-n
 def parse(path: Path):
     """The A2L file as pya2ldb's in-memory database session."""
     return pya2l.import_a2l(str(path), in_memory=True, progress_bar=False, loglevel="ERROR", encoding="utf-8")
-
-
-def vsegen(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "vsegen.harness.cli", *args], cwd=cwd, capture_output=True,
-                          text=True)
 
 
 def kit(tmp_path: Path, name: str, real: str, car: str = "c_class") -> Path:
@@ -103,11 +97,11 @@ def test_limits_and_units_come_from_the_schema(tmp_path):
 
 @needs_arm
 @pytest.mark.parametrize("name", ["kf2dof", "switching"])
-def test_vsegen_a2l_fills_the_addresses_the_firmware_holds_the_values_at(tmp_path, name):
+def test_vsegen_a2l_fills_the_addresses_the_firmware_holds_the_values_at(tmp_path, name, vsegen):
     folder = kit(tmp_path, name, "float")
     elf = firmware(folder)
-    result = vsegen("a2l", "--elf", str(elf), "--a2l", f"vse_{name}.a2l", "--out", "filled.a2l", cwd=folder)
-    assert result.returncode == 0, result.stderr
+    result = vsegen.process("a2l", "--elf", str(elf), "--a2l", f"vse_{name}.a2l", "--out", "filled.a2l", cwd=folder)
+    assert result.exit_code == 0, result.stderr
     session, symbols = parse(folder / "filled.a2l"), nm_addresses(elf)
     estimator = build(name, load_vehicle(VEHICLES / "c_class.toml"), "calibratable")
     base = symbols[f"vse_{name}_calibration"]
@@ -121,7 +115,7 @@ def test_vsegen_a2l_fills_the_addresses_the_firmware_holds_the_values_at(tmp_pat
 
 
 @needs_arm
-def test_a_mismatched_firmware_or_symbol_is_one_line(tmp_path):
+def test_a_mismatched_firmware_or_symbol_is_one_line(tmp_path, vsegen):
     double = kit(tmp_path, "kf2dof", "double")
     elf = firmware(kit(tmp_path, "kf2dof", "float"))
     cases = [
@@ -132,6 +126,6 @@ def test_a_mismatched_firmware_or_symbol_is_one_line(tmp_path):
         (["--elf", str(elf), "--a2l", str(double / "vse_kf2dof.h")], "expected an A2L file vsegen generated"),
     ]
     for args, fragment in cases:
-        result = vsegen("a2l", *args, "--out", "x.a2l", cwd=tmp_path)
-        assert result.returncode == 2 and result.stderr.count("\n") == 1 and fragment in result.stderr, result.stderr
+        result = vsegen.process("a2l", *args, "--out", "x.a2l", cwd=tmp_path)
+        assert result.exit_code == 2 and result.stderr.count("\n") == 1 and fragment in result.stderr, result.stderr
         assert not (tmp_path / "x.a2l").exists()

@@ -8,10 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from asammdf import MDF, Signal
-from click.testing import CliRunner
 from locations import VEHICLES
 
-from vsegen.harness.cli import main
 from vsegen.harness.logs.channels import read_channel_map
 from vsegen.harness.logs.mdf import read_mdf
 from vsegen.harness.logs.table import read_estimates, read_log, write_log
@@ -60,7 +58,7 @@ def write_mf4(log, path: Path, slow=("vx",)) -> None:
     mdf.save(path, overwrite=True)
 
 
-def test_an_mdf4_log_runs_through_a_channel_map_on_a_causal_grid(tmp_path, config, dlc):
+def test_an_mdf4_log_runs_through_a_channel_map_on_a_causal_grid(tmp_path, config, dlc, vsegen):
     write_mf4(dlc, tmp_path / "drive.mf4")
     (tmp_path / "map.toml").write_text(MAP)
     log = read_mdf(tmp_path / "drive.mf4", read_channel_map(tmp_path / "map.toml"), 0.01)
@@ -68,16 +66,16 @@ def test_an_mdf4_log_runs_through_a_channel_map_on_a_causal_grid(tmp_path, confi
     assert np.allclose(log["r"], dlc["r"][:len(log)], rtol=1e-12, atol=1e-15)
     held = dlc["vx"][(np.arange(len(log)) // 2) * 2]  # 50 Hz: each odd tick holds the even sample before it
     assert np.allclose(log["vx"], held, rtol=1e-12)
-    result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / "drive.mf4"), "--channels",
-                                       str(tmp_path / "map.toml"), "--estimator", "kf2dof", "--out",
-                                       str(tmp_path / "est.mf4")])
+    result = vsegen("run", "--log", str(tmp_path / "drive.mf4"), "--channels",
+                    str(tmp_path / "map.toml"), "--estimator", "kf2dof", "--out",
+                    str(tmp_path / "est.mf4"))
     assert result.exit_code == 0, result.output
     assert "taken causally onto a uniform 10 ms grid" in result.stderr
     written = MDF(tmp_path / "est.mf4")
     assert {"beta", "vy", "r", "status"} <= set(written.channels_db)
 
 
-def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc):
+def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc, vsegen):
     write_log(dlc, tmp_path / "si.csv")
     logger = {"t": dlc["t"], **{name: dlc[c] * k for c, (name, k) in LOGGER.items()}}
     from vsegen.harness.logs.table import Log
@@ -87,8 +85,8 @@ def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc)
     outputs = []
     for log, extra in (("si.csv", []), ("logger.csv", ["--channels", str(tmp_path / "map.toml")])):
         out = tmp_path / f"est_{log}"
-        result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / log), "--estimator", "kf2dof",
-                                           "--out", str(out), *extra])
+        result = vsegen("run", "--log", str(tmp_path / log), "--estimator", "kf2dof",
+                        "--out", str(out), *extra)
         assert result.exit_code == 0, result.output
         outputs.append(read_estimates(out))
     assert np.allclose(outputs[0]["beta"], outputs[1]["beta"], rtol=1e-9, atol=1e-12)
@@ -103,22 +101,22 @@ def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc)
     (("factor = 0.0625", "factor = 0"), "[columns.delta] factor = 0: expected a finite non-zero number"),
     (('channel = "YawRate"', 'channel = "Gyro"'), "missing channel 'Gyro' for column 'r'"),
 ])
-def test_channel_map_mistakes_are_one_line_and_nothing_is_written(tmp_path, dlc, edit, fragment):
+def test_channel_map_mistakes_are_one_line_and_nothing_is_written(tmp_path, dlc, edit, fragment, vsegen):
     write_mf4(dlc, tmp_path / "drive.mf4")
     (tmp_path / "map.toml").write_text(MAP.replace(*edit))
     out = tmp_path / "est.csv"
-    result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / "drive.mf4"), "--channels",
-                                       str(tmp_path / "map.toml"), "--estimator", "kf2dof", "--out", str(out),
-                                       "--vehicle", str(VEHICLES / "c_class.toml")])
+    result = vsegen("run", "--log", str(tmp_path / "drive.mf4"), "--channels",
+                    str(tmp_path / "map.toml"), "--estimator", "kf2dof", "--out", str(out),
+                    "--vehicle", str(VEHICLES / "c_class.toml"))
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0], lines
     assert not out.exists()
 
 
-def test_a_file_that_is_not_mdf4_is_one_line(tmp_path):
+def test_a_file_that_is_not_mdf4_is_one_line(tmp_path, vsegen):
     (tmp_path / "junk.mf4").write_bytes(b"\x00junk" * 100)
-    result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / "junk.mf4"), "--estimator", "kf2dof",
-                                       "--out", str(tmp_path / "est.csv")])
+    result = vsegen("run", "--log", str(tmp_path / "junk.mf4"), "--estimator", "kf2dof",
+                    "--out", str(tmp_path / "est.csv"))
     assert result.exit_code == 2
     assert result.stderr.startswith(f"vsegen: error: {tmp_path / 'junk.mf4'}: not a readable MDF4 file")

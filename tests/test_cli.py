@@ -2,22 +2,13 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-from pathlib import Path
-
 import pytest
 from locations import DEFAULT_VEHICLE, REPO
 
 
-def vsegen(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "vsegen.harness.cli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-
-
-def test_verify_prints_the_table_and_a_progress_line_per_estimator():
-    result = vsegen("verify", "--estimator", "kf2dof", "--estimator", "switching")
-    assert result.returncode == 0, result.stderr
+def test_verify_prints_the_table_and_a_progress_line_per_estimator(vsegen):
+    result = vsegen.process("verify", "--estimator", "kf2dof", "--estimator", "switching")
+    assert result.exit_code == 0, result.stderr
     assert "verify passed: 26 runs" in result.stdout
     assert "dlc(speed_kmh=120.0)" in result.stdout and "max rel diff" in result.stdout
     progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
@@ -25,27 +16,27 @@ def test_verify_prints_the_table_and_a_progress_line_per_estimator():
 
 
 @pytest.mark.slow
-def test_verify_default_vehicle_prints_table():
-    result = vsegen("verify")
-    assert result.returncode == 0, result.stderr
+def test_verify_default_vehicle_prints_table(vsegen):
+    result = vsegen.process("verify")
+    assert result.exit_code == 0, result.stderr
     assert "verify passed: 117 runs" in result.stdout
 
 
-def test_generate_check_is_clean_on_the_repository():
-    result = vsegen("generate", "--check")
-    assert result.returncode == 0, result.stdout + result.stderr
+def test_generate_check_is_clean_on_the_repository(vsegen):
+    result = vsegen.process("generate", "--check")
+    assert result.exit_code == 0, result.stdout + result.stderr
     for folder in ("c_class/kf2dof", "c_class/kf2dof-float-calibratable",
                    "c_class/pf_improved-float-baked", "ev_seed002/aukf"):
         assert f"up to date  generated/{folder}\n" in result.stdout
 
 
-def test_generate_then_check_detects_an_edit(tmp_path):
-    assert vsegen("generate", "--out", str(tmp_path)).returncode == 0
+def test_generate_then_check_detects_an_edit(tmp_path, vsegen):
+    assert vsegen.process("generate", "--out", str(tmp_path)).exit_code == 0
     target = tmp_path / "c_class" / "kf2dof" / "vse_kf2dof.h"
     target.write_text(target.read_text().replace("(0.01)", "(0.02)"))
     (tmp_path / "c_class" / "removed_estimator").mkdir()       # left over from an older tree
-    result = vsegen("generate", "--check", "--out", str(tmp_path))
-    assert result.returncode == 1
+    result = vsegen.process("generate", "--check", "--out", str(tmp_path))
+    assert result.exit_code == 1
     assert "-#define VSE_KF2DOF_SAMPLE_TIME (0.02)" in result.stdout
     assert "stale" in result.stderr
     assert "removed_estimator: no vehicle file or estimator generates this folder" in result.stderr
@@ -55,52 +46,52 @@ def test_generate_then_check_detects_an_edit(tmp_path):
     (["verify", "--estimator", "nope"], "unknown estimator 'nope'"),
     (["generate", "--vehicle", "missing.toml"], "missing.toml: cannot read vehicle file"),
 ])
-def test_user_errors_are_one_line(args, fragment):
-    result = vsegen(*args)
-    assert result.returncode == 2
+def test_user_errors_are_one_line(args, fragment, vsegen):
+    result = vsegen.process(*args)
+    assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and fragment in lines[0] and "Traceback" not in result.stderr
 
 
-def test_bad_vehicle_file_is_one_line(tmp_path):
+def test_bad_vehicle_file_is_one_line(tmp_path, vsegen):
     bad = tmp_path / "bad.toml"
     bad.write_text((REPO / "vehicles" / "c_class.toml").read_text().replace("mass = 1412.0", "mass = -1"))
-    result = vsegen("verify", "--vehicle", str(bad))
-    assert result.returncode == 2
+    result = vsegen.process("verify", "--vehicle", str(bad))
+    assert result.exit_code == 2
     assert result.stderr.count("\n") == 1
     assert f"{bad}:5: [vehicle] mass = -1: expected a finite number > 0 (kg)" in result.stderr
 
 
-def test_list():
-    result = vsegen("list")
-    assert result.returncode == 0 and "kf2dof" in result.stdout and "dlc" in result.stdout
+def test_list(vsegen):
+    result = vsegen.process("list")
+    assert result.exit_code == 0 and "kf2dof" in result.stdout and "dlc" in result.stdout
     text = " ".join(result.stdout.split())                      # rich may wrap long lines
     assert "[options: mu=0.85 v_start=12.5" in text and "yaw_moment=0.0]" in text
 
 
-def test_simulate_run_score_plot(tmp_path):
+def test_simulate_run_score_plot(tmp_path, vsegen):
     log, est, ref, fig = (tmp_path / n for n in ("log.csv", "est.csv", "ref.csv", "fig.png"))
-    result = vsegen("simulate", "dlc", "--set", "speed_kmh=100", "--seed", "2", "--out", str(log))
-    assert result.returncode == 0, result.stderr
+    result = vsegen.process("simulate", "dlc", "--set", "speed_kmh=100", "--seed", "2", "--out", str(log))
+    assert result.exit_code == 0, result.stderr
     assert "stayed in cones" in result.stdout
     for backend, out in (("c", est), ("reference", ref)):
-        result = vsegen("run", "--log", str(log), "--estimator", "kf2dof", "--backend", backend,
-                        "--out", str(out))
-        assert result.returncode == 0, result.stderr
+        result = vsegen.process("run", "--log", str(log), "--estimator", "kf2dof", "--backend", backend,
+                                "--out", str(out))
+        assert result.exit_code == 0, result.stderr
     header = est.read_text().splitlines()[0]
     assert header == "t,beta,vy,r,status"
-    result = vsegen("score", "--log", str(log), "--est", str(est))
-    assert result.returncode == 0 and "beta (deg)" in result.stdout and "RMSE" in result.stdout
-    result = vsegen("plot", "--log", str(log), "--est", str(est), "--est", str(ref), "--out", str(fig))
-    assert result.returncode == 0, result.stderr
+    result = vsegen.process("score", "--log", str(log), "--est", str(est))
+    assert result.exit_code == 0 and "beta (deg)" in result.stdout and "RMSE" in result.stdout
+    result = vsegen.process("plot", "--log", str(log), "--est", str(est), "--est", str(ref), "--out", str(fig))
+    assert result.exit_code == 0, result.stderr
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_run_at_another_rate_generates_for_it(tmp_path):
+def test_run_at_another_rate_generates_for_it(tmp_path, vsegen):
     log, est = tmp_path / "log.csv", tmp_path / "est.csv"
-    assert vsegen("simulate", "sine_steer", "--rate", "200", "--out", str(log)).returncode == 0
-    result = vsegen("run", "--log", str(log), "--estimator", "kf2dof", "--out", str(est))
-    assert result.returncode == 0, result.stderr
+    assert vsegen.process("simulate", "sine_steer", "--rate", "200", "--out", str(log)).exit_code == 0
+    result = vsegen.process("run", "--log", str(log), "--estimator", "kf2dof", "--out", str(est))
+    assert result.exit_code == 0, result.stderr
     assert "T = 0.005 s" in result.stdout
 
 
@@ -114,91 +105,83 @@ def test_run_at_another_rate_generates_for_it(tmp_path):
     (["generate"], "no vehicle file in"),
     (["score", "--log", "missing.csv", "--est", "e.csv"], "missing.csv: cannot read"),
 ])
-def test_more_user_errors(tmp_path, args, fragment):
-    result = vsegen(*args, cwd=tmp_path)
-    assert result.returncode == 2, result.stderr
+def test_more_user_errors(tmp_path, args, fragment, vsegen):
+    result = vsegen.process(*args, cwd=tmp_path)
+    assert result.exit_code == 2, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and fragment in result.stderr
     assert not (tmp_path / "x.csv").exists()
 
 
-def test_score_rejects_mismatched_files(tmp_path):
+def test_score_rejects_mismatched_files(tmp_path, vsegen):
     a, b, est = tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "est.csv"
-    assert vsegen("simulate", "sine_steer", "--out", str(a)).returncode == 0
-    assert vsegen("simulate", "step_steer", "--out", str(b)).returncode == 0
-    assert vsegen("run", "--log", str(b), "--estimator", "kf2dof", "--out", str(est)).returncode == 0
-    result = vsegen("score", "--log", str(a), "--est", str(est))
-    assert result.returncode == 2 and "expected the same time stamps" in result.stderr
+    assert vsegen.process("simulate", "sine_steer", "--out", str(a)).exit_code == 0
+    assert vsegen.process("simulate", "step_steer", "--out", str(b)).exit_code == 0
+    assert vsegen.process("run", "--log", str(b), "--estimator", "kf2dof", "--out", str(est)).exit_code == 0
+    result = vsegen.process("score", "--log", str(a), "--est", str(est))
+    assert result.exit_code == 2 and "expected the same time stamps" in result.stderr
 
 
-def test_yaw_rate_estimator_from_a_yaw_moment_log_is_scored_and_plotted(tmp_path):
+def test_yaw_rate_estimator_from_a_yaw_moment_log_is_scored_and_plotted(tmp_path, vsegen):
     """arx_dual_kf estimates r only: score and plot use the yaw rate; a log with mz feeds it."""
     log, est, fig, bad = (tmp_path / n for n in ("log.csv", "arx.csv", "arx.png", "bad.csv"))
-    assert vsegen("simulate", "sine_steer", "--set", "yaw_moment=1000", "--out", str(log)).returncode == 0
+    assert vsegen.process("simulate", "sine_steer", "--set", "yaw_moment=1000", "--out", str(log)).exit_code == 0
     assert "mz" in log.read_text().splitlines()[0].split(",")
-    result = vsegen("run", "--log", str(log), "--estimator", "arx_dual_kf", "--out", str(est))
-    assert result.returncode == 0, result.stderr
-    result = vsegen("score", "--log", str(log), "--est", str(est))
-    assert result.returncode == 0 and "r (deg/s)" in result.stdout and "beta" not in result.stdout
-    result = vsegen("plot", "--log", str(log), "--est", str(est), "--out", str(fig))
-    assert result.returncode == 0, result.stderr
+    result = vsegen.process("run", "--log", str(log), "--estimator", "arx_dual_kf", "--out", str(est))
+    assert result.exit_code == 0, result.stderr
+    result = vsegen.process("score", "--log", str(log), "--est", str(est))
+    assert result.exit_code == 0 and "r (deg/s)" in result.stdout and "beta" not in result.stdout
+    result = vsegen.process("plot", "--log", str(log), "--est", str(est), "--out", str(fig))
+    assert result.exit_code == 0, result.stderr
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad.write_text("t,x\n0,1\n0.01,2\n")
-    result = vsegen("score", "--log", str(log), "--est", str(bad))
-    assert result.returncode == 2 and "no estimated signal: expected a column beta, vy or r" in result.stderr
+    result = vsegen.process("score", "--log", str(log), "--est", str(bad))
+    assert result.exit_code == 2 and "no estimated signal: expected a column beta, vy or r" in result.stderr
 
 
-def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path):
-    from click.testing import CliRunner
+def test_a_log_at_another_rate_than_the_vehicle_file_is_said_once(tmp_path, vsegen):
 
-    from vsegen.harness.cli import main
     from vsegen.harness.logs.table import write_log
     from vsegen.harness.project.vehicles import load_vehicle
     from vsegen.harness.sim.scenarios import Case
 
     config = load_vehicle(REPO / "vehicles" / "c_class.toml")
     write_log(Case.of("sine_steer").simulate(config, 200.0, 1), tmp_path / "fast.csv")
-    result = CliRunner().invoke(main, ["run", "--log", str(tmp_path / "fast.csv"), "--estimator", "kf2dof",
-                                       "--out", str(tmp_path / "est.csv")])
+    result = vsegen("run", "--log", str(tmp_path / "fast.csv"), "--estimator", "kf2dof",
+                    "--out", str(tmp_path / "est.csv"))
     assert result.exit_code == 0, result.output
     said = [line for line in result.stderr.splitlines() if "differs from [estimator] sample_time" in line]
     assert len(said) == 1 and "sample time 0.005 s" in said[0] and "sample_time = 0.01 s" in said[0]
 
 
-def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path):
-    from click.testing import CliRunner
+def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path, vsegen):
 
-    from vsegen.harness.cli import main
 
-    runner = CliRunner()
     for arguments in (["simulate", "sine_steer", "--no-truth", "--out", str(tmp_path / "road.csv")],
                       ["run", "--log", str(tmp_path / "road.csv"), "--estimator", "kf2dof", "--out",
                        str(tmp_path / "est.csv")],
                       ["plot", "--log", str(tmp_path / "road.csv"), "--est", str(tmp_path / "est.csv"), "--out",
                        str(tmp_path / "road.png")]):
-        result = runner.invoke(main, arguments)
+        result = vsegen(*arguments)
         assert result.exit_code == 0, result.output
     assert (tmp_path / "road.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path):
-    from click.testing import CliRunner
+def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path, vsegen):
 
-    from vsegen.harness.cli import main
     from vsegen.harness.logs.table import read_estimates
 
-    runner = CliRunner()
     log, est = str(tmp_path / "dlc.csv"), str(tmp_path / "est.csv")
-    assert runner.invoke(main, ["simulate", "dlc", "--out", log]).exit_code == 0
+    assert vsegen("simulate", "dlc", "--out", log).exit_code == 0
     window = ["--from", "2", "--to", "6"]
     for arguments in (["run", "--log", log, "--estimator", "kf2dof", "--out", est, *window],
                       ["score", "--log", log, "--est", est, *window],
                       ["plot", "--log", log, "--est", est, "--out", str(tmp_path / "p.png"), *window]):
-        result = runner.invoke(main, arguments)
+        result = vsegen(*arguments)
         assert result.exit_code == 0, result.output
     t = read_estimates(tmp_path / "est.csv")["t"]
     assert t[0] >= 2.0 and t[-1] <= 6.0 and len(t) == 401
-    result = runner.invoke(main, ["run", "--log", log, "--estimator", "kf2dof", "--out", str(tmp_path / "x.csv"),
-                                  "--from", "50"])
+    result = vsegen("run", "--log", log, "--estimator", "kf2dof", "--out", str(tmp_path / "x.csv"),
+                    "--from", "50")
     assert result.exit_code == 2
     assert "time window 50.0 .. None s holds 0 sample(s): expected at least 2 inside 0 .. " in result.stderr
     assert not (tmp_path / "x.csv").exists()

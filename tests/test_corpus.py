@@ -7,9 +7,6 @@ import json
 from pathlib import Path
 
 import pytest
-from click.testing import CliRunner
-
-from vsegen.harness.cli import main
 
 CORPUS = Path(__file__).parent / "corpus"
 EXPECTED = json.loads((CORPUS / "expected.json").read_text())
@@ -18,10 +15,6 @@ EXPECTED = json.loads((CORPUS / "expected.json").read_text())
 def test_corpus_is_complete():
     files = {str(p.relative_to(CORPUS)) for p in CORPUS.glob("*/*")}
     assert files == set(EXPECTED)
-
-
-def invoke(args: list[str]):
-    return CliRunner().invoke(main, args, catch_exceptions=False)
 
 
 def assert_one_clear_line(result, path: Path, fragment: str) -> None:
@@ -34,45 +27,45 @@ def assert_one_clear_line(result, path: Path, fragment: str) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("vehicles/")))
-def test_bad_vehicle_files(tmp_path, name):
+def test_bad_vehicle_files(tmp_path, name, vsegen):
     path = CORPUS / name
     out = tmp_path / "out"
-    assert_one_clear_line(invoke(["generate", "--vehicle", str(path), "--out", str(out)]), path,
+    assert_one_clear_line(vsegen("generate", "--vehicle", str(path), "--out", str(out)), path,
                           EXPECTED[name])
     assert not out.exists()
-    assert_one_clear_line(invoke(["verify", "--vehicle", str(path)]), path, EXPECTED[name])
+    assert_one_clear_line(vsegen("verify", "--vehicle", str(path)), path, EXPECTED[name])
     log = tmp_path / "log.csv"
-    assert_one_clear_line(invoke(["simulate", "dlc", "--vehicle", str(path), "--out", str(log)]),
+    assert_one_clear_line(vsegen("simulate", "dlc", "--vehicle", str(path), "--out", str(log)),
                           path, EXPECTED[name])
     assert not log.exists()
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("logs/")))
-def test_bad_logs(tmp_path, name):
+def test_bad_logs(tmp_path, name, vsegen):
     path = CORPUS / name
     est = tmp_path / "est.csv"
-    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+    assert_one_clear_line(vsegen("run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)),
                           path, EXPECTED[name])
     assert not est.exists() and list(tmp_path.iterdir()) == []
-    assert_one_clear_line(invoke(["score", "--log", str(path), "--est", str(path)]), path,
+    assert_one_clear_line(vsegen("score", "--log", str(path), "--est", str(path)), path,
                           EXPECTED[name])
     figure = tmp_path / "fig.png"
-    assert_one_clear_line(invoke(["plot", "--log", str(path), "--est", str(path), "--out", str(figure)]),
+    assert_one_clear_line(vsegen("plot", "--log", str(path), "--est", str(path), "--out", str(figure)),
                           path, EXPECTED[name])
     assert not figure.exists()
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("units/")))
-def test_unit_mistakes(tmp_path, name):
+def test_unit_mistakes(tmp_path, name, vsegen):
     """Logs that pass every range check but whose physics says a unit is wrong (r in deg/s, the
     steering-wheel angle as delta, a_y in g): run refuses in one line naming the column and the
     likely cause, writes nothing, and runs with --no-unit-check."""
     path = CORPUS / name
     est = tmp_path / "est.csv"
-    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+    assert_one_clear_line(vsegen("run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)),
                           path, EXPECTED[name])
     assert list(tmp_path.iterdir()) == []
-    forced = invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est), "--no-unit-check"])
+    forced = vsegen("run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est), "--no-unit-check")
     assert forced.exit_code == 0 and est.is_file()
 
 
@@ -87,24 +80,24 @@ def _logger_log(folder: Path) -> Path:
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("channels/")))
-def test_bad_channel_maps(tmp_path, name):
+def test_bad_channel_maps(tmp_path, name, vsegen):
     """A channel map with a mistake: one line naming the map (or, for a channel the log lacks, the
     log) and the key, exit 2, nothing written."""
     path, log = CORPUS / name, _logger_log(tmp_path)
     est = tmp_path / "est.csv"
-    result = invoke(["run", "--log", str(log), "--channels", str(path), "--estimator", "kf2dof",
-                     "--out", str(est)])
+    result = vsegen("run", "--log", str(log), "--channels", str(path), "--estimator", "kf2dof",
+                    "--out", str(est))
     blamed = log if name.endswith("missing_channel.toml") else path
     assert_one_clear_line(result, blamed, EXPECTED[name])
     assert sorted(tmp_path.iterdir()) == [log]
 
 
 @pytest.mark.parametrize("name", sorted(n for n in EXPECTED if n.startswith("mdf/")))
-def test_bad_mdf4_files(tmp_path, name):
+def test_bad_mdf4_files(tmp_path, name, vsegen):
     """An MDF4 file that is empty, not MDF, truncated or lacks a channel: one line, exit 2, nothing
     written, no traceback (asammdf's own complaints included)."""
     path = CORPUS / name
     est = tmp_path / "est.csv"
-    assert_one_clear_line(invoke(["run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)]),
+    assert_one_clear_line(vsegen("run", "--log", str(path), "--estimator", "kf2dof", "--out", str(est)),
                           path, EXPECTED[name])
     assert list(tmp_path.iterdir()) == []

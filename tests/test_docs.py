@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import re
 import subprocess
-import sys
 
 from locations import REPO
 
@@ -22,12 +21,11 @@ def test_the_generated_reference_pages_are_up_to_date():
         assert (REPO / "docs" / name).read_text() == text, f"docs/{name} is stale: run `vsegen docs`"
 
 
-def test_vsegen_docs_check_fails_on_a_stale_page(tmp_path):
+def test_vsegen_docs_check_fails_on_a_stale_page(tmp_path, vsegen):
     (tmp_path / "vehicle-file.md").write_text("old\n")
     (tmp_path / "signals.md").write_text(reference_docs.signals_page())
-    result = subprocess.run([sys.executable, "-m", "vsegen.harness.cli", "docs", "--check", "--out", str(tmp_path)],
-                            capture_output=True, text=True)
-    assert result.returncode == 1
+    result = vsegen("docs", "--check", "--out", tmp_path)
+    assert result.exit_code == 1
     assert "+# The vehicle file" in result.stdout and "run `vsegen docs`" in result.stderr
 
 

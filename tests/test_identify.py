@@ -8,11 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from locations import VEHICLES
 from scipy.signal import lsim
 
-from vsegen.harness.cli import main
 from vsegen.harness.identify import identify
 from vsegen.harness.identify.vehicle_file import identified_vehicle_file
 from vsegen.harness.logs.table import TRUTH, Log, write_log
@@ -122,15 +120,15 @@ def test_stiffness_intervals_hold_the_known_values_of_a_bicycle_model_log(config
     assert "no quasi-steady cornering above 2 m/s^2" in refused["roll_gradient"]
 
 
-def test_a_log_that_excites_nothing_is_refused_line_by_line_with_exit_2(tmp_path: Path):
+def test_a_log_that_excites_nothing_is_refused_line_by_line_with_exit_2(tmp_path: Path, vsegen):
     t = np.arange(0.0, 20.0, 0.01)
     rng = np.random.default_rng(3)
     crawl = Log({"t": t, "delta": np.zeros_like(t), "vx": np.full_like(t, 2.0), "ax": rng.normal(0, 0.3, len(t)),
                  "ay": rng.normal(0, 0.3, len(t)), "r": rng.normal(0, 0.0175, len(t))}, "crawl.csv")
     write_log(crawl, tmp_path / "crawl.csv")
     out = tmp_path / "car.toml"
-    result = CliRunner().invoke(main, ["identify", "--log", str(tmp_path / "crawl.csv"), "--vehicle",
-                                       str(VEHICLES / "c_class.toml"), "--out", str(out)])
+    result = vsegen("identify", "--log", str(tmp_path / "crawl.csv"), "--vehicle",
+                    str(VEHICLES / "c_class.toml"), "--out", str(out))
     assert result.exit_code == 2, result.output
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 10 and all(line.startswith("vsegen: not identified: ") for line in lines)
@@ -139,14 +137,14 @@ def test_a_log_that_excites_nothing_is_refused_line_by_line_with_exit_2(tmp_path
     assert not out.exists()
 
 
-def test_a_file_copied_to_another_car_warns_and_the_shipped_files_do_not(tmp_path: Path):
+def test_a_file_copied_to_another_car_warns_and_the_shipped_files_do_not(tmp_path: Path, vsegen):
     for path in sorted(VEHICLES.glob("*.toml")):
         config = load_vehicle(path)
         assert all(underived_warning(config, name) is None for name in config.estimators), path
     text = with_settings((VEHICLES / "c_class.toml").read_text(), "vehicle", mass=1780.0)
     (tmp_path / "new_car.toml").write_text(text)
-    result = CliRunner().invoke(main, ["generate", "--vehicle", str(tmp_path / "new_car.toml"),
-                                       "--estimator", "switching", "--out", str(tmp_path / "out")])
+    result = vsegen("generate", "--vehicle", str(tmp_path / "new_car.toml"),
+                    "--estimator", "switching", "--out", str(tmp_path / "out"))
     assert result.exit_code == 0, result.output
     warnings = [line for line in result.stderr.splitlines() if "warning" in line]
     assert len(warnings) == 1

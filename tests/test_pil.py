@@ -5,7 +5,6 @@ its instruction count and stack measured on the target."""
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 from dataclasses import replace
 
@@ -72,13 +71,12 @@ def test_instructions_grow_with_the_particle_count(config):
     assert 1.8 < counts[1] / counts[0] < 2.1, counts
 
 
-def test_without_qemu_the_command_is_one_line(tmp_path):
+def test_without_qemu_the_command_is_one_line(tmp_path, vsegen):
     bare = tmp_path / "bin"
     bare.mkdir()
     os.symlink(sys.executable, bare / "python3")
-    result = subprocess.run([sys.executable, "-m", "vsegen.harness.cli", "pil", "--estimator", "kf2dof"], cwd=REPO,
-                            capture_output=True, text=True, env={**os.environ, "PATH": str(bare)})
-    assert result.returncode == 2 and result.stderr.count("\n") == 1
+    result = vsegen.process("pil", "--estimator", "kf2dof", env={**os.environ, "PATH": str(bare)})
+    assert result.exit_code == 2 and result.stderr.count("\n") == 1
     assert "qemu-system-arm, arm-none-eabi-gcc not found: expected the Debian packages" in result.stderr
 
 

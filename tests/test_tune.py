@@ -12,10 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 from locations import VEHICLES
 
-from vsegen.harness.cli import main
 from vsegen.harness.host.build import compile_estimator, load_tuning_estimator
 from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.project.vehicles import load_vehicle
@@ -86,20 +84,20 @@ def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_compu
     assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
 
 
-def test_tune_needs_ground_truth_and_says_so_in_one_line(tmp_path: Path, logs):
+def test_tune_needs_ground_truth_and_says_so_in_one_line(tmp_path: Path, logs, vsegen):
     log = logs["train"][0][0]
     bare = Log({k: v for k, v in log.columns.items() if k != "beta_ref"}, "bare.csv")
     write_log(bare, tmp_path / "bare.csv")
-    result = CliRunner().invoke(main, ["tune", "--estimator", "switching", "--log", str(tmp_path / "bare.csv"),
-                                       "--vehicle", str(VEHICLES / "rwd_saloon.toml"), "--out",
-                                       str(tmp_path / "t.toml"), "--scheduler", "serial"])
+    result = vsegen("tune", "--estimator", "switching", "--log", str(tmp_path / "bare.csv"),
+                    "--vehicle", str(VEHICLES / "rwd_saloon.toml"), "--out",
+                    str(tmp_path / "t.toml"), "--scheduler", "serial")
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines() == [
         f"vsegen: error: {tmp_path / 'bare.csv'}:1: missing column 'beta_ref': tune scores switching's beta "
         "against it (a log with ground truth, e.g. an optical or GNSS/INS reference)"]
 
 
-def test_a_real_scheduler_and_worker_give_the_serial_result(tmp_path: Path, logs):
+def test_a_real_scheduler_and_worker_give_the_serial_result(tmp_path: Path, logs, vsegen):
     """A distributed scheduler and a worker started as separate processes, reached by address."""
     scheduler_file = tmp_path / "scheduler.json"
     processes = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--port", "0",
@@ -121,7 +119,7 @@ def test_a_real_scheduler_and_worker_give_the_serial_result(tmp_path: Path, logs
         runs = {}
         for scheduler in ("serial", address):
             out = tmp_path / f"tuned_{len(runs)}.toml"
-            result = CliRunner().invoke(main, [*arguments, "--scheduler", scheduler, "--out", str(out)])
+            result = vsegen(*arguments, "--scheduler", scheduler, "--out", str(out))
             assert result.exit_code == 0, result.output
             runs[scheduler] = out.read_text()
         assert runs["serial"] == runs[address]

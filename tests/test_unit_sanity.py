@@ -5,10 +5,8 @@ written; --no-unit-check runs anyway; the simulated logs of both truth cars pass
 from __future__ import annotations
 
 import pytest
-from click.testing import CliRunner
 from locations import VEHICLES
 
-from vsegen.harness.cli import main
 from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.logs.units import check_units
 from vsegen.harness.project.vehicles import load_vehicle
@@ -23,19 +21,19 @@ MISTAKES = [
 
 
 @pytest.mark.parametrize("column, factor, cause", MISTAKES, ids=[m[2] for m in MISTAKES])
-def test_a_unit_mistake_is_named_in_one_line_and_nothing_is_written(tmp_path, config, column, factor, cause):
+def test_a_unit_mistake_is_named_in_one_line_and_nothing_is_written(tmp_path, config, column, factor, cause, vsegen):
     log = Case.of("step_steer", delta=0.02).simulate(config, 100.0, 1)
     wrong = dict(log.columns)
     wrong[column] = wrong[column] * factor
     write_log(Log(wrong, "wrong.csv"), tmp_path / "wrong.csv")
     out = tmp_path / "est.csv"
     arguments = ["run", "--log", str(tmp_path / "wrong.csv"), "--estimator", "kf2dof", "--out", str(out)]
-    result = CliRunner().invoke(main, arguments)
+    result = vsegen(*arguments)
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and cause in lines[0] and str(tmp_path / "wrong.csv") in lines[0], lines
     assert not out.exists()
-    assert CliRunner().invoke(main, [*arguments, "--no-unit-check"]).exit_code == 0
+    assert vsegen(*arguments, "--no-unit-check").exit_code == 0
 
 
 @pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])

@@ -1,4 +1,5 @@
-"""Low-speed and invalid-input rule: identical in generated C and the reference, never non-finite."""
+"""kf2dof: its Kalman step as a named Function matching the reference's blocks, and the low-speed and
+invalid-input rule (identical in generated C and the reference, never non-finite)."""
 
 from __future__ import annotations
 
@@ -103,3 +104,28 @@ def test_random_garbage_never_leaves_a_non_finite_state(compiled, config):
     assert np.all(np.isfinite(outputs)) and np.all(np.isfinite(states))
     P = states[:, 2:5]
     assert np.all(P[:, 0] > 0) and np.all(P[:, 2] > 0) and np.all(P[:, 0] * P[:, 2] - P[:, 1] ** 2 > 0)
+
+
+def test_kf2dof_dynamic_update_is_a_named_function(config):
+    """The 2-DOF KF step exists as a named Function and matches the reference's blocks."""
+    from vsegen.harness.reference import blocks
+    from vsegen.model.calibration import baked
+    from vsegen.model.estimators.kf2dof import dynamic_update
+
+    fn = dynamic_update(baked(config))
+    assert fn.name_in() == ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
+    assert fn.name_out() == ["x_next", "P_next", "beta", "innovation"]
+    s = config.settings("kf2dof")
+    x, P = np.array([0.1, 0.05]), np.array([[0.02, 0.001], [0.001, 0.003]])
+    out = fn(x=x, P=[P[0, 0], P[0, 1], P[1, 1]], delta_prev=0.01, vx_prev=20.0, delta=0.012,
+             vx=20.5, ay=1.0, r_meas=0.06)
+    A, B, _, _ = blocks.bicycle(config.vehicle, 20.0)
+    Phi, Gamma = blocks.discretise("zoh", A, B, config.sample_time)
+    xp, Pp = blocks.kf_predict(x, P, Phi, Gamma, np.array([0.01]),
+                               np.array(s["process_noise"]) * config.sample_time)
+    _, _, C, D = blocks.bicycle(config.vehicle, 20.5)
+    xe, Pe = blocks.kf_update(xp, Pp, np.array([1.0, 0.06]), C, D, np.array([0.012]),
+                              np.array(s["measurement_noise"]))
+    np.testing.assert_allclose(np.array(out["x_next"]).ravel(), xe, rtol=1e-13)
+    np.testing.assert_allclose(np.array(out["P_next"]).ravel(), [Pe[0, 0], Pe[0, 1], Pe[1, 1]], rtol=1e-12)
+    assert float(out["beta"]) == pytest.approx(np.arctan2(xe[0], 20.5), rel=1e-13)
