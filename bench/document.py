@@ -1,9 +1,30 @@
-"""Sections of the generated reports (docs/benchmarks.md): each written by its own command and
-kept when another command rewrites the rest."""
+"""The generated reports: where each says what produced it, and sections (docs/benchmarks.md)
+each written by its own command and kept when another command rewrites the rest."""
 
 from __future__ import annotations
 
+import subprocess
+from importlib import metadata
 from pathlib import Path
+
+import casadi
+
+from bench import REPO
+
+
+def provenance(command: str) -> str:
+    """'Written by `command` at commit abc1234 (vsegen 0.1.0, CasADi 3.8.2)': the command and the
+    commit a report's numbers come from, noting changes to the code not yet committed (the reports
+    under docs/ themselves do not count)."""
+    commit = _git("rev-parse", "--short=10", "HEAD") or "(not a git checkout)"
+    changed = _git("status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)docs")
+    return (f"Written by `{command}` at commit {commit}{' plus uncommitted changes' if changed else ''} "
+            f"(vsegen {metadata.version('vsegen')}, CasADi {casadi.__version__})")
+
+
+def _git(*args: str) -> str:
+    done = subprocess.run(["git", *args], cwd=REPO, capture_output=True, text=True)
+    return done.stdout.strip() if done.returncode == 0 else ""
 
 
 def section_of(document: str, heading: str) -> list[str]:

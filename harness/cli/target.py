@@ -158,7 +158,7 @@ def misra(update_baseline: bool, out: Path | None) -> None:
             sections.append((f"{config.name}/{name} ({form})", counts))
             total.update(counts)
     per_rule = checks.by_rule(total)
-    write_text_atomic(out, checks.report(sections))
+    write_text_atomic(out, checks.report(sections, checks.provenance(project().root)))
     if update_baseline:
         checks.write_baseline(per_rule)
     rules = ", ".join(f"{rule.removeprefix('misra-c2012-')}: {count}" for rule, count in per_rule.items())
