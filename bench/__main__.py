@@ -68,7 +68,8 @@ def main(argv: list[str] | None = None) -> None:
     log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
     folder = Path(tempfile.mkdtemp(prefix="vsegen-bench-"))
     lines = [f"# Benchmarks (vehicle {config.name})", "",
-             f"{provenance('python -m bench')}. Machine: {_machine()}. Log: {LOG_CASE.label}, "
+             f"{provenance(f'python -m bench --fuzz-steps {args.fuzz_steps}')}. Machine: {_machine()}. "
+             f"Log: {LOG_CASE.label}, "
              f"{len(log)} steps. Instructions: `valgrind --tool=callgrind`, inclusive cost of the "
              "step function per step (repeatable); ns: median over 51 passes (noisy on shared "
              "machines).", ""]
