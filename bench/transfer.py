@@ -2,8 +2,8 @@
 estimator; and which estimator is best where.
 
 For each car A and estimator, ``vsegen tune`` searches the estimator's tunable settings on A's
-training set (bench.tuning.TRAINING); the tuned values are then written into car B's own file
-(B's identified car-specific settings stay) and scored on B's hold-out (bench.tuning.HOLDOUT,
+test-track training set (bench.tuning.PROTOCOLS[0]); the tuned values are then written into car B's own file
+(B's identified car-specific settings stay) and scored on B's hold-out (that protocol's,
 never searched on). β RMSE in degrees, mean over the hold-out seeds.
 
     python -m bench.transfer [--trials N] [--scheduler ADDRESS]
@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 
 from bench import VEHICLES
-from bench.tuning import CARS, HOLDOUT, HOLDOUT_SEEDS, SEED, TRAINING, TRIALS
+from bench.tuning import CARS, HOLDOUT_SEEDS, PROTOCOLS, SEED, TRIALS
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.tune.search import DEGREES, objective_value, settings_text, tune
 from vsegen.model.estimators import build
@@ -25,9 +25,13 @@ def sideslip_estimators(config) -> list[str]:
     return [name for name in config.estimators if "beta" in build(name, config).outputs.names]
 
 
+TRAINING, HOLDOUT = PROTOCOLS[0].training, PROTOCOLS[0].holdout
+
+
 def table(scheduler: str | None = None, trials: int = TRIALS) -> list[str]:
     """Markdown lines: per estimator and scored car, hold-out β RMSE with the car's shipped
-    settings, tuned on the same car, and tuned on the other car; then the best per column."""
+    settings, tuned on the same car, and tuned on the other car; then the best per column. The
+    tuned settings are the search's choice, whether or not ``vsegen tune`` would have written them."""
     configs = {car: load_vehicle(VEHICLES / f"{car}.toml") for car in CARS}
     texts = {car: (VEHICLES / f"{car}.toml").read_text() for car in CARS}
     rate = {car: 1.0 / configs[car].sample_time for car in CARS}

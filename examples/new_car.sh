@@ -5,7 +5,7 @@
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-new_car}
-mkdir -p "$work/drive" "$work/track"
+mkdir -p "$work/drive" "$work/track" "$work/holdout"
 cd "$work"
 truth="$repo/vehicles/rwd_saloon.toml"
 
@@ -30,12 +30,14 @@ vsegen simulate dlc --vehicle "$truth" --out track/dlc.csv
 vsegen simulate step_steer --vehicle "$truth" --out track/step.csv
 vsegen simulate sine_steer --vehicle "$truth" --out track/sine.csv
 vsegen simulate fishhook --vehicle "$truth" --out track/fishhook.csv
-vsegen simulate continuous_dlc --vehicle "$truth" --set speed_kmh=80 --out track/continuous_dlc.csv
+vsegen simulate dlc --vehicle "$truth" --set mu=0.5 --out track/dlc_low_friction.csv
+vsegen simulate continuous_dlc --vehicle "$truth" --set speed_kmh=80 --out holdout/continuous_dlc.csv
 
 # 1. identify  2. tune  3. generate  4. verify
 vsegen identify --vehicle my_car.toml --out car.toml --report identify.md \
   --log drive/step_small.csv --log drive/step_large.csv --log drive/sine.csv --log drive/lane_change.csv --log drive/weave.csv
 vsegen tune --estimator switching --vehicle car.toml --out tuned.toml \
-  --log track/dlc.csv --log track/step.csv --log track/sine.csv --log track/fishhook.csv --holdout track/continuous_dlc.csv
+  --log track/dlc.csv --log track/step.csv --log track/sine.csv --log track/fishhook.csv --log track/dlc_low_friction.csv \
+  --holdout holdout/continuous_dlc.csv
 vsegen generate --vehicle tuned.toml --estimator switching --out generated
 vsegen verify --vehicle tuned.toml --estimator switching

@@ -299,17 +299,31 @@ class Estimator:
                 "init": self.structure.init_operations(self.init)}
 
 
+EVERYWHERE = "everywhere"
+BEYOND_LINEAR = "beyond_linear"
+LOW_FRICTION = "low_friction"
+REGIMES = {
+    EVERYWHERE: "every sample",
+    BEYOND_LINEAR: "lateral acceleration beyond the tyres' linear range",
+    LOW_FRICTION: "driving near the friction limit of a low-friction road",
+}
+"""Where a tunable setting acts: ``vsegen tune`` searches a setting only when the training logs
+cover its regime (harness.tune.coverage), so a setting the logs never exercise keeps its value."""
+
+
 @dataclass(frozen=True)
 class Tunable:
     """A numeric setting ``vsegen tune`` may search: the scalar, or each entry of a list or
     matrix diagonal, between ``low`` and ``high`` (units of the setting), on a log scale when
     ``log``. Only settings read at run time by the calibratable C (no structural ones); ``when``
-    (of the estimator's settings) says whether the configured options read it."""
+    (of the estimator's settings) says whether the configured options read it; ``regime`` (a key
+    of :data:`REGIMES`) where it acts."""
 
     low: float
     high: float
     log: bool = True
     when: Callable[[Mapping[str, Any]], bool] | None = None
+    regime: str = EVERYWHERE
 
     def applies(self, settings: Mapping[str, Any]) -> bool:
         """Whether the generated code of ``settings`` reads this setting."""

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
+import numpy as np
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
@@ -41,15 +43,22 @@ from vsegen.harness.project.vehicles import load_vehicle
                    "address such as tcp://host:8786 (also $VSEGEN_SCHEDULER).")
 @click.option("--plot", "plot_path", type=click.Path(path_type=Path), default=None,
               help="PNG of the search (default: next to --out).")
+@click.option("--free", "freed", multiple=True, metavar="SETTING",
+              help="Search this setting even where the training logs do not cover its regime (repeatable).")
+@click.option("--accept-worse", is_flag=True,
+              help="Write the tuned file even where it is worse than the base (else: nothing written, exit 3).")
 @CHANNELS_OPTION
 @UNIT_CHECK_OPTION
 @user_errors
 def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, holdout_paths: tuple[Path, ...],
          trials: int, objective: str, seed: int, batch: int, scheduler: str | None, plot_path: Path | None,
-         channels: Path | None, no_unit_check: bool) -> None:
-    """Tune an estimator's numeric settings on logs with ground truth, running its generated C."""
+         freed: tuple[str, ...], accept_worse: bool, channels: Path | None, no_unit_check: bool) -> None:
+    """Tune an estimator's numeric settings on logs with ground truth, running its generated C.
+    Settings whose regime the logs do not cover keep their values; a result worse than the base
+    on a training log, cross-validated or on the hold-out is not written (exit 3)."""
     from vsegen.harness.jobs.pool import ClusterError
     from vsegen.harness.score.plot import tuning_plot
+    from vsegen.harness.tune.objective import combined
     from vsegen.harness.tune.search import DEGREES, TuneError, scored_output
     from vsegen.harness.tune.search import tune as tune_settings
 
@@ -65,27 +74,44 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
         try:
             result = tune_settings(vehicle.read_text(), config, estimator, train, holdout, trials, objective,
                                    seed, batch, scheduler,
-                                   lambda done, total: progress.update(task, completed=done, total=total))
+                                   lambda done, total: progress.update(task, completed=done, total=total), freed)
         except (TuneError, ClusterError) as exc:
             raise UserError(str(exc)) from None
-    write_text_atomic(out, result.text)
     output, _ = scored_output(config, estimator)
     unit = "deg" if output == "beta" else "deg/s"
-    table = Table(title=f"{estimator}: {objective} of {output} ({unit}), {trials} trials")
-    for column in ("", "training", "hold-out"):
-        table.add_column(column, justify="right")
-    for label, train_value, holdout_value in (("before", result.baseline_train, result.baseline_holdout),
-                                               ("after", result.tuned_train, result.tuned_holdout)):
-        table.add_row(label, f"{train_value * DEGREES:.4f}",
-                      "-" if holdout_value is None else f"{holdout_value * DEGREES:.4f}")
-    console.print(table)
+    console.print(f"training coverage: {result.coverage.describe()}")
+    for key, why in result.frozen.items():
+        console.print(f"kept at its base value: {key} ({why}; --free {key} to search it anyway)")
+    console.print(_scores_table(result, estimator, objective, output, unit, trials))
     for dim in result.dimensions:
         if dim.label in result.best.point:
             console.print(f"  {dim.label} = {result.best.point[dim.label]:.4g}")
     plot_path = plot_path or out.with_suffix(".png")
-    tuning_plot([s * DEGREES for s in (t.score for t in result.trials)], result.baseline_train * DEGREES,
-                result.tuned_train * DEGREES,
-                None if result.baseline_holdout is None else result.baseline_holdout * DEGREES,
-                None if result.tuned_holdout is None else result.tuned_holdout * DEGREES, unit, plot_path,
+    holdout = result.holdout or (None, None)
+    tuning_plot([t.score * DEGREES for t in result.trials], combined(result.base.scores) * DEGREES,
+                combined(result.best.scores) * DEGREES, None if holdout[0] is None else holdout[0] * DEGREES,
+                None if holdout[1] is None else holdout[1] * DEGREES, unit, plot_path,
                 f"vsegen tune {estimator} ({config.name})")
+    if result.harm and not accept_worse:
+        click.echo(f"vsegen: tune: the tuned settings are worse than the base ({'; '.join(result.harm)}): "
+                   f"nothing written to {out} (--accept-worse writes them anyway)", err=True)
+        sys.exit(3)
+    if result.harm:
+        click.echo(f"vsegen: tune: warning: written although worse than the base ({'; '.join(result.harm)})",
+                   err=True)
+    write_text_atomic(out, result.text)
     console.print(f"wrote {out} and {plot_path}")
+
+
+def _scores_table(result, estimator: str, objective: str, output: str, unit: str, trials: int) -> Table:
+    """Before and after: training (mean and worst log), cross-validated, hold-out."""
+    from vsegen.harness.tune.search import DEGREES
+
+    table = Table(title=f"{estimator}: {objective} of {output} ({unit}), {trials} trials")
+    for column in ("", "training mean", "training worst", "cross-validated", "hold-out"):
+        table.add_column(column, justify="right")
+    for index, (label, trial) in enumerate((("before", result.base), ("after", result.best))):
+        holdout = "-" if result.holdout is None else f"{result.holdout[index] * DEGREES:.4f}"
+        table.add_row(label, f"{np.mean(trial.scores) * DEGREES:.4f}", f"{np.max(trial.scores) * DEGREES:.4f}",
+                      f"{result.cross_validated[index] * DEGREES:.4f}", holdout)
+    return table

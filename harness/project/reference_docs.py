@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from vsegen.model import schema, signals, status
+from vsegen.model.estimator import REGIMES
 from vsegen.model.estimators import DEFINITIONS
 from vsegen.model.params import WHEELBASE_TOLERANCE
 
@@ -52,7 +53,8 @@ def vehicle_file_page() -> str:
                       f"{1e3 * WHEELBASE_TOLERANCE:g} mm.", ""]
     lines += ["## [estimator.&lt;name&gt;]", "",
               "One table per estimator the file configures; `vsegen generate` generates those. Settings "
-              "marked *tunable* are the ones `vsegen tune` may search (in the range shown).", ""]
+              "marked *tunable* are the ones `vsegen tune` may search (in the range shown), where the "
+              "training logs cover the regime they act in.", ""]
     for name, definition in DEFINITIONS.items():
         lines += [f"### [estimator.{name}]", "", *_field_table(definition.schema.fields, definition.tunable), ""]
         rules = [_rule_text(rule) for rule in definition.schema.rules]
@@ -112,7 +114,8 @@ def _field_table(fields: tuple[schema.Field, ...], tunable: Any = None) -> list[
 
 
 def _range(tunable: Any) -> str:
-    return f"{tunable.low:g} to {tunable.high:g}" + (", log scale" if tunable.log else "")
+    return (f"{tunable.low:g} to {tunable.high:g}" + (", log scale" if tunable.log else "")
+            + f"; acts in {REGIMES[tunable.regime]}")
 
 
 def _default(value: Any) -> str:

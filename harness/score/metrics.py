@@ -66,10 +66,15 @@ def silent_error_time(log: Log, estimates: Log, limit: float = SILENT_LIMIT) -> 
     "never silently wrong" rule asks this to stay within :data:`SILENT_DURATION`. A sample with a
     non-finite estimate counts as wrong."""
     spun = np.maximum.accumulate(np.abs(log["beta_ref"]) > SPIN_SIDESLIP)
-    error = np.abs(estimates["beta"] - log["beta_ref"])
-    silent = (~(error <= limit)) & (estimates["status"] == 0) & ~spun
+    return longest_silent_stretch(log["t"], estimates["beta"] - log["beta_ref"], estimates["status"], spun, limit)
+
+
+def longest_silent_stretch(t: np.ndarray, error: np.ndarray, status: np.ndarray, excluded: np.ndarray,
+                           limit: float = SILENT_LIMIT) -> tuple[float, float]:
+    """(longest stretch, its start) in s of consecutive samples at times ``t`` where |``error``|
+    exceeds ``limit`` (or is not finite) with ``status`` 0, the ``excluded`` samples left out."""
+    silent = (~(np.abs(error) <= limit)) & (status == 0) & ~excluded
     longest, start, run_start = 0.0, float("nan"), None
-    t = log["t"]
     step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     for k, bad in enumerate(np.append(silent, False)):
         if bad and run_start is None:

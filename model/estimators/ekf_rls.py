@@ -43,6 +43,7 @@ from vsegen.model import consistency, filters, kalman, signals, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
+    BEYOND_LINEAR,
     GYRO_VARIANCE,
     ROLL_GRADIENT,
     Definition,
@@ -470,6 +471,7 @@ DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable={"process_noise": Tunable(1e-8, 1e-1), "measurement_noise": Tunable(1e-5, 1e-2),
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
-             "indicator_low": Tunable(0.1, 2.0), "indicator_high": Tunable(0.5, 10.0)},
+             "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
+             "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
     status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT),
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)

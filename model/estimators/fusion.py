@@ -16,6 +16,7 @@ from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
+    LOW_FRICTION,
     ROLL_GRADIENT,
     Definition,
     Estimator,
@@ -105,7 +106,8 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
-             "threshold": Tunable(0.5, 4.0, log=False), "integral_gain": Tunable(0.05, 5.0),
-             **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0)},
+             "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
+             "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
+             **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT),
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)

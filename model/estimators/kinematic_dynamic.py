@@ -14,7 +14,7 @@ import casadi as ca
 from vsegen.model import filters, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
-from vsegen.model.estimator import Tunable
+from vsegen.model.estimator import BEYOND_LINEAR, Tunable
 from vsegen.model.estimators import kf2dof
 from vsegen.model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
 from vsegen.model.layout import Layout, covariance_signals
@@ -58,9 +58,9 @@ def _checks_against(kind: str):
 
 
 YAW_RATE_CHECK_TUNABLES = {
-    "yaw_rate_band": Tunable(0.05, 1.0, when=_checks_against("reference")),
-    "yaw_acceleration_max": Tunable(1.0, 20.0, when=_checks_against("yaw_acceleration")),
-    "yaw_rate_jump": Tunable(0.03, 0.5, when=_checks_against("yaw_acceleration")),
+    "yaw_rate_band": Tunable(0.05, 1.0, when=_checks_against("reference"), regime=BEYOND_LINEAR),
+    "yaw_acceleration_max": Tunable(1.0, 20.0, when=_checks_against("yaw_acceleration"), regime=BEYOND_LINEAR),
+    "yaw_rate_jump": Tunable(0.03, 0.5, when=_checks_against("yaw_acceleration"), regime=BEYOND_LINEAR),
 }
 """What ``tune`` may search of the yaw-rate check, for the configured kind of check."""
 
