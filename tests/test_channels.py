@@ -97,7 +97,7 @@ def test_a_csv_with_the_loggers_names_and_units_equals_the_si_log(tmp_path, dlc,
 @pytest.mark.parametrize("edit, fragment", [
     (('unit = "km/h"', 'unit = "kmh"'), "[columns.vx] unit = 'kmh': expected one of rad, deg"),
     (('unit = "deg/s"', 'unit = "km/h"'), "[columns.r] unit = 'km/h': expected a unit of angular rate"),
-    (("[columns.ax]", "[columns.accel]"), "[columns.accel]: unknown column: expected one of delta"),
+    (("[columns.ax]", "[columns.accel]"), "[columns.accel]: unknown column: expected one of t, delta"),
     (("factor = 0.0625", "factor = 0"), "[columns.delta] factor = 0: expected a finite non-zero number"),
     (('channel = "YawRate"', 'channel = "Gyro"'), "missing channel 'Gyro' for column 'r'"),
 ])

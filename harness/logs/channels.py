@@ -6,10 +6,13 @@ A channel map is a TOML file with one table per log column (docs/conventions.md)
     channel = "SteerWhlAng"   # the logger's channel name
     unit = "deg"              # from UNITS; converted to the column's SI unit
     factor = 0.0625           # optional, applied first (e.g. 1 / steering ratio)
+    group = 3                 # optional (MDF4): the channel group, where the name repeats
+    message = "ESP_21"        # optional (MDF4): or the group by its acquisition name (a CAN message)
 
 A column the map does not name is read from a channel of its own name, in SI units. Units must
 match the column's kind (an angle for delta, a speed for vx, ...): a map that gives km/h for the
-yaw rate is refused in one line.
+yaw rate is refused in one line. The time column ``t`` of a CSV log may be mapped too (its name
+and unit: s, ms or us); an MDF4 file's channels carry their own time stamps.
 """
 
 from __future__ import annotations
@@ -30,11 +33,13 @@ UNITS: dict[str, tuple[str, float]] = {
     "rpm": ("angular rate", 2.0 * math.pi / 60.0),
     "m/s^2": ("acceleration", 1.0), "g": ("acceleration", 9.80665),
     "N*m": ("moment", 1.0), "-": ("ratio", 1.0),
+    "s": ("time", 1.0), "ms": ("time", 1e-3), "us": ("time", 1e-6),
 }
 """The unit vocabulary: name -> (kind, factor to the kind's SI unit)."""
 SI_KIND = {"rad": "angle", "m/s": "speed", "rad/s": "angular rate", "m/s^2": "acceleration",
-           "N*m": "moment", "-": "ratio"}
-COLUMNS = signals.LOG_COLUMN_UNITS
+           "N*m": "moment", "-": "ratio", "s": "time"}
+COLUMNS = {signals.TIME.name: signals.TIME.unit, **signals.LOG_COLUMN_UNITS}
+"""Every column a map may name, with its SI unit: time, the inputs and the ground truth."""
 
 
 @dataclass(frozen=True)
@@ -45,6 +50,10 @@ class Column:
     channel: str
     scale: float
     """Multiplies the channel's values: factor x the unit's factor to SI."""
+    group: int | None = None
+    """MDF4: the channel group to read the channel from (where its name repeats)."""
+    message: str | None = None
+    """MDF4: the channel group by its acquisition name (e.g. the CAN message)."""
 
 
 @dataclass(frozen=True)
@@ -77,9 +86,14 @@ def read_channel_map(path: Path | None) -> ChannelMap:
             raise LogError(f"{where}: unknown column: expected one of {', '.join(COLUMNS)}")
         if not isinstance(entry, dict) or not isinstance(entry.get("channel"), str) or not entry["channel"]:
             raise LogError(f"{where} channel: expected the logger's channel name as a string")
-        extra = set(entry) - {"channel", "unit", "factor"}
+        extra = set(entry) - {"channel", "unit", "factor", "group", "message"}
         if extra:
-            raise LogError(f"{where} {sorted(extra)[0]}: unknown key: expected channel, unit, factor")
+            raise LogError(f"{where} {sorted(extra)[0]}: unknown key: expected channel, unit, factor, group, message")
+        group, message = entry.get("group"), entry.get("message")
+        if group is not None and (isinstance(group, bool) or not isinstance(group, int) or group < 0):
+            raise LogError(f"{where} group = {group!r}: expected the channel group's index (a whole number >= 0)")
+        if message is not None and (not isinstance(message, str) or not message):
+            raise LogError(f"{where} message = {message!r}: expected the channel group's acquisition name")
         unit = entry.get("unit", COLUMNS[name])
         if unit not in UNITS:
             raise LogError(f"{where} unit = {unit!r}: expected one of {', '.join(UNITS)}")
@@ -91,7 +105,7 @@ def read_channel_map(path: Path | None) -> ChannelMap:
         if isinstance(factor, bool) or not isinstance(factor, (int, float)) or not math.isfinite(factor) \
                 or factor == 0:
             raise LogError(f"{where} factor = {factor!r}: expected a finite non-zero number")
-        columns[name] = Column(name, entry["channel"], float(factor) * to_si)
+        columns[name] = Column(name, entry["channel"], float(factor) * to_si, group, message)
     return ChannelMap(columns, str(path))
 
 

@@ -153,13 +153,16 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
     for name in header:
         if header.count(name) > 1:
             raise LogError(f"{source}:1: column '{name}' appears twice: expected unique column names")
-    for name in required:
-        if name not in header and mapped_from.get(name, name) != name:
-            raise LogError(f"{source}:1: missing channel '{mapped_from[name]}' for column '{name}' (channel "
-                           f"map): expected it among the logged columns {', '.join(logged)}")
-        if name not in header:
-            raise LogError(f"{source}:1: missing column '{name}': expected the columns "
-                           f"{', '.join(required)} (found {', '.join(header)})")
+    absent = [name for name in required if name not in header]
+    unmapped = [f"'{mapped_from[n]}' for column '{n}'" for n in absent if mapped_from.get(n, n) != n]
+    if unmapped:
+        raise LogError(f"{source}:1: missing channel{'s' if len(unmapped) > 1 else ''} {', '.join(unmapped)} "
+                       f"(channel map): expected {'them' if len(unmapped) > 1 else 'it'} among the logged columns "
+                       f"{', '.join(logged)}")
+    if absent:
+        names = ", ".join(f"'{n}'" for n in absent)
+        raise LogError(f"{source}:1: missing column{'s' if len(absent) > 1 else ''} {names}: expected the columns "
+                       f"{', '.join(required)} (found {', '.join(header)})")
     data = [row for row in rows[1:]]
     while data and not any(cell.strip() for cell in data[-1]):
         data.pop()
@@ -220,23 +223,18 @@ def _check_increasing(t: np.ndarray, source: str) -> None:
 
 def on_uniform_grid(log: Log) -> Log:
     """``log`` itself when its time steps are uniform (within SAMPLE_TIME_JITTER); otherwise the log
-    on a uniform grid at its median step T, taken causally: each tick gets the latest sample at or
-    before it, never a later one. The grid lags the first sample by the largest late jitter, so a
-    sample stamped a little late still lands on its own tick; across gaps longer than MAX_GAP the
-    numeric columns are NaN. ``notes`` say what was done and where the gaps are."""
+    on a uniform grid at its fitted step T (:func:`fitted_step`), taken causally: each tick gets the
+    latest sample at or before it, never a later one. The grid lags the fitted clock by the largest
+    late jitter, so a sample stamped a little late still lands on its own tick; across gaps longer
+    than MAX_GAP the numeric columns are NaN. ``notes`` say what was done and where the gaps are."""
     t = log["t"]
     steps = np.diff(t)
     mean = (t[-1] - t[0]) / (len(t) - 1)
     if np.all(np.abs(steps - mean) <= SAMPLE_TIME_JITTER * mean):
         return log
-    nominal = float(np.median(steps))
-    for _ in range(2):  # refine: the slope of the time stamps over their tick numbers
-        ticks_of_samples = np.round((t - t[0]) / nominal)
-        nominal = float(np.polyfit(ticks_of_samples, t, 1)[0])
-    nominal = round(nominal, GRID_DIGITS)
-    phase = (t - t[0]) / nominal
-    late = float(np.clip(((phase - np.round(phase)) * nominal).max(), 0.0, 0.49 * nominal))
-    ticks = t[0] + late + nominal * np.arange(int(np.floor((t[-1] - t[0] - late) / nominal)) + 1)
+    nominal, start, residual = fitted_step(t)
+    late = float(np.clip(residual.max(), 0.0, 0.49 * nominal))
+    ticks = start + late + nominal * np.arange(int(np.floor((t[-1] - start - late) / nominal)) + 1)
     latest, stale = latest_samples(t, ticks)
     columns = {}
     for name, column in log.columns.items():
@@ -245,17 +243,37 @@ def on_uniform_grid(log: Log) -> Log:
             values = np.where(stale, np.nan, values)
         columns[name] = values
     columns["t"] = ticks
-    deviation = (phase - np.round(phase)) * nominal
-    jitter = float(deviation.max() - deviation.min()) / 2
+    jitter = float(residual.max() - residual.min()) / 2
     step = f"{nominal * 1e3:.6g} ms"
     notes = {**log.notes, "resampled": f"time steps not uniform (jitter +-{jitter * 1e3:.3g} ms around a {step} "
                                        f"step): taken causally onto a uniform {step} grid, {len(t)} samples -> "
                                        f"{len(ticks)} ticks"}
     gaps = [(float(ticks[run.start]), float(ticks[run.stop - 1])) for run in runs(stale)]
     if gaps:
-        notes["gaps"] = (f"{len(gaps)} gap(s) longer than {MAX_GAP:g} s, estimators hold there: "
-                         + ", ".join(f"{a:.3f}..{b:.3f} s" for a, b in gaps[:5]) + (" ..." if len(gaps) > 5 else ""))
+        notes["gaps"] = gap_note(gaps)
     return Log(columns, log.source, notes)
+
+
+def fitted_step(t: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """(step T rounded to GRID_DIGITS, start, residuals) of jittered time stamps ``t`` (s): each
+    consecutive pair of samples is a whole number of ticks apart (rounded locally, so an error in
+    the first guess of T never accumulates over a long log), then T and the start are the least
+    squares line through the stamps over their tick numbers; the residuals are each stamp's
+    offset from it (its jitter)."""
+    steps = np.diff(t)
+    nominal = float(np.median(steps))
+    for _ in range(3):
+        ticks = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(steps / nominal), 1.0))])
+        nominal, start = (float(c) for c in np.polyfit(ticks, t, 1))
+    nominal = round(nominal, GRID_DIGITS)
+    start = float(np.mean(t - nominal * ticks))
+    return nominal, start, t - (start + nominal * ticks)
+
+
+def gap_note(gaps: list[tuple[float, float]]) -> str:
+    """The note of the gaps (start, end in s) on a log's grid where the estimators hold."""
+    return (f"{len(gaps)} gap(s) longer than {MAX_GAP:g} s, estimators hold there: "
+            + ", ".join(f"{a:.3f}..{b:.3f} s" for a, b in gaps[:5]) + (" ..." if len(gaps) > 5 else ""))
 
 
 def latest_samples(t: np.ndarray, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
