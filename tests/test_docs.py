@@ -58,3 +58,13 @@ def test_markdown_links_inside_the_repository_resolve():
             if "://" not in target and not (page.parent / target).exists():
                 broken.append(f"{page.relative_to(REPO)} -> {target}")
     assert broken == []
+
+
+def test_an_installed_vsegen_writes_every_page_a_user_needs(tmp_path, vsegen):
+    """The conventions and log format, the vehicle-file reference and the signal catalogue come
+    from the installed package (no docs/ folder needed)."""
+    result = vsegen.process("docs", "--out", tmp_path / "docs", cwd=tmp_path)
+    assert result.exit_code == 0, result.output
+    written = {p.name for p in (tmp_path / "docs").iterdir()}
+    assert written == {"conventions.md", "vehicle-file.md", "signals.md"}
+    assert "## Log format" in (tmp_path / "docs" / "conventions.md").read_text()

@@ -35,6 +35,7 @@ def test_the_wheel_installs_everything_under_one_vsegen_namespace(wheel):
                    "vsegen/codegen/templates/step.c.j2", "vsegen/harness/target/misra_baseline.json",
                    "vsegen/harness/host/runner.c.j2", "vsegen/harness/verify/fuzz.c.j2",
                    "vsegen/harness/target/pil_main.c.j2", "vsegen/harness/target/boards/mps2.ld",
+                   "vsegen/harness/project/conventions.md",
                    "vsegen/vehicles/c_class.toml"):
         assert needed in names
 

@@ -64,8 +64,9 @@ def list_() -> None:
               help="Do not write: compare with --out and print a unified diff of what would change.")
 @user_errors
 def docs(out: Path | None, check_only: bool) -> None:
-    """Write the reference pages generated from the code: vehicle-file.md (every key, unit, default,
-    check and meaning) and signals.md (log columns, status bits)."""
+    """Write the reference pages: conventions.md (units, signs, the log format, channel maps),
+    vehicle-file.md (every key, unit, default, check and meaning) and signals.md (log columns,
+    status bits), the last two generated from the code."""
     out = out or project().reports
     pages = reference_docs.pages()
     if check_only:

@@ -41,8 +41,9 @@ def channel_map_text() -> str:
     """A channel map naming every log column: the core inputs active (channel = the column's own
     name, SI unit), the rest commented out."""
     docs = {s.name: s.doc for s in (*(e.signal for e in signals.INPUTS), *signals.TRUTH)}
-    lines = ["# Channel map: which logger channel holds each log column, in which unit (see the README of",
-             "# vsegen, 'Logs'). Units: rad, deg | m/s, km/h, mph | rad/s, deg/s, rpm | m/s^2, g | N*m | -.",
+    lines = ["# Channel map: which logger channel holds each log column, in which unit (`vsegen docs` writes",
+             "# conventions.md, 'Log format'). Units: rad, deg | m/s, km/h, mph | rad/s, deg/s, rpm | m/s^2, g | N*m",
+             "# | - | s, ms, us. `group` or `message` choose an MDF4 channel whose name is in several groups.",
              "# `factor` (optional) is applied first, e.g. 1 / steering ratio for a steering-wheel angle.",
              "# A column left out is read from a channel of its own name, in SI units.",
              "# Use: vsegen run --log DRIVE.mf4 --channels channels.toml --estimator switching --out est.csv", ""]
@@ -59,6 +60,7 @@ def readme_text() -> str:
             "- `channels.toml`: how your logger's channels map to vsegen's log columns.\n\n"
             "Next, from this folder:\n\n"
             "```sh\n"
+            "vsegen docs                          # conventions, log format, vehicle-file keys into docs/\n"
             "vsegen generate                      # C of every estimator into generated/car/\n"
             "vsegen verify --estimator kf2dof     # the C against the NumPy reference\n"
             "vsegen run --log DRIVE.mf4 --channels channels.toml --estimator switching --out est.csv\n"
