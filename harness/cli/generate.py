@@ -26,11 +26,14 @@ from vsegen.model.params import VehicleConfig
 def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
            params: str | None) -> list[tuple[str, str, str]]:
     """(real, params, folder name) to generate: the one asked for, or the vehicle file's default
-    and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS)."""
-    chosen = (real or config.codegen["real"], params or config.codegen["params"])
+    and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS). A form other
+    than the vehicle file's default goes to ``<estimator>-<real>-<params>/``, so generating two
+    forms into one place never replaces one kit with the other."""
+    default = (config.codegen["real"], config.codegen["params"])
+    chosen = (real or default[0], params or default[1])
     if real or params or out.resolve() != project().generated:
-        return [(*chosen, name)]
-    return codegen.forms_to_write(name, chosen)
+        return [(*chosen, name if chosen == default else f"{name}-{chosen[0]}-{chosen[1]}")]
+    return codegen.forms_to_write(name, default)
 
 
 def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
@@ -82,7 +85,7 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
                 elif not check_only:
                     write_folder(files, folder)
                     console.print(f"generated   {display(folder)}  ({', '.join(sorted(files))})")
-    if check_only and not vehicles and not estimators:   # the whole tree: no folder left over
+    if check_only and not (vehicles or estimators or real or params):   # the whole tree: no folder left over
         for folder in _stray_folders(out, expected):
             click.echo(f"vsegen: {display(folder)}: no vehicle file or estimator generates this folder "
                        f"(remove it)", err=True)

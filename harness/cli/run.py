@@ -9,8 +9,11 @@ import numpy as np
 
 from vsegen.harness.cli.common import (
     CHANNELS_OPTION,
+    PARAMS_OPTION,
+    REAL_OPTION,
     UNIT_CHECK_OPTION,
     VEHICLE_OPTION,
+    UserError,
     chosen_estimators,
     console,
     read_user_log,
@@ -19,7 +22,8 @@ from vsegen.harness.cli.common import (
     warn_underived,
     window_options,
 )
-from vsegen.harness.logs.table import write_log
+from vsegen.harness.logs.estimates import write_estimates
+from vsegen.model.estimators import build
 
 
 @click.command()
@@ -31,13 +35,18 @@ from vsegen.harness.logs.table import write_log
               help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
 @click.option("--out", type=click.Path(path_type=Path), required=True,
               help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
+@REAL_OPTION
+@PARAMS_OPTION
 @CHANNELS_OPTION
 @UNIT_CHECK_OPTION
 @window_options
 @user_errors
-def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out: Path, channels: Path | None,
-        no_unit_check: bool, start: float | None, stop: float | None) -> None:
-    """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...)."""
+def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out: Path, real: str | None,
+        params: str | None, channels: Path | None, no_unit_check: bool, start: float | None,
+        stop: float | None) -> None:
+    """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...). With the C
+    backend, --real and --params choose the form that will be flashed (default: the vehicle file's
+    [codegen])."""
     from vsegen.harness.host.run_log import run_estimator
 
     config = vehicle_config(vehicle)
@@ -48,14 +57,13 @@ def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out:
         click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
                    f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
                    f"settings keep their meaning in time); generate for that rate to flash the same code", err=True)
-    with console.status(f"running {estimator} ({backend}) on {len(log)} samples"):
-        estimates = run_estimator(config, estimator, log, backend)
-    if out.suffix.lower() == ".mf4":
-        from vsegen.harness.logs.mdf import write_mdf
-
-        write_mdf(estimates, out)
-    else:
-        write_log(estimates, out)
+    if backend == "reference" and (real or params):
+        raise UserError("--real/--params choose a form of the generated C: expected --backend c")
+    form = f"{real or config.codegen['real']}, {params or config.codegen['params']}" if backend == "c" else backend
+    with console.status(f"running {estimator} ({form}) on {len(log)} samples"):
+        estimates = run_estimator(config, estimator, log, backend, real, params)
+    units = {s.name: s.unit for s in build(estimator, config).outputs.signals}
+    write_estimates(estimates, out, units)
     flagged = int(np.count_nonzero(estimates["status"]))
-    console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, "
+    console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, {form}, "
                   f"{flagged} with status != 0)")

@@ -16,7 +16,7 @@ from vsegen.harness.cli.common import (
     user_errors,
     window_options,
 )
-from vsegen.harness.logs.table import read_estimates
+from vsegen.harness.logs.estimates import read_estimates
 
 
 @click.command()

@@ -37,14 +37,16 @@ def estimator_inputs(estimator, log: Log):
 
 
 def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c",
-                  real: str | None = None) -> Log:
-    """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs; ``real``
-    (C only) defaults to the vehicle file's [codegen] real."""
+                  real: str | None = None, params: str | None = None) -> Log:
+    """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs; ``real`` and
+    ``params`` (C only: the form that will be flashed) default to the vehicle file's [codegen]."""
     config = config_for_log(config, log)
+    params = params or config.codegen["params"]
     estimator = build(name, config)
     inputs = estimator_inputs(estimator, log)
     if backend == "c":
-        outputs, _ = load_estimator(estimator, render(config, name, real)).run(inputs)
+        form = build(name, config, params)
+        outputs, _ = load_estimator(form, render(config, name, real, params)).run(inputs)
     else:
         outputs, _ = run_reference(REFERENCES[name], config, inputs)
     columns = {"t": log["t"].copy()}

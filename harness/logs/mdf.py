@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import gc
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,7 @@ from vsegen.harness.project.files import write_atomic
 SUFFIXES = (".mf4", ".mdf")
 
 
-def _open(path: Path):
+def open_mdf(path: Path):
     """The asammdf reader of ``path``, or LogError (one line). A half-built reader of a damaged
     file fails again in its destructor; that noise (a traceback on stderr) is swallowed while it
     is collected here."""
@@ -51,7 +52,7 @@ def read_mdf(path: Path, channels: ChannelMap, sample_time: float) -> Log:
     look-ahead); a channel older than MAX_GAP at a tick gives NaN there (the estimators hold), and
     the notes say where. Every missing required channel is named at once; a channel name found in
     several groups must be chosen by the map's ``group`` or ``message``."""
-    mdf = _open(path)
+    mdf = open_mdf(path)
     series, missing = {}, []
     for name in (*REQUIRED[1:], *OPTIONAL_INPUTS, *TRUTH):
         column = channels.column(name)
@@ -115,12 +116,13 @@ def _groups(mdf, found) -> str:
                      for g, _ in found)
 
 
-def write_mdf(log: Log, path: Path) -> None:
-    """Write the numeric columns of ``log`` (estimates) as one MDF4 channel group, atomically (a
-    temporary file next to ``path`` renamed into place)."""
+def write_mdf(log: Log, path: Path, units: Mapping[str, str]) -> None:
+    """Write the numeric columns of ``log`` (estimates) as one MDF4 channel group, each channel with
+    its unit from ``units`` ("-" for a ratio or a code), atomically (a temporary file next to
+    ``path`` renamed into place)."""
     from asammdf import MDF, Signal
 
     mdf = MDF(version="4.10")
-    mdf.append([Signal(np.asarray(values, dtype=float), log["t"], name=name)
+    mdf.append([Signal(np.asarray(values, dtype=float), log["t"], name=name, unit=units.get(name, ""))
                 for name, values in log.columns.items() if name != "t"], common_timebase=True)
     write_atomic(path, lambda tmp: mdf.save(tmp, overwrite=True))

@@ -126,16 +126,6 @@ ESTIMATED = ("beta", "vy", "r")
 """Signals an estimates file can be scored on; it must have at least one."""
 
 
-def read_estimates(path: Path) -> Log:
-    """Read an estimates file written by ``vsegen run``: ``t``, at least one of ``beta``, ``vy``,
-    ``r``, and other numeric columns."""
-    log = read_log(path, required=("t",), all_numeric=True)
-    if not any(name in log for name in ESTIMATED):
-        raise LogError(f"{path}:1: no estimated signal: expected a column {', '.join(ESTIMATED[:-1])} "
-                       f"or {ESTIMATED[-1]} (found {', '.join(log.columns)})")
-    return log
-
-
 def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool = False,
              channels: Mapping[str, tuple[str, float]] | None = None) -> Log:
     """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem. Columns

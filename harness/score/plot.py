@@ -1,5 +1,6 @@
 """Seed 000 Fig. 8 style plot: beta against the reference, |delta beta| over time, background
-shaded where a switching estimator used its dynamic scheme, the KF (``mode`` = 0)."""
+shaded where a switching estimator used its dynamic scheme, the KF (``mode`` = 0), where the
+estimator held (low speed or an invalid input) and where its status carried any other bit."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from vsegen.harness.logs.table import Log, LogError, runs
+from vsegen.harness.project.files import write_atomic
+from vsegen.model import status
 
 DYNAMIC = 0
 
@@ -46,12 +49,7 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
     if truth is None:
         label_error = "status (0 = OK)"
         title = f"{title} (no reference in the log)".strip()
-    for est in estimates.values():
-        if "mode" in est:
-            for axis in (top, bottom):
-                _shade(axis, t, est["mode"] == DYNAMIC)
-            top.fill_between([], [], color="tab:green", alpha=0.12, label="dynamic scheme (KF)")
-            break
+    _shade_states(next(iter(estimates.values())), t, top, bottom)
     if "off_course" in log and log["off_course"].any():
         first = t[np.argmax(log["off_course"] > 0)]
         for axis in (top, bottom):
@@ -66,46 +64,31 @@ def plot(log: Log, estimates: dict[str, Log], out: Path, title: str = "") -> Non
     if title:
         top.set_title(title, fontsize=10)
     fig.tight_layout()
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = out.with_name(f".{out.stem}.tmp{out.suffix}")
-    fig.savefig(tmp, dpi=80)
+    write_atomic(Path(out), lambda tmp: fig.savefig(tmp, dpi=80))
     plt.close(fig)
-    tmp.replace(out)
 
 
-def _shade(axis, t: np.ndarray, mask: np.ndarray) -> None:
-    for run in runs(mask):
-        axis.axvspan(t[run.start], t[min(run.stop, len(t) - 1)], color="tab:green", alpha=0.12, lw=0)
+HELD = status.LOW_SPEED | status.INVALID_INPUT
 
 
-def tuning_plot(scores: list[float], baseline_train: float, tuned_train: float,
-                baseline_holdout: float | None, tuned_holdout: float | None, unit: str, out: Path,
-                title: str = "") -> None:
-    """Write a PNG of a tuning run: each trial's training objective and the best so far, with the
-    training and hold-out objectives before and after (over-fitting shows as a hold-out that does
-    not follow the training score)."""
-    fig, (history, summary) = plt.subplots(1, 2, figsize=(11, 4), gridspec_kw={"width_ratios": [3, 1]})
-    finite = np.where(np.isfinite(scores), scores, np.nan)
-    history.plot(np.arange(1, len(scores) + 1), finite, ".", color="0.6", label="trial")
-    history.plot(np.arange(1, len(scores) + 1), np.fmin.accumulate(np.nan_to_num(finite, nan=np.inf)),
-                 "-", color="C0", label="best so far")
-    history.axhline(baseline_train, color="C3", linestyle="--", label="before (training)")
-    history.set_xlabel("trial")
-    history.set_ylabel(f"objective ({unit})")
-    history.legend()
-    labels, before, after = ["training"], [baseline_train], [tuned_train]
-    if baseline_holdout is not None and tuned_holdout is not None:
-        labels.append("hold-out")
-        before.append(baseline_holdout)
-        after.append(tuned_holdout)
-    x = np.arange(len(labels))
-    summary.bar(x - 0.2, before, 0.4, label="before", color="C3")
-    summary.bar(x + 0.2, after, 0.4, label="after", color="C0")
-    summary.set_xticks(x, labels)
-    summary.legend()
-    fig.suptitle(title)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+def state_spans(est: Log) -> dict[tuple[str, str], np.ndarray]:
+    """{(label, colour): mask} of what a plot shades for an estimate: its holds, its KF mode (a
+    switching estimator's mode = 0 on a sample it did not hold) and the samples whose status carries
+    any other bit; masks that are nowhere true are left out."""
+    length = len(est["t"])
+    code = np.nan_to_num(est["status"]).astype(int) if "status" in est else np.zeros(length, dtype=int)
+    held = (code & HELD) != 0
+    spans = {}
+    if "mode" in est:
+        spans[("dynamic scheme (KF)", "tab:green")] = (est["mode"] == DYNAMIC) & ~held
+    spans[("hold (low speed or invalid input)", "0.5")] = held
+    spans[("status bit set (estimate suspect)", "tab:orange")] = (code & ~HELD) != 0
+    return {key: mask for key, mask in spans.items() if mask.any()}
+
+
+def _shade_states(est: Log, t: np.ndarray, top, bottom) -> None:
+    for (label, color), mask in state_spans(est).items():
+        for axis in (top, bottom):
+            for run in runs(mask):
+                axis.axvspan(t[run.start], t[min(run.stop, len(t) - 1)], color=color, alpha=0.15, lw=0)
+        top.fill_between([], [], color=color, alpha=0.15, label=label)
