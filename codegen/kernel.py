@@ -68,7 +68,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     c_text, h_text = _drop_metadata(c_text, h_text, [function.name() for function in functions])
     c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
-    c_text = _compare_min_max(c_text)
+    c_text = _explicit_truth(_compare_min_max(c_text))
     for entry in estimator.structure.in_place:
         c_text = _read_state_first(c_text, entry)
     if real == "float":
@@ -169,6 +169,22 @@ def _compare_min_max(c_text: str) -> str:
                 raise RuntimeError(f"CasADi's casadi_{name} changed; review codegen/kernel.py")
             c_text = c_text.replace(raw, compared)
     return c_text
+
+
+_CONDITION = re.compile(r"\((a\d+)\?")
+_NOT = re.compile(r"\(!(a\d+)\)")
+_LOGIC = re.compile(r"=\((a\d+)(&&|\|\|)(a\d+)\);")
+
+
+def _explicit_truth(c_text: str) -> str:
+    """A real used as a truth value, compared with 0 as C does implicitly: ``(a?b:0)`` becomes
+    ``((a!=0.)?b:0)``, ``(!a)`` ``(a==0.)`` and ``(a&&b)`` ``((a!=0.)&&(b!=0.))``. The same code (NaN
+    is true either way), but no implicit real-to-_Bool conversion, which clang's -Wconversion
+    rejects (-Wfloat-conversion); the real literal keeps both operands essentially real (MISRA
+    C:2012 10.4) and becomes ``0.f`` in float code."""
+    c_text = _CONDITION.sub(r"((\1!=0.)?", c_text)
+    c_text = _NOT.sub(r"(\1==0.)", c_text)
+    return _LOGIC.sub(r"=((\1!=0.)\2(\3!=0.));", c_text)
 
 
 _STATE_READ = re.compile(r"arg\[0\]\[(\d+)\]")

@@ -3,6 +3,7 @@ kit's toolchain file, and the guard against double-precision code on a single-pr
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from pathlib import Path
@@ -33,16 +34,25 @@ def test_command_line_cflags_keep_the_kit_flags(config, tmp_path):
 
 
 @pytest.mark.skipif(ARM is None or shutil.which("cmake") is None, reason="needs cmake and arm-none-eabi-gcc")
-def test_cmake_cross_build_with_the_kit_toolchain(config, tmp_path):
+@pytest.mark.parametrize("user_flags", [[], ["-DCMAKE_C_FLAGS=-g"]])
+def test_cmake_cross_build_with_the_kit_toolchain(config, tmp_path, user_flags):
     """The kit's toolchain file configures a Cortex-M build that makes the static library without
-    startup code or syscalls (the stdio example is off when cross-compiling)."""
+    startup code or syscalls (the stdio example is off when cross-compiling), at -O2 unless a build
+    type says otherwise; the core flags stay when the user gives CMAKE_C_FLAGS (before, they were
+    dropped and an ARMv4T library built at -O0)."""
     folder = _kit(config, tmp_path, "float")
     build = tmp_path / "build"
-    subprocess.run(["cmake", "-S", str(folder), "-B", str(build),
-                    "-DCMAKE_TOOLCHAIN_FILE=toolchain-arm-none-eabi.cmake"],
+    subprocess.run(["cmake", "-S", str(folder), "-B", str(build), "-DCMAKE_EXPORT_COMPILE_COMMANDS=ON",
+                    "-DCMAKE_TOOLCHAIN_FILE=toolchain-arm-none-eabi.cmake", *user_flags],
                    check=True, capture_output=True, text=True)
     subprocess.run(["cmake", "--build", str(build)], check=True, capture_output=True, text=True)
     assert (build / "libvse_kf2dof.a").is_file() and not (build / "vse_kf2dof_example").exists()
+    commands = json.loads((build / "compile_commands.json").read_text())
+    assert commands and all("-mcpu=cortex-m4" in c["command"] and "-mfpu=fpv4-sp-d16" in c["command"]
+                            and " -O2" in c["command"] for c in commands)
+    attributes = subprocess.run(["arm-none-eabi-readelf", "-A", str(build / "libvse_kf2dof.a")],
+                                capture_output=True, text=True, check=True).stdout
+    assert "Tag_CPU_arch: v7E-M" in attributes and "Tag_FP_arch: VFPv4-D16" in attributes
 
 
 @pytest.mark.skipif(ARM is None, reason="needs arm-none-eabi-gcc")
