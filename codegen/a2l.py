@@ -7,9 +7,9 @@ outputs). The generated file links every object to its C symbol with ``SYMBOL_LI
 offset`` (ASAP2 1.7) and leaves the addresses 0 until ``vsegen a2l --elf`` fills them from the
 linked firmware (harness/a2l_link.py).
 
-Layout rules the offsets rely on: every struct member here is a ``real`` (4 or 8 bytes) except
-the outputs' trailing ``int status`` (4 bytes, at most the real's size), so C places the members
-back to back with no padding before any of them.
+Layout rules the offsets rely on: the calibration struct and the state hold ``real`` members only
+(4 or 8 bytes, back to back); the outputs hold reals and ``int`` members (4 bytes: ``status``, a
+switching estimator's ``mode``), each at the next multiple of its own size, as C places them.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from vsegen.model.estimators import SCHEMAS
 
 DATATYPES = {"float": ("FLOAT32_IEEE", 4, 3.4e38), "double": ("FLOAT64_IEEE", 8, 1.7e308)}
 """real -> (ASAP2 data type, size in bytes, largest magnitude used as an open limit)."""
-STATUS_TYPE = ("SLONG", 4, 2147483647.0)
-"""The outputs' ``int status`` (32 bits on every target vsegen builds for)."""
+STATUS_TYPE = ("SLONG", 4, 2147483647)
+"""The outputs' ``int`` members, ``status`` and ``mode`` (32 bits on every target vsegen builds for)."""
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,13 @@ class Quantity:
     upper: float
     count: int = 1
     """Entries of an array (the particle block of a particle filter), else 1."""
+
+    @property
+    def limits(self) -> str:
+        """The lower and upper limit as the A2L writes them: whole numbers for an integer type."""
+        if self.datatype == STATUS_TYPE[0]:
+            return f"{int(self.lower)} {int(self.upper)}"
+        return f"{self.lower:.9g} {self.upper:.9g}"
 
 
 @dataclass(frozen=True)
@@ -91,10 +98,13 @@ def describe(estimator: Estimator, real: str, prefix: str) -> Description:
         measurements.append(Quantity(f"{prefix}_state.particles", f"{particles[0]} particles, entries as "
                                      f"{prefix.upper()}_PARTICLE_*", "-", datatype, state_symbol(prefix),
                                      len(named) * size, -open_limit, open_limit, particles[1]))
-    for i, s in enumerate(estimator.outputs.signals):
-        kind, _, limit = STATUS_TYPE if s.integer else (datatype, size, open_limit)
+    offset = 0
+    for s in estimator.outputs.signals:
+        kind, member, limit = STATUS_TYPE if s.integer else (datatype, size, open_limit)
+        offset = -(-offset // member) * member          # the next multiple of the member's size
         measurements.append(Quantity(f"{prefix}_output.{s.name}", s.doc, s.unit, kind, output_symbol(prefix),
-                                     i * size, 0.0 if s.integer else -limit, limit))
+                                     offset, 0.0 if s.integer else -limit, limit))
+        offset += member
     units = sorted({q.unit for q in (*characteristics, *measurements)})
     return Description(characteristics, tuple(measurements), _conversion_names(units))
 

@@ -21,7 +21,8 @@ from vsegen.model.estimators import build
 pya2l = pytest.importorskip("pya2l")
 from pya2l import model as a2l_model  # noqa: E402
 
-M4F = TARGETS[0]
+M4F, M7 = TARGETS
+A2LTOOL = shutil.which("a2ltool")
 needs_arm = pytest.mark.skipif(shutil.which(M4F.compiler) is None, reason="arm-none-eabi-gcc not installed")
 
 
@@ -38,12 +39,12 @@ def kit(tmp_path: Path, name: str, real: str, car: str = "c_class") -> Path:
     return folder
 
 
-def firmware(folder: Path) -> Path:
-    """The kit's example linked for a Cortex-M4F (newlib, no OS)."""
+def firmware(folder: Path, target=M4F, flags: tuple[str, ...] = ()) -> Path:
+    """The kit's example linked for ``target`` (a Cortex-M4F by default; newlib, no OS)."""
     elf = folder / "firmware.elf"
     sources = sorted(str(p) for p in folder.glob("*.c"))
-    subprocess.run([M4F.compiler, *M4F.flags, "-O2", "-std=c99", "--specs=nosys.specs", *sources, "-lm", "-o",
-                    str(elf)], check=True, capture_output=True, cwd=folder)
+    subprocess.run([target.compiler, *target.flags, "-O2", "-std=c99", *flags, "--specs=nosys.specs", *sources, "-lm",
+                    "-o", str(elf)], check=True, capture_output=True, cwd=folder)
     return elf
 
 
@@ -51,6 +52,13 @@ def nm_addresses(elf: Path) -> dict[str, int]:
     """Symbol addresses as binutils' nm reads them (independent of the linker under test)."""
     out = subprocess.run([M4F.tools_prefix + "nm", str(elf)], check=True, capture_output=True, text=True).stdout
     return {parts[2]: int(parts[0], 16) for parts in (line.split() for line in out.splitlines()) if len(parts) == 3}
+
+
+def addresses(path: Path) -> dict[str, int]:
+    """Every CHARACTERISTIC's and MEASUREMENT's address in the A2L file ``path``, by name."""
+    session = parse(path)
+    return ({c.name: c.address for c in session.query(a2l_model.Characteristic).all()}
+            | {m.name: m.ecu_address.address for m in session.query(a2l_model.Measurement).all()})
 
 
 def read_float(elf: Path, address: int) -> float:
@@ -129,3 +137,44 @@ def test_a_mismatched_firmware_or_symbol_is_one_line(tmp_path, vsegen):
         result = vsegen.process("a2l", *args, "--out", "x.a2l", cwd=tmp_path)
         assert result.exit_code == 2 and result.stderr.count("\n") == 1 and fragment in result.stderr, result.stderr
         assert not (tmp_path / "x.a2l").exists()
+
+
+@needs_arm
+@pytest.mark.parametrize("name,real", [("kf2dof", "float"), ("switching", "double"), ("pf_improved", "float")])
+def test_a2ltool_accepts_the_a2l_strictly_and_finds_the_same_addresses(tmp_path, name, real, vsegen):
+    """An outside judge: the a2ltool CLI (pip a2ltool) parses the generated A2L in strict mode,
+    updates it from the firmware's DWARF in strict mode (before: 'data type has changed' where an
+    int output followed a double, its offset counted as a double's) and finds every address
+    `vsegen a2l` fills (from the symbol table)."""
+    if A2LTOOL is None:
+        pytest.fail("a2ltool is required (pip install -e '.[test]' installs it)")
+    folder = kit(tmp_path, name, real)
+    elf = firmware(folder, M4F if real == "float" else M7, ("-g",))
+    a2l = folder / f"vse_{name}.a2l"
+    checked = subprocess.run([A2LTOOL, "--strict", str(a2l), "--check"], capture_output=True, text=True)
+    assert checked.returncode == 0 and "No problems found" in checked.stdout, checked.stdout + checked.stderr
+    theirs = subprocess.run([A2LTOOL, str(a2l), "--elffile", str(elf), "--update", "--update-mode", "STRICT",
+                             "-o", str(folder / "theirs.a2l")], capture_output=True, text=True)
+    assert theirs.returncode == 0, theirs.stdout + theirs.stderr
+    ours = vsegen.process("a2l", "--elf", elf, "--a2l", a2l, "--out", folder / "ours.a2l", cwd=folder)
+    assert ours.exit_code == 0, ours.output
+    ours, theirs = (addresses(folder / f"{side}.a2l") for side in ("ours", "theirs"))
+    assert ours == theirs and len(ours) > 10
+    assert "2147483647" in a2l.read_text() and "2.14748365e+09" not in a2l.read_text()
+
+
+@needs_arm
+def test_the_calibration_survives_link_time_optimisation(tmp_path, vsegen):
+    """With -flto the const calibration struct was folded into the code: no object for the A2L
+    file's addresses, and a calibration tool could change nothing. It is volatile now: it stays,
+    and `vsegen a2l` fills its addresses."""
+    folder = kit(tmp_path, "kf2dof", "float")
+    elf = firmware(folder, M4F, ("-flto",))
+    assert "vse_kf2dof_calibration" in nm_addresses(elf)
+    filled = vsegen.process("a2l", "--elf", elf, "--a2l", "vse_kf2dof.a2l", "--out", "filled.a2l", cwd=folder)
+    assert filled.exit_code == 0, filled.output
+    (folder / "vse_kf2dof_calibration.c").unlink()
+    (folder / "vse_kf2dof_calibration.c").write_text('#include "vse_kf2dof.h"\n')   # an image without it
+    bare = firmware(folder, M4F, ("-Wl,--unresolved-symbols=ignore-all",))
+    missing = vsegen.process("a2l", "--elf", bare, "--a2l", "vse_kf2dof.a2l", "--out", "x.a2l", cwd=folder)
+    assert missing.exit_code == 2 and "the linker dropped it" in missing.stderr

@@ -92,3 +92,34 @@ def _shade_states(est: Log, t: np.ndarray, top, bottom) -> None:
             for run in runs(mask):
                 axis.axvspan(t[run.start], t[min(run.stop, len(t) - 1)], color=color, alpha=0.15, lw=0)
         top.fill_between([], [], color=color, alpha=0.15, label=label)
+
+
+def tuning_plot(scores: list[float], baseline_train: float, tuned_train: float,
+                baseline_holdout: float | None, tuned_holdout: float | None, unit: str, out: Path,
+                title: str = "") -> None:
+    """Write a PNG of a tuning run: each trial's training objective and the best so far, with the
+    training and hold-out objectives before and after (over-fitting shows as a hold-out that does
+    not follow the training score)."""
+    fig, (history, summary) = plt.subplots(1, 2, figsize=(11, 4), gridspec_kw={"width_ratios": [3, 1]})
+    finite = np.where(np.isfinite(scores), scores, np.nan)
+    history.plot(np.arange(1, len(scores) + 1), finite, ".", color="0.6", label="trial")
+    history.plot(np.arange(1, len(scores) + 1), np.fmin.accumulate(np.nan_to_num(finite, nan=np.inf)),
+                 "-", color="C0", label="best so far")
+    history.axhline(baseline_train, color="C3", linestyle="--", label="before (training)")
+    history.set_xlabel("trial")
+    history.set_ylabel(f"objective ({unit})")
+    history.legend()
+    labels, before, after = ["training"], [baseline_train], [tuned_train]
+    if baseline_holdout is not None and tuned_holdout is not None:
+        labels.append("hold-out")
+        before.append(baseline_holdout)
+        after.append(tuned_holdout)
+    x = np.arange(len(labels))
+    summary.bar(x - 0.2, before, 0.4, label="before", color="C3")
+    summary.bar(x + 0.2, after, 0.4, label="after", color="C0")
+    summary.set_xticks(x, labels)
+    summary.legend()
+    fig.suptitle(title)
+    fig.tight_layout()
+    write_atomic(Path(out), lambda tmp: fig.savefig(tmp, dpi=110))
+    plt.close(fig)

@@ -70,7 +70,10 @@ def link(text: str, source: str, symbols: dict[str, Symbol], elf: str,
             if new and name.startswith(start):
                 symbol = new
         if symbol not in symbols:
-            hint = " (--state / --output name the firmware's variables)" if name.startswith(tuple(renames)) else ""
+            hint = " (--state / --output name the firmware's variables)" if name.startswith(tuple(renames)) else \
+                (" (the linker dropped it: link the kit's <name>_calibration.c and keep the object, e.g. KEEP() in "
+                 "the linker script; a kit older than its volatile calibration is folded by -flto: regenerate it)"
+                 if kind == "CHARACTERISTIC" else "")
             raise A2LError(f"{elf}: no data object '{symbol}' for {kind} {name}: expected it in the symbol "
                            f"table, defined once{hint}")
         count = re.search(r"MATRIX_DIM (\d+)", body)

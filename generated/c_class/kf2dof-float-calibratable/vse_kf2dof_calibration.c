@@ -14,7 +14,7 @@
 
 /* The generated calibration (the vehicle file's values). Change values here, or flash other
  * values at this object's address, without regenerating the code. */
-const vse_kf2dof_calibration_t vse_kf2dof_calibration = {
+const volatile vse_kf2dof_calibration_t vse_kf2dof_calibration = {
     1412.0f, /* mass */
     1964.4f, /* yaw_inertia */
     1.015f, /* cg_to_front_axle */

@@ -134,8 +134,10 @@ typedef struct {
     vse_pf_improved_real correction_gain_3;
 } vse_pf_improved_calibration_t;
 
-/** The calibration the estimator reads (defined in vse_pf_improved_calibration.c). */
-extern const vse_pf_improved_calibration_t vse_pf_improved_calibration;
+/** The calibration the estimator reads (defined in vse_pf_improved_calibration.c). volatile: the code reads it at
+ *  run time, so link-time optimisation can neither fold its values into the code nor drop the
+ *  object (a calibration tool writes it where the A2L file says). */
+extern const volatile vse_pf_improved_calibration_t vse_pf_improved_calibration;
 
 /** Initialise the state from the first sample (call once, then vse_pf_improved_step for every sample
  *  from the first one on). Any input values are accepted. */

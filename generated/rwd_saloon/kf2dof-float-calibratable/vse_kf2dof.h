@@ -110,8 +110,10 @@ typedef struct {
     vse_kf2dof_real linear_range;
 } vse_kf2dof_calibration_t;
 
-/** The calibration the estimator reads (defined in vse_kf2dof_calibration.c). */
-extern const vse_kf2dof_calibration_t vse_kf2dof_calibration;
+/** The calibration the estimator reads (defined in vse_kf2dof_calibration.c). volatile: the code reads it at
+ *  run time, so link-time optimisation can neither fold its values into the code nor drop the
+ *  object (a calibration tool writes it where the A2L file says). */
+extern const volatile vse_kf2dof_calibration_t vse_kf2dof_calibration;
 
 /** Initialise the state from the first sample (call once, then vse_kf2dof_step for every sample
  *  from the first one on). Any input values are accepted. */

@@ -15,7 +15,7 @@
 
 /* The generated calibration (the vehicle file's values). Change values here, or flash other
  * values at this object's address, without regenerating the code. */
-const vse_pf_improved_calibration_t vse_pf_improved_calibration = {
+const volatile vse_pf_improved_calibration_t vse_pf_improved_calibration = {
     90.0f, /* vx_max */
     30.0f, /* ax_max */
     30.0f, /* ay_max */
