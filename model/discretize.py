@@ -40,6 +40,10 @@ class ZohPlan:
     error_bound: float
 
 
+MAX_EXPONENT = 700.0
+"""Above e^700 the error bound is reported as infinite (a double overflows near e^709)."""
+
+
 def plan_zoh(norm_bound: float, sample_time: float) -> ZohPlan:
     """Choose series length and squarings for ||A|| <= ``norm_bound`` (1/s) at ``sample_time`` (s).
 
@@ -55,7 +59,8 @@ def plan_zoh(norm_bound: float, sample_time: float) -> ZohPlan:
     while _remainder(theta_s, terms) > ZOH_REMAINDER:
         terms += 1
     rho = _remainder(theta_s, terms)
-    bound = math.exp(theta) * math.expm1(2**squarings * math.log1p(rho))
+    growth = 2**squarings * math.log1p(rho)
+    bound = math.exp(theta) * math.expm1(growth) if theta + growth < MAX_EXPONENT else math.inf
     return ZohPlan(terms, squarings, bound)
 
 

@@ -87,16 +87,43 @@ def number_field(key: str, expected: str, accept: Callable[[float], bool], doc: 
     return Field(key, expected, check, doc, default, bounds, unit=unit)
 
 
-def positive(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
-    """A finite number > 0 in ``unit`` (optional when ``default`` is given)."""
-    return number_field(key, f"a finite number > 0 ({unit})", lambda x: x > 0.0, doc, default,
-                        ((">", 0.0),), unit)
+PHYSICAL_MAXIMUM = {
+    "kg": 1e5, "kg*m^2": 1e7, "m": 100.0, "N/rad": 1e8, "N": 1e8, "N*m": 1e7, "m/s": 200.0, "m/s^2": 1e3,
+    "rad": 10.0, "rad/s": 1e4, "rad/s^2": 1e5, "rad/(m/s^2)": 1.0, "s": 1e4, "Hz": 1e3, "m^2": 100.0,
+    "1/s": 1e4, "1/rad^2": 1e12, "-": 1e6, "(rad/s)^2": 1e6,
+}
+"""The largest magnitude a setting in a unit may have: beyond any vehicle (a 100 t truck, 200 m/s)
+yet far inside float range, so a calibration can never overflow the estimator's arithmetic. The
+generated C of a calibratable build checks these bounds at run time too (and the A2L file gives
+them as limits)."""
+COMPOUND_MAXIMUM = 1e12
+"""The same for a setting whose entries have mixed units (covariances: a yaw moment's variance
+reaches 1e8 (N*m)^2)."""
+
+
+def physical_maximum(unit: str) -> float:
+    """The largest magnitude of a setting in ``unit`` (:data:`PHYSICAL_MAXIMUM`)."""
+    return PHYSICAL_MAXIMUM.get(unit, COMPOUND_MAXIMUM)
+
+
+def positive(key: str, unit: str, doc: str = "", default: float | None = None,
+             minimum: float | None = None) -> Field:
+    """A number in ``unit`` above 0 (at least ``minimum``, the smallest physical value, when given)
+    and at most the unit's physical maximum (optional when ``default`` is given)."""
+    high = physical_maximum(unit)
+    if minimum is None:
+        return number_field(key, f"a finite number > 0 and <= {high:g} ({unit})", lambda x: 0.0 < x <= high,
+                            doc, default, ((">", 0.0), ("<=", high)), unit)
+    return number_field(key, f"a number from {minimum:g} to {high:g} ({unit})", lambda x: minimum <= x <= high,
+                        doc, default, ((">=", minimum), ("<=", high)), unit)
 
 
 def nonnegative(key: str, unit: str, doc: str = "", default: float | None = None) -> Field:
-    """A finite number >= 0 in ``unit`` (optional when ``default`` is given)."""
-    return number_field(key, f"a finite number >= 0 ({unit})", lambda x: x >= 0.0, doc, default,
-                        ((">=", 0.0),), unit)
+    """A number >= 0 in ``unit``, at most the unit's physical maximum (optional when ``default``
+    is given)."""
+    high = physical_maximum(unit)
+    return number_field(key, f"a finite number >= 0 and <= {high:g} ({unit})", lambda x: 0.0 <= x <= high,
+                        doc, default, ((">=", 0.0), ("<=", high)), unit)
 
 
 def fraction(key: str, doc: str = "", default: float | None = None) -> Field:
@@ -120,8 +147,9 @@ def choice(key: str, options: tuple[str, ...], doc: str = "", default: str | Non
 def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
     """A symmetric positive-definite ``size``×``size`` matrix, written either as the list of its
     ``size`` diagonal entries or in full as a list of rows. Normalised to a tuple of row tuples."""
+    high = physical_maximum(unit)
     expected = (f"a symmetric positive-definite {size}x{size} matrix ({unit}): a list of {size} "
-                f"positive diagonal entries or {size} rows of {size} numbers")
+                f"positive diagonal entries or {size} rows of {size} numbers, each at most {high:g} in magnitude")
 
     def check(value: Any) -> tuple[tuple[float, ...], ...]:
         if not isinstance(value, list) or len(value) != size:
@@ -135,13 +163,15 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
                 matrix = np.diag([_number(v) for v in value])
         except Invalid:
             raise Invalid(expected) from None
+        if np.max(np.abs(matrix)) > high:
+            raise Invalid(expected)
         if not np.array_equal(matrix, matrix.T):
             raise Invalid(expected + " (it is not symmetric)")
         if np.min(np.linalg.eigvalsh(matrix)) <= 0.0:
             raise Invalid(expected + " (it is not positive definite)")
         return tuple(tuple(float(v) for v in row) for row in matrix)
 
-    return Field(key, expected, check, doc, positive_definite=True, unit=unit)
+    return Field(key, expected, check, doc, bounds=((">=", -high), ("<=", high)), positive_definite=True, unit=unit)
 
 
 def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
@@ -149,7 +179,8 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
     """The ``size`` diagonal entries of a diagonal covariance, each > 0 (or >= 0 when
     ``zero_allowed``). Normalised to a tuple of floats."""
     bound = ">= 0" if zero_allowed else "> 0"
-    expected = f"a list of {size} numbers {bound} ({unit}), the diagonal"
+    high = physical_maximum(unit)
+    expected = f"a list of {size} numbers {bound} and <= {high:g} ({unit}), the diagonal"
 
     def check(value: Any) -> tuple[float, ...]:
         if not isinstance(value, list) or len(value) != size:
@@ -158,11 +189,11 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
             entries = tuple(_number(v) for v in value)
         except Invalid:
             raise Invalid(expected) from None
-        if any(v < 0.0 or (v == 0.0 and not zero_allowed) for v in entries):
+        if any(v < 0.0 or (v == 0.0 and not zero_allowed) or v > high for v in entries):
             raise Invalid(expected)
         return entries
 
-    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0),), unit=unit)
+    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0), ("<=", high)), unit=unit)
 
 
 def vector(key: str, size: int, unit: str, doc: str = "",
@@ -204,17 +235,18 @@ def between(key: str, low: float, high: float, doc: str = "", default: float | N
 # [vehicle]: physical parameters (names fixed: other tools depend on them)
 
 VEHICLE: tuple[Field, ...] = (
-    positive("mass", "kg", "vehicle mass m"),
-    positive("yaw_inertia", "kg*m^2", "yaw moment of inertia I_z"),
-    positive("cg_to_front_axle", "m", "a, CG to front axle"),
-    positive("cg_to_rear_axle", "m", "b, CG to rear axle"),
-    positive("wheelbase", "m", "l = a + b"),
-    positive("cornering_stiffness_front", "N/rad", "C_f, front axle (both tyres), positive"),
-    positive("cornering_stiffness_rear", "N/rad", "C_r, rear axle (both tyres), positive"),
-    positive("wheel_radius", "m", "effective rolling radius R_eff"),
-    positive("track_width", "m", "track width (front = rear)"),
-    positive("cg_height", "m", "CG height above ground"),
+    positive("mass", "kg", "vehicle mass m", minimum=10.0),
+    positive("yaw_inertia", "kg*m^2", "yaw moment of inertia I_z", minimum=1.0),
+    positive("cg_to_front_axle", "m", "a, CG to front axle", minimum=0.01),
+    positive("cg_to_rear_axle", "m", "b, CG to rear axle", minimum=0.01),
+    positive("wheelbase", "m", "l = a + b", minimum=0.1),
+    positive("cornering_stiffness_front", "N/rad", "C_f, front axle (both tyres), positive", minimum=100.0),
+    positive("cornering_stiffness_rear", "N/rad", "C_r, rear axle (both tyres), positive", minimum=100.0),
+    positive("wheel_radius", "m", "effective rolling radius R_eff", minimum=0.01),
+    positive("track_width", "m", "track width (front = rear)", minimum=0.1),
+    positive("cg_height", "m", "CG height above ground", minimum=0.01),
 )
+"""Physical bounds: from a 10 kg robot car to a 100 t truck (PHYSICAL_MAXIMUM)."""
 
 # [inputs]: plausibility limits shared by all estimators. A finite input inside its limit is
 # plausible; anything else (NaN, +-Inf, beyond the limit) is rejected with status INVALID_INPUT.

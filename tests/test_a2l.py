@@ -97,7 +97,7 @@ def test_limits_and_units_come_from_the_schema(tmp_path):
     session = parse(kit(tmp_path, "kf2dof", "float") / "vse_kf2dof.a2l")
     mass = session.query(a2l_model.Characteristic).filter_by(name="vse_kf2dof_calibration.mass").one()
     units = {c.name: c.unit for c in session.query(a2l_model.CompuMethod).all()}
-    assert (mass.lowerLimit, units[mass.conversion]) == (0.0, "kg")
+    assert (mass.lowerLimit, mass.upperLimit, units[mass.conversion]) == (10.0, 1e5, "kg")
     r_noise = session.query(a2l_model.Characteristic).filter_by(
         name="vse_kf2dof_calibration.measurement_noise_22").one()
     assert units[r_noise.conversion] == "(rad/s)^2"

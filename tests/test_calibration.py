@@ -29,7 +29,7 @@ def test_calibration_file_and_struct(config):
     assert "vse_kf2dof_calibration.c" in files
     header = files["vse_kf2dof.h"]
     assert "} vse_kf2dof_calibration_t;" in header and "vse_kf2dof_real mass;" in header
-    assert "extern const vse_kf2dof_calibration_t vse_kf2dof_calibration;" in header
+    assert "extern const volatile vse_kf2dof_calibration_t vse_kf2dof_calibration;" in header
     assert "1412.0, /* mass */" in files["vse_kf2dof_calibration.c"]
     assert "vse_kf2dof_calibration.c" in files["CMakeLists.txt"] and \
         "vse_kf2dof_calibration.o" in files["Makefile"]

@@ -57,34 +57,82 @@ static void read_calibration(casadi_real p[27])
 static int calibration_valid(const casadi_real p[27])
 {
     int valid = 1;
-    if (!(p[0] > 0.0)) {    /* mass > 0 */
+    if (!(p[0] >= 10.0)) {    /* mass >= 10 */
         valid = 0;
     }
-    if (!(p[1] > 0.0)) {    /* yaw_inertia > 0 */
+    if (!(p[0] <= 100000.0)) {    /* mass <= 100000 */
         valid = 0;
     }
-    if (!(p[2] > 0.0)) {    /* cg_to_front_axle > 0 */
+    if (!(p[1] >= 1.0)) {    /* yaw_inertia >= 1 */
         valid = 0;
     }
-    if (!(p[3] > 0.0)) {    /* cg_to_rear_axle > 0 */
+    if (!(p[1] <= 10000000.0)) {    /* yaw_inertia <= 1e+07 */
         valid = 0;
     }
-    if (!(p[4] > 0.0)) {    /* cornering_stiffness_front > 0 */
+    if (!(p[2] >= 0.01)) {    /* cg_to_front_axle >= 0.01 */
         valid = 0;
     }
-    if (!(p[5] > 0.0)) {    /* cornering_stiffness_rear > 0 */
+    if (!(p[2] <= 100.0)) {    /* cg_to_front_axle <= 100 */
+        valid = 0;
+    }
+    if (!(p[3] >= 0.01)) {    /* cg_to_rear_axle >= 0.01 */
+        valid = 0;
+    }
+    if (!(p[3] <= 100.0)) {    /* cg_to_rear_axle <= 100 */
+        valid = 0;
+    }
+    if (!(p[4] >= 100.0)) {    /* cornering_stiffness_front >= 100 */
+        valid = 0;
+    }
+    if (!(p[4] <= 100000000.0)) {    /* cornering_stiffness_front <= 1e+08 */
+        valid = 0;
+    }
+    if (!(p[5] >= 100.0)) {    /* cornering_stiffness_rear >= 100 */
+        valid = 0;
+    }
+    if (!(p[5] <= 100000000.0)) {    /* cornering_stiffness_rear <= 1e+08 */
         valid = 0;
     }
     if (!(p[6] > 0.0)) {    /* delta_max > 0 */
         valid = 0;
     }
+    if (!(p[6] <= 10.0)) {    /* delta_max <= 10 */
+        valid = 0;
+    }
     if (!(p[7] > 0.0)) {    /* vx_max > 0 */
+        valid = 0;
+    }
+    if (!(p[7] <= 200.0)) {    /* vx_max <= 200 */
         valid = 0;
     }
     if (!(p[8] > 0.0)) {    /* ay_max > 0 */
         valid = 0;
     }
+    if (!(p[8] <= 1000.0)) {    /* ay_max <= 1000 */
+        valid = 0;
+    }
     if (!(p[9] > 0.0)) {    /* r_max > 0 */
+        valid = 0;
+    }
+    if (!(p[9] <= 10000.0)) {    /* r_max <= 10000 */
+        valid = 0;
+    }
+    if (!(p[10] >= -1000000000000.0)) {    /* process_noise_11 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[10] <= 1000000000000.0)) {    /* process_noise_11 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[11] >= -1000000000000.0)) {    /* process_noise_12 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[11] <= 1000000000000.0)) {    /* process_noise_12 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[12] >= -1000000000000.0)) {    /* process_noise_22 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[12] <= 1000000000000.0)) {    /* process_noise_22 <= 1e+12 */
         valid = 0;
     }
     if (!(p[10] > 0.0)) {    /* process_noise: leading 1x1 minor > 0 */
@@ -93,10 +141,46 @@ static int calibration_valid(const casadi_real p[27])
     if (!(((p[10] * p[12]) - (p[11] * p[11])) > 0.0)) {    /* process_noise: leading 2x2 minor > 0 */
         valid = 0;
     }
+    if (!(p[13] >= -1000000000000.0)) {    /* measurement_noise_11 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[13] <= 1000000000000.0)) {    /* measurement_noise_11 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[14] >= -1000000000000.0)) {    /* measurement_noise_12 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[14] <= 1000000000000.0)) {    /* measurement_noise_12 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[15] >= -1000000000000.0)) {    /* measurement_noise_22 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[15] <= 1000000000000.0)) {    /* measurement_noise_22 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[13] > 0.0)) {    /* measurement_noise: leading 1x1 minor > 0 */
         valid = 0;
     }
     if (!(((p[13] * p[15]) - (p[14] * p[14])) > 0.0)) {    /* measurement_noise: leading 2x2 minor > 0 */
+        valid = 0;
+    }
+    if (!(p[16] >= -1000000000000.0)) {    /* initial_covariance_11 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[16] <= 1000000000000.0)) {    /* initial_covariance_11 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[17] >= -1000000000000.0)) {    /* initial_covariance_12 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[17] <= 1000000000000.0)) {    /* initial_covariance_12 <= 1e+12 */
+        valid = 0;
+    }
+    if (!(p[18] >= -1000000000000.0)) {    /* initial_covariance_22 >= -1e+12 */
+        valid = 0;
+    }
+    if (!(p[18] <= 1000000000000.0)) {    /* initial_covariance_22 <= 1e+12 */
         valid = 0;
     }
     if (!(p[16] > 0.0)) {    /* initial_covariance: leading 1x1 minor > 0 */
@@ -108,25 +192,49 @@ static int calibration_valid(const casadi_real p[27])
     if (!(p[19] > 0.0)) {    /* vx_min > 0 */
         valid = 0;
     }
+    if (!(p[19] <= 200.0)) {    /* vx_min <= 200 */
+        valid = 0;
+    }
     if (!(p[20] > 0.0)) {    /* vx_resume > 0 */
+        valid = 0;
+    }
+    if (!(p[20] <= 200.0)) {    /* vx_resume <= 200 */
         valid = 0;
     }
     if (!(p[21] >= 0.0)) {    /* residual_window >= 0 */
         valid = 0;
     }
+    if (!(p[21] <= 10000.0)) {    /* residual_window <= 10000 */
+        valid = 0;
+    }
     if (!(p[22] > 0.0)) {    /* residual_limit > 0 */
+        valid = 0;
+    }
+    if (!(p[22] <= 1000000.0)) {    /* residual_limit <= 1e+06 */
         valid = 0;
     }
     if (!(p[23] >= 0.0)) {    /* residual_hold >= 0 */
         valid = 0;
     }
+    if (!(p[23] <= 10000.0)) {    /* residual_hold <= 10000 */
+        valid = 0;
+    }
     if (!(p[24] > 0.0)) {    /* sensor_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[24] <= 1000000000000.0)) {    /* sensor_noise_1 <= 1e+12 */
         valid = 0;
     }
     if (!(p[25] > 0.0)) {    /* sensor_noise_2 > 0 */
         valid = 0;
     }
+    if (!(p[25] <= 1000000000000.0)) {    /* sensor_noise_2 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[26] >= 0.0)) {    /* linear_range >= 0 */
+        valid = 0;
+    }
+    if (!(p[26] <= 1000.0)) {    /* linear_range <= 1000 */
         valid = 0;
     }
     if (!(p[20] > p[19])) {    /* vx_resume > vx_min */

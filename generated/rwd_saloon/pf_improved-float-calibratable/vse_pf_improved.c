@@ -64,85 +64,169 @@ static int calibration_valid(const casadi_real p[28])
     if (!(p[0] > 0.0f)) {    /* vx_max > 0 */
         valid = 0;
     }
+    if (!(p[0] <= 200.0f)) {    /* vx_max <= 200 */
+        valid = 0;
+    }
     if (!(p[1] > 0.0f)) {    /* ax_max > 0 */
+        valid = 0;
+    }
+    if (!(p[1] <= 1000.0f)) {    /* ax_max <= 1000 */
         valid = 0;
     }
     if (!(p[2] > 0.0f)) {    /* ay_max > 0 */
         valid = 0;
     }
+    if (!(p[2] <= 1000.0f)) {    /* ay_max <= 1000 */
+        valid = 0;
+    }
     if (!(p[3] > 0.0f)) {    /* r_max > 0 */
+        valid = 0;
+    }
+    if (!(p[3] <= 10000.0f)) {    /* r_max <= 10000 */
         valid = 0;
     }
     if (!(p[4] > 0.0f)) {    /* measurement_noise_1 > 0 */
         valid = 0;
     }
+    if (!(p[4] <= 1000000000000.0f)) {    /* measurement_noise_1 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[5] > 0.0f)) {    /* measurement_noise_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[5] <= 1000000000000.0f)) {    /* measurement_noise_2 <= 1e+12 */
         valid = 0;
     }
     if (!(p[6] > 0.0f)) {    /* measurement_noise_3 > 0 */
         valid = 0;
     }
+    if (!(p[6] <= 1000000000000.0f)) {    /* measurement_noise_3 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[7] > 0.0f)) {    /* initial_spread_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[7] <= 1000000000000.0f)) {    /* initial_spread_1 <= 1e+12 */
         valid = 0;
     }
     if (!(p[8] > 0.0f)) {    /* initial_spread_2 > 0 */
         valid = 0;
     }
+    if (!(p[8] <= 1000000000000.0f)) {    /* initial_spread_2 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[9] > 0.0f)) {    /* process_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[9] <= 1000000000000.0f)) {    /* process_noise_1 <= 1e+12 */
         valid = 0;
     }
     if (!(p[10] > 0.0f)) {    /* process_noise_2 > 0 */
         valid = 0;
     }
+    if (!(p[10] <= 1000000000000.0f)) {    /* process_noise_2 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[11] > 0.0f)) {    /* process_noise_3 > 0 */
+        valid = 0;
+    }
+    if (!(p[11] <= 1000000000000.0f)) {    /* process_noise_3 <= 1e+12 */
         valid = 0;
     }
     if (!(p[12] > 0.0f)) {    /* process_noise_max_1 > 0 */
         valid = 0;
     }
+    if (!(p[12] <= 1000000000000.0f)) {    /* process_noise_max_1 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[13] > 0.0f)) {    /* process_noise_max_2 > 0 */
+        valid = 0;
+    }
+    if (!(p[13] <= 1000000000000.0f)) {    /* process_noise_max_2 <= 1e+12 */
         valid = 0;
     }
     if (!(p[14] > 0.0f)) {    /* process_noise_max_3 > 0 */
         valid = 0;
     }
+    if (!(p[14] <= 1000000000000.0f)) {    /* process_noise_max_3 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[15] > 0.0f)) {    /* speed_noise_1 > 0 */
+        valid = 0;
+    }
+    if (!(p[15] <= 1000000000000.0f)) {    /* speed_noise_1 <= 1e+12 */
         valid = 0;
     }
     if (!(p[16] > 0.0f)) {    /* speed_noise_2 > 0 */
         valid = 0;
     }
+    if (!(p[16] <= 1000000000000.0f)) {    /* speed_noise_2 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[17] >= 0.0f)) {    /* adaptation_gain_acceleration >= 0 */
+        valid = 0;
+    }
+    if (!(p[17] <= 1000000.0f)) {    /* adaptation_gain_acceleration <= 1e+06 */
         valid = 0;
     }
     if (!(p[18] >= 0.0f)) {    /* adaptation_gain_yaw_rate >= 0 */
         valid = 0;
     }
+    if (!(p[18] <= 1000000.0f)) {    /* adaptation_gain_yaw_rate <= 1e+06 */
+        valid = 0;
+    }
     if (!(p[19] >= 0.0f)) {    /* drift_acceleration >= 0 */
+        valid = 0;
+    }
+    if (!(p[19] <= 1000.0f)) {    /* drift_acceleration <= 1000 */
         valid = 0;
     }
     if (!(p[20] >= 0.0f)) {    /* drift_yaw_rate >= 0 */
         valid = 0;
     }
+    if (!(p[20] <= 10000.0f)) {    /* drift_yaw_rate <= 10000 */
+        valid = 0;
+    }
     if (!(p[21] > 0.0f)) {    /* drift_limit > 0 */
+        valid = 0;
+    }
+    if (!(p[21] <= 10.0f)) {    /* drift_limit <= 10 */
         valid = 0;
     }
     if (!(p[22] >= 0.0f)) {    /* roll_gradient >= 0 */
         valid = 0;
     }
+    if (!(p[22] <= 1.0f)) {    /* roll_gradient <= 1 */
+        valid = 0;
+    }
     if (!(p[23] > 0.0f)) {    /* vx_min > 0 */
+        valid = 0;
+    }
+    if (!(p[23] <= 200.0f)) {    /* vx_min <= 200 */
         valid = 0;
     }
     if (!(p[24] > 0.0f)) {    /* vx_resume > 0 */
         valid = 0;
     }
+    if (!(p[24] <= 200.0f)) {    /* vx_resume <= 200 */
+        valid = 0;
+    }
     if (!(p[25] >= 0.0f)) {    /* correction_gain_1 >= 0 */
+        valid = 0;
+    }
+    if (!(p[25] <= 1000000000000.0f)) {    /* correction_gain_1 <= 1e+12 */
         valid = 0;
     }
     if (!(p[26] >= 0.0f)) {    /* correction_gain_2 >= 0 */
         valid = 0;
     }
+    if (!(p[26] <= 1000000000000.0f)) {    /* correction_gain_2 <= 1e+12 */
+        valid = 0;
+    }
     if (!(p[27] >= 0.0f)) {    /* correction_gain_3 >= 0 */
+        valid = 0;
+    }
+    if (!(p[27] <= 1000000000000.0f)) {    /* correction_gain_3 <= 1e+12 */
         valid = 0;
     }
     if (!(p[24] > p[23])) {    /* vx_resume > vx_min */
