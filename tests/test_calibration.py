@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from types import MappingProxyType
 
@@ -179,3 +180,40 @@ def test_the_header_exposes_the_parameter_hash(config, variant):
     heavier = variant("vehicle", mass=1500.0)
     assert heavier.parameter_hash("kf2dof") != config.parameter_hash("kf2dof")
     assert heavier.parameter_hash("kf2dof") in render(heavier, "kf2dof")["vse_kf2dof.h"]
+
+
+@pytest.mark.parametrize("field,value", [("mass", math.inf), ("mass", math.nan), ("mass", 1e30),
+                                         ("cornering_stiffness_front", 1e20), ("measurement_noise_11", math.inf),
+                                         ("mass", -1.0), ("vx_min", 1e38)])
+def test_a_bad_calibration_is_named_refused_and_forgotten_when_it_is_mended(config, field, value):
+    """C_f = 1e20 or +Inf, R11 = +Inf or a mass of 1e30 written into the calibration made beta and v_y
+    NaN for the rest of the log; now every value is bounded: the integrator's check names the broken
+    rule, the steps hold with INVALID_CALIBRATION and a finite state, and the estimator recovers
+    when the good value returns."""
+    estimator = load_tuning_estimator(config, "kf2dof")
+    names = estimator.estimator.parameters.names
+    good = np.array(calibration_values(config, "kf2dof", names))
+    inputs = Case.of("dlc").simulate(config, 100.0, 1).matrix(estimator.estimator.inputs.names)
+    estimator.set_calibration(good)
+    assert estimator.calibration_check() == 0
+    reference, _ = estimator.run(inputs)
+    bad = good.copy()
+    bad[names.index(field)] = value
+    estimator.set_calibration(bad)
+    failing = estimator.calibration_check()
+    assert failing > 0
+    checks = checks_in_words(config)
+    assert checks[failing - 1].split()[0] == field
+    outputs, states = estimator.run(inputs)
+    assert np.isfinite(states).all() and np.isfinite(outputs).all()
+    assert (outputs[:, -1].astype(int) & INVALID_CALIBRATION).all()
+    estimator.set_calibration(good)
+    mended, _ = estimator.run(inputs)
+    np.testing.assert_array_equal(mended, reference)
+
+
+def checks_in_words(config) -> list[str]:
+    """The generated C's names of its calibration checks, in order."""
+    text = render(config, "kf2dof", "double", "calibratable")["vse_kf2dof.c"]
+    table = text.split("vse_kf2dof_calibration_checks[VSE_KF2DOF_N_CALIBRATION_CHECKS] = {")[1].split("};")[0]
+    return [line.strip().rstrip(",").strip('"') for line in table.strip().splitlines()]

@@ -105,6 +105,11 @@ class CEstimator:
             raise ValueError(f"{len(values)} calibration values: expected {len(self.estimator.parameters.names)}")
         self.library.vse_harness_set_calibration(_ptr(values))
 
+    def calibration_check(self) -> int:
+        """The generated ``<name>_calibration_check()``: 0, or the number of the first schema check
+        the calibration breaks (tuning builds only)."""
+        return int(self.library.vse_harness_calibration_check())
+
     def step(self, state: np.ndarray, inputs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(state_next, output) of one step from ``state``."""
         state = np.ascontiguousarray(state, dtype=np.float64)

@@ -115,6 +115,18 @@ typedef struct {
  *  object (a calibration tool writes it where the A2L file says). */
 extern const volatile vse_kf2dof_calibration_t vse_kf2dof_calibration;
 
+/** Number of checks the vehicle-file schema makes on the calibration (bounds, comparisons,
+ *  positive definiteness), repeated before every step. */
+#define VSE_KF2DOF_N_CALIBRATION_CHECKS (61)
+
+/** 0 when vse_kf2dof_calibration passes every check, else the number (1-based) of the first check it
+ *  breaks, for the integrator to refuse a bad calibration at start-up or to report it; a step
+ *  with a failing calibration holds with status INVALID_CALIBRATION. */
+int vse_kf2dof_calibration_check(void);
+
+/** The checks in words, e.g. "mass >= 10": vse_kf2dof_calibration_checks[n - 1] names check n. */
+extern const char *const vse_kf2dof_calibration_checks[VSE_KF2DOF_N_CALIBRATION_CHECKS];
+
 /** Initialise the state from the first sample (call once, then vse_kf2dof_step for every sample
  *  from the first one on). Any input values are accepted. */
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first);

@@ -52,196 +52,274 @@ static void read_calibration(casadi_real p[27])
     p[26] = vse_kf2dof_calibration.linear_range;
 }
 
-/* 1 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
- * every one), else 0: a step with a failing calibration holds with status INVALID_CALIBRATION. */
-static int calibration_valid(const casadi_real p[27])
+/* 0 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
+ * every one: each check is a comparison that holds), else the number of the first it breaks. */
+static int first_failing_check(const casadi_real p[27])
 {
-    int valid = 1;
-    if (!(p[0] >= 10.0f)) {    /* mass >= 10 */
-        valid = 0;
-    }
-    if (!(p[0] <= 100000.0f)) {    /* mass <= 100000 */
-        valid = 0;
-    }
-    if (!(p[1] >= 1.0f)) {    /* yaw_inertia >= 1 */
-        valid = 0;
-    }
-    if (!(p[1] <= 10000000.0f)) {    /* yaw_inertia <= 1e+07 */
-        valid = 0;
-    }
-    if (!(p[2] >= 0.01f)) {    /* cg_to_front_axle >= 0.01 */
-        valid = 0;
-    }
-    if (!(p[2] <= 100.0f)) {    /* cg_to_front_axle <= 100 */
-        valid = 0;
-    }
-    if (!(p[3] >= 0.01f)) {    /* cg_to_rear_axle >= 0.01 */
-        valid = 0;
-    }
-    if (!(p[3] <= 100.0f)) {    /* cg_to_rear_axle <= 100 */
-        valid = 0;
-    }
-    if (!(p[4] >= 100.0f)) {    /* cornering_stiffness_front >= 100 */
-        valid = 0;
-    }
-    if (!(p[4] <= 100000000.0f)) {    /* cornering_stiffness_front <= 1e+08 */
-        valid = 0;
-    }
-    if (!(p[5] >= 100.0f)) {    /* cornering_stiffness_rear >= 100 */
-        valid = 0;
-    }
-    if (!(p[5] <= 100000000.0f)) {    /* cornering_stiffness_rear <= 1e+08 */
-        valid = 0;
-    }
-    if (!(p[6] > 0.0f)) {    /* delta_max > 0 */
-        valid = 0;
-    }
-    if (!(p[6] <= 10.0f)) {    /* delta_max <= 10 */
-        valid = 0;
-    }
-    if (!(p[7] > 0.0f)) {    /* vx_max > 0 */
-        valid = 0;
-    }
-    if (!(p[7] <= 200.0f)) {    /* vx_max <= 200 */
-        valid = 0;
-    }
-    if (!(p[8] > 0.0f)) {    /* ay_max > 0 */
-        valid = 0;
-    }
-    if (!(p[8] <= 1000.0f)) {    /* ay_max <= 1000 */
-        valid = 0;
-    }
-    if (!(p[9] > 0.0f)) {    /* r_max > 0 */
-        valid = 0;
-    }
-    if (!(p[9] <= 10000.0f)) {    /* r_max <= 10000 */
-        valid = 0;
-    }
-    if (!(p[10] >= -1000000000000.0f)) {    /* process_noise_11 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[10] <= 1000000000000.0f)) {    /* process_noise_11 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[11] >= -1000000000000.0f)) {    /* process_noise_12 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[11] <= 1000000000000.0f)) {    /* process_noise_12 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[12] >= -1000000000000.0f)) {    /* process_noise_22 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[12] <= 1000000000000.0f)) {    /* process_noise_22 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[10] > 0.0f)) {    /* process_noise: leading 1x1 minor > 0 */
-        valid = 0;
-    }
-    if (!(((p[10] * p[12]) - (p[11] * p[11])) > 0.0f)) {    /* process_noise: leading 2x2 minor > 0 */
-        valid = 0;
-    }
-    if (!(p[13] >= -1000000000000.0f)) {    /* measurement_noise_11 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[13] <= 1000000000000.0f)) {    /* measurement_noise_11 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[14] >= -1000000000000.0f)) {    /* measurement_noise_12 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[14] <= 1000000000000.0f)) {    /* measurement_noise_12 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[15] >= -1000000000000.0f)) {    /* measurement_noise_22 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[15] <= 1000000000000.0f)) {    /* measurement_noise_22 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[13] > 0.0f)) {    /* measurement_noise: leading 1x1 minor > 0 */
-        valid = 0;
-    }
-    if (!(((p[13] * p[15]) - (p[14] * p[14])) > 0.0f)) {    /* measurement_noise: leading 2x2 minor > 0 */
-        valid = 0;
-    }
-    if (!(p[16] >= -1000000000000.0f)) {    /* initial_covariance_11 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[16] <= 1000000000000.0f)) {    /* initial_covariance_11 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[17] >= -1000000000000.0f)) {    /* initial_covariance_12 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[17] <= 1000000000000.0f)) {    /* initial_covariance_12 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[18] >= -1000000000000.0f)) {    /* initial_covariance_22 >= -1e+12 */
-        valid = 0;
-    }
-    if (!(p[18] <= 1000000000000.0f)) {    /* initial_covariance_22 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[16] > 0.0f)) {    /* initial_covariance: leading 1x1 minor > 0 */
-        valid = 0;
-    }
-    if (!(((p[16] * p[18]) - (p[17] * p[17])) > 0.0f)) {    /* initial_covariance: leading 2x2 minor > 0 */
-        valid = 0;
-    }
-    if (!(p[19] > 0.0f)) {    /* vx_min > 0 */
-        valid = 0;
-    }
-    if (!(p[19] <= 200.0f)) {    /* vx_min <= 200 */
-        valid = 0;
-    }
-    if (!(p[20] > 0.0f)) {    /* vx_resume > 0 */
-        valid = 0;
-    }
-    if (!(p[20] <= 200.0f)) {    /* vx_resume <= 200 */
-        valid = 0;
-    }
-    if (!(p[21] >= 0.0f)) {    /* residual_window >= 0 */
-        valid = 0;
-    }
-    if (!(p[21] <= 10000.0f)) {    /* residual_window <= 10000 */
-        valid = 0;
-    }
-    if (!(p[22] > 0.0f)) {    /* residual_limit > 0 */
-        valid = 0;
-    }
-    if (!(p[22] <= 1000000.0f)) {    /* residual_limit <= 1e+06 */
-        valid = 0;
-    }
-    if (!(p[23] >= 0.0f)) {    /* residual_hold >= 0 */
-        valid = 0;
-    }
-    if (!(p[23] <= 10000.0f)) {    /* residual_hold <= 10000 */
-        valid = 0;
-    }
-    if (!(p[24] > 0.0f)) {    /* sensor_noise_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[24] <= 1000000000000.0f)) {    /* sensor_noise_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[25] > 0.0f)) {    /* sensor_noise_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[25] <= 1000000000000.0f)) {    /* sensor_noise_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[26] >= 0.0f)) {    /* linear_range >= 0 */
-        valid = 0;
+    int failing = 0;
+    if (!(p[20] > p[19])) {    /* vx_resume > vx_min */
+        failing = 61;
     }
     if (!(p[26] <= 1000.0f)) {    /* linear_range <= 1000 */
-        valid = 0;
+        failing = 60;
     }
-    if (!(p[20] > p[19])) {    /* vx_resume > vx_min */
-        valid = 0;
+    if (!(p[26] >= 0.0f)) {    /* linear_range >= 0 */
+        failing = 59;
     }
-    return valid;
+    if (!(p[25] <= 1000000000000.0f)) {    /* sensor_noise_2 <= 1e+12 */
+        failing = 58;
+    }
+    if (!(p[25] > 0.0f)) {    /* sensor_noise_2 > 0 */
+        failing = 57;
+    }
+    if (!(p[24] <= 1000000000000.0f)) {    /* sensor_noise_1 <= 1e+12 */
+        failing = 56;
+    }
+    if (!(p[24] > 0.0f)) {    /* sensor_noise_1 > 0 */
+        failing = 55;
+    }
+    if (!(p[23] <= 10000.0f)) {    /* residual_hold <= 10000 */
+        failing = 54;
+    }
+    if (!(p[23] >= 0.0f)) {    /* residual_hold >= 0 */
+        failing = 53;
+    }
+    if (!(p[22] <= 1000000.0f)) {    /* residual_limit <= 1e+06 */
+        failing = 52;
+    }
+    if (!(p[22] > 0.0f)) {    /* residual_limit > 0 */
+        failing = 51;
+    }
+    if (!(p[21] <= 10000.0f)) {    /* residual_window <= 10000 */
+        failing = 50;
+    }
+    if (!(p[21] >= 0.0f)) {    /* residual_window >= 0 */
+        failing = 49;
+    }
+    if (!(p[20] <= 200.0f)) {    /* vx_resume <= 200 */
+        failing = 48;
+    }
+    if (!(p[20] > 0.0f)) {    /* vx_resume > 0 */
+        failing = 47;
+    }
+    if (!(p[19] <= 200.0f)) {    /* vx_min <= 200 */
+        failing = 46;
+    }
+    if (!(p[19] > 0.0f)) {    /* vx_min > 0 */
+        failing = 45;
+    }
+    if (!(((p[16] * p[18]) - (p[17] * p[17])) > 0.0f)) {    /* initial_covariance: leading 2x2 minor > 0 */
+        failing = 44;
+    }
+    if (!(p[16] > 0.0f)) {    /* initial_covariance: leading 1x1 minor > 0 */
+        failing = 43;
+    }
+    if (!(p[18] <= 1000000000000.0f)) {    /* initial_covariance_22 <= 1e+12 */
+        failing = 42;
+    }
+    if (!(p[18] >= -1000000000000.0f)) {    /* initial_covariance_22 >= -1e+12 */
+        failing = 41;
+    }
+    if (!(p[17] <= 1000000000000.0f)) {    /* initial_covariance_12 <= 1e+12 */
+        failing = 40;
+    }
+    if (!(p[17] >= -1000000000000.0f)) {    /* initial_covariance_12 >= -1e+12 */
+        failing = 39;
+    }
+    if (!(p[16] <= 1000000000000.0f)) {    /* initial_covariance_11 <= 1e+12 */
+        failing = 38;
+    }
+    if (!(p[16] >= -1000000000000.0f)) {    /* initial_covariance_11 >= -1e+12 */
+        failing = 37;
+    }
+    if (!(((p[13] * p[15]) - (p[14] * p[14])) > 0.0f)) {    /* measurement_noise: leading 2x2 minor > 0 */
+        failing = 36;
+    }
+    if (!(p[13] > 0.0f)) {    /* measurement_noise: leading 1x1 minor > 0 */
+        failing = 35;
+    }
+    if (!(p[15] <= 1000000000000.0f)) {    /* measurement_noise_22 <= 1e+12 */
+        failing = 34;
+    }
+    if (!(p[15] >= -1000000000000.0f)) {    /* measurement_noise_22 >= -1e+12 */
+        failing = 33;
+    }
+    if (!(p[14] <= 1000000000000.0f)) {    /* measurement_noise_12 <= 1e+12 */
+        failing = 32;
+    }
+    if (!(p[14] >= -1000000000000.0f)) {    /* measurement_noise_12 >= -1e+12 */
+        failing = 31;
+    }
+    if (!(p[13] <= 1000000000000.0f)) {    /* measurement_noise_11 <= 1e+12 */
+        failing = 30;
+    }
+    if (!(p[13] >= -1000000000000.0f)) {    /* measurement_noise_11 >= -1e+12 */
+        failing = 29;
+    }
+    if (!(((p[10] * p[12]) - (p[11] * p[11])) > 0.0f)) {    /* process_noise: leading 2x2 minor > 0 */
+        failing = 28;
+    }
+    if (!(p[10] > 0.0f)) {    /* process_noise: leading 1x1 minor > 0 */
+        failing = 27;
+    }
+    if (!(p[12] <= 1000000000000.0f)) {    /* process_noise_22 <= 1e+12 */
+        failing = 26;
+    }
+    if (!(p[12] >= -1000000000000.0f)) {    /* process_noise_22 >= -1e+12 */
+        failing = 25;
+    }
+    if (!(p[11] <= 1000000000000.0f)) {    /* process_noise_12 <= 1e+12 */
+        failing = 24;
+    }
+    if (!(p[11] >= -1000000000000.0f)) {    /* process_noise_12 >= -1e+12 */
+        failing = 23;
+    }
+    if (!(p[10] <= 1000000000000.0f)) {    /* process_noise_11 <= 1e+12 */
+        failing = 22;
+    }
+    if (!(p[10] >= -1000000000000.0f)) {    /* process_noise_11 >= -1e+12 */
+        failing = 21;
+    }
+    if (!(p[9] <= 10000.0f)) {    /* r_max <= 10000 */
+        failing = 20;
+    }
+    if (!(p[9] > 0.0f)) {    /* r_max > 0 */
+        failing = 19;
+    }
+    if (!(p[8] <= 1000.0f)) {    /* ay_max <= 1000 */
+        failing = 18;
+    }
+    if (!(p[8] > 0.0f)) {    /* ay_max > 0 */
+        failing = 17;
+    }
+    if (!(p[7] <= 200.0f)) {    /* vx_max <= 200 */
+        failing = 16;
+    }
+    if (!(p[7] > 0.0f)) {    /* vx_max > 0 */
+        failing = 15;
+    }
+    if (!(p[6] <= 10.0f)) {    /* delta_max <= 10 */
+        failing = 14;
+    }
+    if (!(p[6] > 0.0f)) {    /* delta_max > 0 */
+        failing = 13;
+    }
+    if (!(p[5] <= 100000000.0f)) {    /* cornering_stiffness_rear <= 1e+08 */
+        failing = 12;
+    }
+    if (!(p[5] >= 100.0f)) {    /* cornering_stiffness_rear >= 100 */
+        failing = 11;
+    }
+    if (!(p[4] <= 100000000.0f)) {    /* cornering_stiffness_front <= 1e+08 */
+        failing = 10;
+    }
+    if (!(p[4] >= 100.0f)) {    /* cornering_stiffness_front >= 100 */
+        failing = 9;
+    }
+    if (!(p[3] <= 100.0f)) {    /* cg_to_rear_axle <= 100 */
+        failing = 8;
+    }
+    if (!(p[3] >= 0.01f)) {    /* cg_to_rear_axle >= 0.01 */
+        failing = 7;
+    }
+    if (!(p[2] <= 100.0f)) {    /* cg_to_front_axle <= 100 */
+        failing = 6;
+    }
+    if (!(p[2] >= 0.01f)) {    /* cg_to_front_axle >= 0.01 */
+        failing = 5;
+    }
+    if (!(p[1] <= 10000000.0f)) {    /* yaw_inertia <= 1e+07 */
+        failing = 4;
+    }
+    if (!(p[1] >= 1.0f)) {    /* yaw_inertia >= 1 */
+        failing = 3;
+    }
+    if (!(p[0] <= 100000.0f)) {    /* mass <= 100000 */
+        failing = 2;
+    }
+    if (!(p[0] >= 10.0f)) {    /* mass >= 10 */
+        failing = 1;
+    }
+    return failing;
 }
+
+/* 1 when the calibration passes every check, else 0: a step with a failing calibration holds
+ * with status INVALID_CALIBRATION. */
+static int calibration_valid(const casadi_real p[27])
+{
+    return (first_failing_check(p) == 0) ? 1 : 0;
+}
+
+int vse_kf2dof_calibration_check(void)
+{
+    casadi_real p[27];
+    read_calibration(p);
+    return first_failing_check(p);
+}
+
+const char *const vse_kf2dof_calibration_checks[VSE_KF2DOF_N_CALIBRATION_CHECKS] = {
+    "mass >= 10",
+    "mass <= 100000",
+    "yaw_inertia >= 1",
+    "yaw_inertia <= 1e+07",
+    "cg_to_front_axle >= 0.01",
+    "cg_to_front_axle <= 100",
+    "cg_to_rear_axle >= 0.01",
+    "cg_to_rear_axle <= 100",
+    "cornering_stiffness_front >= 100",
+    "cornering_stiffness_front <= 1e+08",
+    "cornering_stiffness_rear >= 100",
+    "cornering_stiffness_rear <= 1e+08",
+    "delta_max > 0",
+    "delta_max <= 10",
+    "vx_max > 0",
+    "vx_max <= 200",
+    "ay_max > 0",
+    "ay_max <= 1000",
+    "r_max > 0",
+    "r_max <= 10000",
+    "process_noise_11 >= -1e+12",
+    "process_noise_11 <= 1e+12",
+    "process_noise_12 >= -1e+12",
+    "process_noise_12 <= 1e+12",
+    "process_noise_22 >= -1e+12",
+    "process_noise_22 <= 1e+12",
+    "process_noise: leading 1x1 minor > 0",
+    "process_noise: leading 2x2 minor > 0",
+    "measurement_noise_11 >= -1e+12",
+    "measurement_noise_11 <= 1e+12",
+    "measurement_noise_12 >= -1e+12",
+    "measurement_noise_12 <= 1e+12",
+    "measurement_noise_22 >= -1e+12",
+    "measurement_noise_22 <= 1e+12",
+    "measurement_noise: leading 1x1 minor > 0",
+    "measurement_noise: leading 2x2 minor > 0",
+    "initial_covariance_11 >= -1e+12",
+    "initial_covariance_11 <= 1e+12",
+    "initial_covariance_12 >= -1e+12",
+    "initial_covariance_12 <= 1e+12",
+    "initial_covariance_22 >= -1e+12",
+    "initial_covariance_22 <= 1e+12",
+    "initial_covariance: leading 1x1 minor > 0",
+    "initial_covariance: leading 2x2 minor > 0",
+    "vx_min > 0",
+    "vx_min <= 200",
+    "vx_resume > 0",
+    "vx_resume <= 200",
+    "residual_window >= 0",
+    "residual_window <= 10000",
+    "residual_limit > 0",
+    "residual_limit <= 1e+06",
+    "residual_hold >= 0",
+    "residual_hold <= 10000",
+    "sensor_noise_1 > 0",
+    "sensor_noise_1 <= 1e+12",
+    "sensor_noise_2 > 0",
+    "sensor_noise_2 <= 1e+12",
+    "linear_range >= 0",
+    "linear_range <= 1000",
+    "vx_resume > vx_min"
+};
 
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)
 {

@@ -146,6 +146,18 @@ typedef struct {
  *  object (a calibration tool writes it where the A2L file says). */
 extern const volatile vse_pf_improved_calibration_t vse_pf_improved_calibration;
 
+/** Number of checks the vehicle-file schema makes on the calibration (bounds, comparisons,
+ *  positive definiteness), repeated before every step. */
+#define VSE_PF_IMPROVED_N_CALIBRATION_CHECKS (63)
+
+/** 0 when vse_pf_improved_calibration passes every check, else the number (1-based) of the first check it
+ *  breaks, for the integrator to refuse a bad calibration at start-up or to report it; a step
+ *  with a failing calibration holds with status INVALID_CALIBRATION. */
+int vse_pf_improved_calibration_check(void);
+
+/** The checks in words, e.g. "mass >= 10": vse_pf_improved_calibration_checks[n - 1] names check n. */
+extern const char *const vse_pf_improved_calibration_checks[VSE_PF_IMPROVED_N_CALIBRATION_CHECKS];
+
 /** Initialise the state from the first sample (call once, then vse_pf_improved_step for every sample
  *  from the first one on). Any input values are accepted. */
 void vse_pf_improved_init(vse_pf_improved_state *state, const vse_pf_improved_input *first);

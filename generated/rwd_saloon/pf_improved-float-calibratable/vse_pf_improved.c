@@ -56,202 +56,282 @@ static void read_calibration(casadi_real p[28])
     p[27] = vse_pf_improved_calibration.correction_gain_3;
 }
 
-/* 1 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
- * every one), else 0: a step with a failing calibration holds with status INVALID_CALIBRATION. */
-static int calibration_valid(const casadi_real p[28])
+/* 0 when the calibration passes every check the vehicle-file schema makes on it (a NaN fails
+ * every one: each check is a comparison that holds), else the number of the first it breaks. */
+static int first_failing_check(const casadi_real p[28])
 {
-    int valid = 1;
-    if (!(p[0] > 0.0f)) {    /* vx_max > 0 */
-        valid = 0;
-    }
-    if (!(p[0] <= 200.0f)) {    /* vx_max <= 200 */
-        valid = 0;
-    }
-    if (!(p[1] > 0.0f)) {    /* ax_max > 0 */
-        valid = 0;
-    }
-    if (!(p[1] <= 1000.0f)) {    /* ax_max <= 1000 */
-        valid = 0;
-    }
-    if (!(p[2] > 0.0f)) {    /* ay_max > 0 */
-        valid = 0;
-    }
-    if (!(p[2] <= 1000.0f)) {    /* ay_max <= 1000 */
-        valid = 0;
-    }
-    if (!(p[3] > 0.0f)) {    /* r_max > 0 */
-        valid = 0;
-    }
-    if (!(p[3] <= 10000.0f)) {    /* r_max <= 10000 */
-        valid = 0;
-    }
-    if (!(p[4] > 0.0f)) {    /* measurement_noise_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[4] <= 1000000000000.0f)) {    /* measurement_noise_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[5] > 0.0f)) {    /* measurement_noise_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[5] <= 1000000000000.0f)) {    /* measurement_noise_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[6] > 0.0f)) {    /* measurement_noise_3 > 0 */
-        valid = 0;
-    }
-    if (!(p[6] <= 1000000000000.0f)) {    /* measurement_noise_3 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[7] > 0.0f)) {    /* initial_spread_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[7] <= 1000000000000.0f)) {    /* initial_spread_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[8] > 0.0f)) {    /* initial_spread_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[8] <= 1000000000000.0f)) {    /* initial_spread_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[9] > 0.0f)) {    /* process_noise_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[9] <= 1000000000000.0f)) {    /* process_noise_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[10] > 0.0f)) {    /* process_noise_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[10] <= 1000000000000.0f)) {    /* process_noise_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[11] > 0.0f)) {    /* process_noise_3 > 0 */
-        valid = 0;
-    }
-    if (!(p[11] <= 1000000000000.0f)) {    /* process_noise_3 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[12] > 0.0f)) {    /* process_noise_max_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[12] <= 1000000000000.0f)) {    /* process_noise_max_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[13] > 0.0f)) {    /* process_noise_max_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[13] <= 1000000000000.0f)) {    /* process_noise_max_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[14] > 0.0f)) {    /* process_noise_max_3 > 0 */
-        valid = 0;
-    }
-    if (!(p[14] <= 1000000000000.0f)) {    /* process_noise_max_3 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[15] > 0.0f)) {    /* speed_noise_1 > 0 */
-        valid = 0;
-    }
-    if (!(p[15] <= 1000000000000.0f)) {    /* speed_noise_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[16] > 0.0f)) {    /* speed_noise_2 > 0 */
-        valid = 0;
-    }
-    if (!(p[16] <= 1000000000000.0f)) {    /* speed_noise_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[17] >= 0.0f)) {    /* adaptation_gain_acceleration >= 0 */
-        valid = 0;
-    }
-    if (!(p[17] <= 1000000.0f)) {    /* adaptation_gain_acceleration <= 1e+06 */
-        valid = 0;
-    }
-    if (!(p[18] >= 0.0f)) {    /* adaptation_gain_yaw_rate >= 0 */
-        valid = 0;
-    }
-    if (!(p[18] <= 1000000.0f)) {    /* adaptation_gain_yaw_rate <= 1e+06 */
-        valid = 0;
-    }
-    if (!(p[19] >= 0.0f)) {    /* drift_acceleration >= 0 */
-        valid = 0;
-    }
-    if (!(p[19] <= 1000.0f)) {    /* drift_acceleration <= 1000 */
-        valid = 0;
-    }
-    if (!(p[20] >= 0.0f)) {    /* drift_yaw_rate >= 0 */
-        valid = 0;
-    }
-    if (!(p[20] <= 10000.0f)) {    /* drift_yaw_rate <= 10000 */
-        valid = 0;
-    }
-    if (!(p[21] > 0.0f)) {    /* drift_limit > 0 */
-        valid = 0;
-    }
-    if (!(p[21] <= 10.0f)) {    /* drift_limit <= 10 */
-        valid = 0;
-    }
-    if (!(p[22] >= 0.0f)) {    /* roll_gradient >= 0 */
-        valid = 0;
-    }
-    if (!(p[22] <= 1.0f)) {    /* roll_gradient <= 1 */
-        valid = 0;
-    }
-    if (!(p[23] > 0.0f)) {    /* vx_min > 0 */
-        valid = 0;
-    }
-    if (!(p[23] <= 200.0f)) {    /* vx_min <= 200 */
-        valid = 0;
-    }
-    if (!(p[24] > 0.0f)) {    /* vx_resume > 0 */
-        valid = 0;
-    }
-    if (!(p[24] <= 200.0f)) {    /* vx_resume <= 200 */
-        valid = 0;
-    }
-    if (!(p[25] >= 0.0f)) {    /* correction_gain_1 >= 0 */
-        valid = 0;
-    }
-    if (!(p[25] <= 1000000000000.0f)) {    /* correction_gain_1 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[26] >= 0.0f)) {    /* correction_gain_2 >= 0 */
-        valid = 0;
-    }
-    if (!(p[26] <= 1000000000000.0f)) {    /* correction_gain_2 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[27] >= 0.0f)) {    /* correction_gain_3 >= 0 */
-        valid = 0;
-    }
-    if (!(p[27] <= 1000000000000.0f)) {    /* correction_gain_3 <= 1e+12 */
-        valid = 0;
-    }
-    if (!(p[24] > p[23])) {    /* vx_resume > vx_min */
-        valid = 0;
-    }
-    if (!(p[12] > p[9])) {    /* process_noise_max_1 > process_noise_1 */
-        valid = 0;
-    }
-    if (!(p[13] > p[10])) {    /* process_noise_max_2 > process_noise_2 */
-        valid = 0;
-    }
-    if (!(p[14] > p[11])) {    /* process_noise_max_3 > process_noise_3 */
-        valid = 0;
-    }
-    if (!(p[25] <= 1.0f)) {    /* correction_gain_1 <= 1 */
-        valid = 0;
+    int failing = 0;
+    if (!(p[27] <= 1.0f)) {    /* correction_gain_3 <= 1 */
+        failing = 63;
     }
     if (!(p[26] <= 1.0f)) {    /* correction_gain_2 <= 1 */
-        valid = 0;
+        failing = 62;
     }
-    if (!(p[27] <= 1.0f)) {    /* correction_gain_3 <= 1 */
-        valid = 0;
+    if (!(p[25] <= 1.0f)) {    /* correction_gain_1 <= 1 */
+        failing = 61;
     }
-    return valid;
+    if (!(p[14] > p[11])) {    /* process_noise_max_3 > process_noise_3 */
+        failing = 60;
+    }
+    if (!(p[13] > p[10])) {    /* process_noise_max_2 > process_noise_2 */
+        failing = 59;
+    }
+    if (!(p[12] > p[9])) {    /* process_noise_max_1 > process_noise_1 */
+        failing = 58;
+    }
+    if (!(p[24] > p[23])) {    /* vx_resume > vx_min */
+        failing = 57;
+    }
+    if (!(p[27] <= 1000000000000.0f)) {    /* correction_gain_3 <= 1e+12 */
+        failing = 56;
+    }
+    if (!(p[27] >= 0.0f)) {    /* correction_gain_3 >= 0 */
+        failing = 55;
+    }
+    if (!(p[26] <= 1000000000000.0f)) {    /* correction_gain_2 <= 1e+12 */
+        failing = 54;
+    }
+    if (!(p[26] >= 0.0f)) {    /* correction_gain_2 >= 0 */
+        failing = 53;
+    }
+    if (!(p[25] <= 1000000000000.0f)) {    /* correction_gain_1 <= 1e+12 */
+        failing = 52;
+    }
+    if (!(p[25] >= 0.0f)) {    /* correction_gain_1 >= 0 */
+        failing = 51;
+    }
+    if (!(p[24] <= 200.0f)) {    /* vx_resume <= 200 */
+        failing = 50;
+    }
+    if (!(p[24] > 0.0f)) {    /* vx_resume > 0 */
+        failing = 49;
+    }
+    if (!(p[23] <= 200.0f)) {    /* vx_min <= 200 */
+        failing = 48;
+    }
+    if (!(p[23] > 0.0f)) {    /* vx_min > 0 */
+        failing = 47;
+    }
+    if (!(p[22] <= 1.0f)) {    /* roll_gradient <= 1 */
+        failing = 46;
+    }
+    if (!(p[22] >= 0.0f)) {    /* roll_gradient >= 0 */
+        failing = 45;
+    }
+    if (!(p[21] <= 10.0f)) {    /* drift_limit <= 10 */
+        failing = 44;
+    }
+    if (!(p[21] > 0.0f)) {    /* drift_limit > 0 */
+        failing = 43;
+    }
+    if (!(p[20] <= 10000.0f)) {    /* drift_yaw_rate <= 10000 */
+        failing = 42;
+    }
+    if (!(p[20] >= 0.0f)) {    /* drift_yaw_rate >= 0 */
+        failing = 41;
+    }
+    if (!(p[19] <= 1000.0f)) {    /* drift_acceleration <= 1000 */
+        failing = 40;
+    }
+    if (!(p[19] >= 0.0f)) {    /* drift_acceleration >= 0 */
+        failing = 39;
+    }
+    if (!(p[18] <= 1000000.0f)) {    /* adaptation_gain_yaw_rate <= 1e+06 */
+        failing = 38;
+    }
+    if (!(p[18] >= 0.0f)) {    /* adaptation_gain_yaw_rate >= 0 */
+        failing = 37;
+    }
+    if (!(p[17] <= 1000000.0f)) {    /* adaptation_gain_acceleration <= 1e+06 */
+        failing = 36;
+    }
+    if (!(p[17] >= 0.0f)) {    /* adaptation_gain_acceleration >= 0 */
+        failing = 35;
+    }
+    if (!(p[16] <= 1000000000000.0f)) {    /* speed_noise_2 <= 1e+12 */
+        failing = 34;
+    }
+    if (!(p[16] > 0.0f)) {    /* speed_noise_2 > 0 */
+        failing = 33;
+    }
+    if (!(p[15] <= 1000000000000.0f)) {    /* speed_noise_1 <= 1e+12 */
+        failing = 32;
+    }
+    if (!(p[15] > 0.0f)) {    /* speed_noise_1 > 0 */
+        failing = 31;
+    }
+    if (!(p[14] <= 1000000000000.0f)) {    /* process_noise_max_3 <= 1e+12 */
+        failing = 30;
+    }
+    if (!(p[14] > 0.0f)) {    /* process_noise_max_3 > 0 */
+        failing = 29;
+    }
+    if (!(p[13] <= 1000000000000.0f)) {    /* process_noise_max_2 <= 1e+12 */
+        failing = 28;
+    }
+    if (!(p[13] > 0.0f)) {    /* process_noise_max_2 > 0 */
+        failing = 27;
+    }
+    if (!(p[12] <= 1000000000000.0f)) {    /* process_noise_max_1 <= 1e+12 */
+        failing = 26;
+    }
+    if (!(p[12] > 0.0f)) {    /* process_noise_max_1 > 0 */
+        failing = 25;
+    }
+    if (!(p[11] <= 1000000000000.0f)) {    /* process_noise_3 <= 1e+12 */
+        failing = 24;
+    }
+    if (!(p[11] > 0.0f)) {    /* process_noise_3 > 0 */
+        failing = 23;
+    }
+    if (!(p[10] <= 1000000000000.0f)) {    /* process_noise_2 <= 1e+12 */
+        failing = 22;
+    }
+    if (!(p[10] > 0.0f)) {    /* process_noise_2 > 0 */
+        failing = 21;
+    }
+    if (!(p[9] <= 1000000000000.0f)) {    /* process_noise_1 <= 1e+12 */
+        failing = 20;
+    }
+    if (!(p[9] > 0.0f)) {    /* process_noise_1 > 0 */
+        failing = 19;
+    }
+    if (!(p[8] <= 1000000000000.0f)) {    /* initial_spread_2 <= 1e+12 */
+        failing = 18;
+    }
+    if (!(p[8] > 0.0f)) {    /* initial_spread_2 > 0 */
+        failing = 17;
+    }
+    if (!(p[7] <= 1000000000000.0f)) {    /* initial_spread_1 <= 1e+12 */
+        failing = 16;
+    }
+    if (!(p[7] > 0.0f)) {    /* initial_spread_1 > 0 */
+        failing = 15;
+    }
+    if (!(p[6] <= 1000000000000.0f)) {    /* measurement_noise_3 <= 1e+12 */
+        failing = 14;
+    }
+    if (!(p[6] > 0.0f)) {    /* measurement_noise_3 > 0 */
+        failing = 13;
+    }
+    if (!(p[5] <= 1000000000000.0f)) {    /* measurement_noise_2 <= 1e+12 */
+        failing = 12;
+    }
+    if (!(p[5] > 0.0f)) {    /* measurement_noise_2 > 0 */
+        failing = 11;
+    }
+    if (!(p[4] <= 1000000000000.0f)) {    /* measurement_noise_1 <= 1e+12 */
+        failing = 10;
+    }
+    if (!(p[4] > 0.0f)) {    /* measurement_noise_1 > 0 */
+        failing = 9;
+    }
+    if (!(p[3] <= 10000.0f)) {    /* r_max <= 10000 */
+        failing = 8;
+    }
+    if (!(p[3] > 0.0f)) {    /* r_max > 0 */
+        failing = 7;
+    }
+    if (!(p[2] <= 1000.0f)) {    /* ay_max <= 1000 */
+        failing = 6;
+    }
+    if (!(p[2] > 0.0f)) {    /* ay_max > 0 */
+        failing = 5;
+    }
+    if (!(p[1] <= 1000.0f)) {    /* ax_max <= 1000 */
+        failing = 4;
+    }
+    if (!(p[1] > 0.0f)) {    /* ax_max > 0 */
+        failing = 3;
+    }
+    if (!(p[0] <= 200.0f)) {    /* vx_max <= 200 */
+        failing = 2;
+    }
+    if (!(p[0] > 0.0f)) {    /* vx_max > 0 */
+        failing = 1;
+    }
+    return failing;
 }
+
+/* 1 when the calibration passes every check, else 0: a step with a failing calibration holds
+ * with status INVALID_CALIBRATION. */
+static int calibration_valid(const casadi_real p[28])
+{
+    return (first_failing_check(p) == 0) ? 1 : 0;
+}
+
+int vse_pf_improved_calibration_check(void)
+{
+    casadi_real p[28];
+    read_calibration(p);
+    return first_failing_check(p);
+}
+
+const char *const vse_pf_improved_calibration_checks[VSE_PF_IMPROVED_N_CALIBRATION_CHECKS] = {
+    "vx_max > 0",
+    "vx_max <= 200",
+    "ax_max > 0",
+    "ax_max <= 1000",
+    "ay_max > 0",
+    "ay_max <= 1000",
+    "r_max > 0",
+    "r_max <= 10000",
+    "measurement_noise_1 > 0",
+    "measurement_noise_1 <= 1e+12",
+    "measurement_noise_2 > 0",
+    "measurement_noise_2 <= 1e+12",
+    "measurement_noise_3 > 0",
+    "measurement_noise_3 <= 1e+12",
+    "initial_spread_1 > 0",
+    "initial_spread_1 <= 1e+12",
+    "initial_spread_2 > 0",
+    "initial_spread_2 <= 1e+12",
+    "process_noise_1 > 0",
+    "process_noise_1 <= 1e+12",
+    "process_noise_2 > 0",
+    "process_noise_2 <= 1e+12",
+    "process_noise_3 > 0",
+    "process_noise_3 <= 1e+12",
+    "process_noise_max_1 > 0",
+    "process_noise_max_1 <= 1e+12",
+    "process_noise_max_2 > 0",
+    "process_noise_max_2 <= 1e+12",
+    "process_noise_max_3 > 0",
+    "process_noise_max_3 <= 1e+12",
+    "speed_noise_1 > 0",
+    "speed_noise_1 <= 1e+12",
+    "speed_noise_2 > 0",
+    "speed_noise_2 <= 1e+12",
+    "adaptation_gain_acceleration >= 0",
+    "adaptation_gain_acceleration <= 1e+06",
+    "adaptation_gain_yaw_rate >= 0",
+    "adaptation_gain_yaw_rate <= 1e+06",
+    "drift_acceleration >= 0",
+    "drift_acceleration <= 1000",
+    "drift_yaw_rate >= 0",
+    "drift_yaw_rate <= 10000",
+    "drift_limit > 0",
+    "drift_limit <= 10",
+    "roll_gradient >= 0",
+    "roll_gradient <= 1",
+    "vx_min > 0",
+    "vx_min <= 200",
+    "vx_resume > 0",
+    "vx_resume <= 200",
+    "correction_gain_1 >= 0",
+    "correction_gain_1 <= 1e+12",
+    "correction_gain_2 >= 0",
+    "correction_gain_2 <= 1e+12",
+    "correction_gain_3 >= 0",
+    "correction_gain_3 <= 1e+12",
+    "vx_resume > vx_min",
+    "process_noise_max_1 > process_noise_1",
+    "process_noise_max_2 > process_noise_2",
+    "process_noise_max_3 > process_noise_3",
+    "correction_gain_1 <= 1",
+    "correction_gain_2 <= 1",
+    "correction_gain_3 <= 1"
+};
 
 /* ---- the particle filter's generic part (model.estimator.Particles) ----------------------------
  * State: the head (7 entries), the random stream (4 words), then
