@@ -105,3 +105,20 @@ def test_every_missing_channel_is_named_at_once(tmp_path, dlc):
     write_log(Log({c: dlc[c] for c in ("t", "delta", "vx")}, "sparse"), tmp_path / "sparse.csv")
     with pytest.raises(LogError, match=r":1: missing columns 'ax', 'ay', 'r': expected the columns"):
         read_log(tmp_path / "sparse.csv")
+
+
+def test_the_files_own_unit_is_compared_with_the_map(tmp_path, dlc):
+    """An MDF4 file that says km/h for the speed, read through a map that takes it as m/s (or names
+    no unit): before, the file's unit was never looked at."""
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(dlc[c], dlc["t"], name=c, unit=u) for c, u in (("delta", "rad"), ("ax", "m/s^2"),
+                                                                       ("ay", "m/s²"), ("r", "rad/s"))])
+    mdf.append([Signal(dlc["vx"] * 3.6, dlc["t"], name="VehSpd", unit="km/h")])
+    mdf.save(tmp_path / "drive.mf4", overwrite=True)
+    (tmp_path / "wrong.toml").write_text('[columns.vx]\nchannel = "VehSpd"\n')
+    with pytest.raises(LogError, match=r"channel 'VehSpd' is in km/h \(the file's unit\), the channel map reads it as "
+                                       r"m/s: expected unit = \"km/h\" in \[columns.vx\]"):
+        read_mdf(tmp_path / "drive.mf4", read_channel_map(tmp_path / "wrong.toml"), 0.01)
+    (tmp_path / "right.toml").write_text('[columns.vx]\nchannel = "VehSpd"\nunit = "km/h"\n')
+    log = read_mdf(tmp_path / "drive.mf4", read_channel_map(tmp_path / "right.toml"), 0.01)
+    np.testing.assert_allclose(log["vx"], dlc["vx"][:len(log)], rtol=1e-12)

@@ -100,7 +100,9 @@ def read_user_log(path: Path, channels: Path | None, sample_time: float | Callab
             click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
     log = log.window(*window)
     if unit_check is not None:
-        check_units(log, unit_check.vehicle["wheelbase"])
+        unchecked = check_units(log, unit_check.vehicle)
+        if unchecked:
+            click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
     return log
 
 

@@ -38,6 +38,9 @@ UNITS: dict[str, tuple[str, float]] = {
 """The unit vocabulary: name -> (kind, factor to the kind's SI unit)."""
 SI_KIND = {"rad": "angle", "m/s": "speed", "rad/s": "angular rate", "m/s^2": "acceleration",
            "N*m": "moment", "-": "ratio", "s": "time"}
+ALIASES = {"kph": "km/h", "km/hr": "km/h", "°": "deg", "°/s": "deg/s", "deg/sec": "deg/s", "rad/sec": "rad/s",
+           "m/s²": "m/s^2", "m/s2": "m/s^2", "m/(s^2)": "m/s^2", "Nm": "N*m", "N.m": "N*m", "sec": "s", "1/min": "rpm"}
+"""Other spellings of the vocabulary's units that loggers write into MDF4 files."""
 COLUMNS = {signals.TIME.name: signals.TIME.unit, **signals.LOG_COLUMN_UNITS}
 """Every column a map may name, with its SI unit: time, the inputs and the ground truth."""
 
@@ -50,6 +53,8 @@ class Column:
     channel: str
     scale: float
     """Multiplies the channel's values: factor x the unit's factor to SI."""
+    unit: str = ""
+    """The unit the map declares (the column's SI unit when it names none)."""
     group: int | None = None
     """MDF4: the channel group to read the channel from (where its name repeats)."""
     message: str | None = None
@@ -63,7 +68,7 @@ class ChannelMap:
 
     def column(self, name: str) -> Column:
         """The map's entry for ``name``, or a channel of that name in SI units."""
-        return self.columns.get(name, Column(name, name, 1.0))
+        return self.columns.get(name, Column(name, name, 1.0, COLUMNS.get(name, "")))
 
 
 def read_channel_map(path: Path | None) -> ChannelMap:
@@ -105,7 +110,7 @@ def read_channel_map(path: Path | None) -> ChannelMap:
         if isinstance(factor, bool) or not isinstance(factor, (int, float)) or not math.isfinite(factor) \
                 or factor == 0:
             raise LogError(f"{where} factor = {factor!r}: expected a finite non-zero number")
-        columns[name] = Column(name, entry["channel"], float(factor) * to_si, group, message)
+        columns[name] = Column(name, entry["channel"], float(factor) * to_si, unit, group, message)
     return ChannelMap(columns, str(path))
 
 
@@ -114,3 +119,13 @@ def _line(text: str, name: str) -> int:
         if line.strip().replace(" ", "") == f"[columns.{name}]":
             return number
     return 1
+
+
+def file_unit_conflict(column: Column, written: str) -> str | None:
+    """The unit a logger wrote for ``column``'s channel (``written``, e.g. MDF4 metadata), when it
+    is a unit of the vocabulary other than the one the map declares (None otherwise: they agree,
+    or the file's unit cannot be judged)."""
+    unit = ALIASES.get(written.strip(), written.strip())
+    if unit in UNITS and column.unit in UNITS and UNITS[unit] != UNITS[column.unit]:
+        return unit
+    return None

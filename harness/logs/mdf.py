@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vsegen.harness.logs.channels import ChannelMap
+from vsegen.harness.logs.channels import ChannelMap, file_unit_conflict
 from vsegen.harness.logs.table import (
     OPTIONAL_INPUTS,
     REQUIRED,
@@ -61,6 +61,11 @@ def read_mdf(path: Path, channels: ChannelMap, sample_time: float) -> Log:
                 missing.append(f"'{column.channel}' for column '{name}'")
             continue
         signal = mdf.get(column.channel, *_occurrence(mdf, path, column, channels.source))
+        written = file_unit_conflict(column, str(signal.unit or ""))
+        if written:
+            raise LogError(f"{path}: channel '{column.channel}' is in {written} (the file's unit), the channel map "
+                           f"reads it as {column.unit}: expected unit = \"{written}\" in [columns.{name}] of "
+                           f"{channels.source}")
         series[name] = (np.asarray(signal.timestamps, dtype=float),
                         np.asarray(signal.samples, dtype=float) * column.scale)
     if missing:

@@ -1,68 +1,162 @@
-"""Unit sanity from the signals' physics: wrong units that pass the range checks.
+"""Unit sanity from the redundancy of a chassis log: wrong units that pass the range checks.
 
-In quasi-steady cornering a_y = r v_x (plus the roll share g k a_y, a few tens of percent at most)
-and, in the tyres' linear range, delta = l r / v_x (1 + K_s v_x^2) with understeer of order one.
-Ratios far from these are a unit or a signal mistake; the factor that explains them names the
-likely cause (r in deg/s, v_x in km/h or mph, a_y in g, delta in degrees or as the steering-wheel
-angle). Used by the CLI before running an estimator; ``--no-unit-check`` skips it.
+Every relation below holds in any manoeuvre, not only in steady cornering, so a log is judged
+wherever the car moves enough:
+
+* **v_x against the wheel speeds**: v_x is the wheels' rolling speed, v_x = R_eff mean(|omega|);
+* **r against the rear wheels' speed difference**: the unsteered axle turns at
+  r = R_eff (omega_rr - omega_rl) / t_w;
+* **a_y against r v_x**: a_y = v_y' + r v_x, and v_y' is small beside r v_x in most samples (the
+  body's roll adds g k a_y, a few tens of percent);
+* **delta against the yaw rate through the bicycle model**: the linear 2-DOF model driven by the
+  logged delta at the logged speed predicts r, with the lag of a transient, in the tyres' linear
+  range (a wider band where a log never leaves the nonlinear range).
+
+Each relation gives the median ratio of the logged signal to its prediction over the samples
+where both are large enough. A ratio far from 1 is one line naming the column and the likely
+cause (v_x in km/h or mph, r in deg/s, a_y in g, delta in degrees or as the steering-wheel
+angle), exit 2. A column no relation could judge (no wheel speeds, too little motion) is listed
+by :func:`check_units`, so the caller can say that its unit was not checked.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
-from vsegen.harness.logs.segments import SLOPE_WINDOW, derivative, smoothed
+from vsegen.harness.logs import segments
 from vsegen.harness.logs.table import Log, LogError
 
+SMOOTHING = 0.3
+"""s: every signal is averaged over this before its ratios are taken (noise down about fivefold)."""
 MIN_SAMPLES = 100
-"""Quasi-steady samples needed before judging (about a second at 100 Hz)."""
-RELATIVE_RATE = 0.3
-"""1/s: r and a_y count as quasi-steady where each changes by less than this share of itself per
-second (in whatever unit it was logged, so a wrong unit does not hide the steady stretches; a
-sliding or spinning car is not steady)."""
-LATERAL_RATIO = (0.75, 1.5)
-"""a_y / (r v_x) expected in quasi-steady cornering (roll adds up to ~30 %)."""
-STEER_RATIO = (0.7, 3.0)
-"""delta / (l r / v_x) expected with |a_y| below 4 m/s^2 (understeer up to 1 + K_s v_x^2 ~ 2)."""
+"""Samples a relation needs before it judges (about a second at 100 Hz)."""
+MIN_SPEED = 5.0
+"""m/s: slower samples are not judged (the wheel and yaw relations need motion)."""
+SPEED_RATIO = (0.8, 1.25)
+"""v_x / (R_eff mean |omega|): slip of the driven wheels and tyre radius spread."""
+YAW_RATIO = (0.7, 1.4)
+"""r / (R_eff (omega_rr - omega_rl) / t_w)."""
+LATERAL_RATIO = (0.5, 1.8)
+"""a_y / (r v_x) in any manoeuvre: roll adds up to ~30 %, transients, lag and a sliding car the
+rest (a mph speed, the nearest mistake, gives 0.45)."""
+STEER_RATIO = (0.25, 4.0)
+"""r / r_model of the bicycle model driven by delta, in the linear range (|a_y| < 4 m/s^2): wide,
+for a vehicle file whose stiffnesses are rough (the steering-wheel angle, the nearest mistake,
+gives 1/15)."""
+SATURATED_STEER_RATIO = (0.15, 4.0)
+"""The same where |a_y| exceeds the linear range: saturated tyres yaw less (or, oversteering, more);
+judged on the samples where r turns the way the model does (a sliding car counter-steers)."""
+MIN_YAW_RATE = 0.03
+"""rad/s: yaw rates below this say little about a ratio."""
+MIN_LATERAL = 0.5
+"""m/s^2: |r v_x| below this says little about a_y's unit."""
+LINEAR_LATERAL = 4.0
+SPEED_CAUSES = (("column 'vx' looks like km/h", 3.6), ("column 'vx' looks like mph", 2.23694))
+"""(cause, factor by which it grows the ratio)."""
+YAW_CAUSES = (("column 'r' looks like deg/s", 180 / math.pi),)
 LATERAL_CAUSES = (("column 'r' looks like deg/s", 180 / math.pi), ("column 'vx' looks like km/h", 3.6),
                   ("column 'vx' looks like mph", 2.23694), ("column 'ay' looks like g", 9.80665))
 """(cause, factor by which it shrinks a_y / (r v_x))."""
 STEER_CAUSES = (("column 'delta' looks like degrees", 180 / math.pi),
                 ("column 'delta' looks like the steering-wheel angle (ratio ~15; map it with factor = 1/ratio)", 15.0),
                 ("column 'delta' looks like the steering-wheel angle in degrees", 15.0 * 180 / math.pi))
-"""(cause, factor by which it grows delta / (l r / v_x))."""
+"""(cause, factor by which it shrinks r / r_model)."""
+WHEELS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 
 
-def check_units(log: Log, wheelbase: float) -> None:
-    """Raise LogError (one line: file, column, likely cause) when the log's physics says a unit is
-    wrong; say nothing when the log has too little cornering to judge."""
+def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
+    """Raise LogError (one line: file, relation, likely cause) when the log's physics says a unit
+    is wrong; return "column (why)" for each input column no relation could judge."""
     need = ("delta", "vx", "ay", "r")
     if any(name not in log for name in need):
-        return
-    delta, vx, ay, r = (np.asarray(log[name], dtype=float) for name in need)
-    ok = np.isfinite(delta) & np.isfinite(vx) & np.isfinite(ay) & np.isfinite(r) & (np.abs(vx) > 5.0)
-    window = max(5, int(round(SLOPE_WINDOW / log.sample_time)))
-    steady = np.ones(len(r), dtype=bool)
-    for signal in (r, ay):
-        finite = np.where(np.isfinite(signal), signal, 0.0)
-        level = np.abs(smoothed(finite, window))
-        steady &= np.abs(derivative(finite, log.sample_time, window)) < RELATIVE_RATE * level
-    if "mz" in log:  # a direct yaw moment turns the car without the steering
-        steady &= np.abs(np.where(np.isfinite(log["mz"]), log["mz"], 0.0)) < 1.0
-    turning = ok & steady & (np.abs(r) > 0.03) & (np.abs(r * vx) > 0.5)
-    if turning.sum() >= MIN_SAMPLES:
-        ratio = float(np.median(ay[turning] / (r[turning] * vx[turning])))
-        if not LATERAL_RATIO[0] <= ratio <= LATERAL_RATIO[1]:
-            raise LogError(f"{log.source}: a_y / (r v_x) = {ratio:.3g} in cornering: expected about 1; "
-                           f"{_cause(ratio, LATERAL_CAUSES, invert=True)} (--no-unit-check to run anyway)")
-    linear = turning & (np.abs(ay) < 4.0)
-    if linear.sum() >= MIN_SAMPLES:
-        ratio = float(np.median(delta[linear] / (wheelbase * r[linear] / vx[linear])))
-        if not STEER_RATIO[0] <= ratio <= STEER_RATIO[1]:
-            raise LogError(f"{log.source}: delta / (l r / v_x) = {ratio:.3g} in cornering: expected 1 to 2; "
-                           f"{_cause(ratio, STEER_CAUSES)} (--no-unit-check to run anyway)")
+        return []
+    window = max(1, round(SMOOTHING / log.sample_time))
+    delta, vx, ay, r = (_smoothed(np.asarray(log[name], dtype=float), window) for name in need)
+    judged: set[str] = set()
+    wheels = all(name in log for name in WHEELS)
+    if wheels:
+        omega = np.vstack([_smoothed(np.asarray(log[name], dtype=float), window) for name in WHEELS])
+        rolling = vehicle["wheel_radius"] * np.mean(np.abs(omega), axis=0)
+        moving = np.isfinite(vx) & np.isfinite(rolling) & (rolling > MIN_SPEED)
+        _judge(log, "v_x / (R_eff mean |omega|)", vx, rolling, moving, SPEED_RATIO, SPEED_CAUSES, judged, "vx")
+        yaw = vehicle["wheel_radius"] * (omega[3] - omega[2]) / vehicle["track_width"]
+        turning = moving & np.isfinite(r) & (np.abs(yaw) > MIN_YAW_RATE)
+        _judge(log, "r / (R_eff (omega_rr - omega_rl) / t_w)", r, yaw, turning, YAW_RATIO, YAW_CAUSES, judged, "r")
+    speed = rolling if wheels else np.abs(vx)
+    moving = np.isfinite(speed) & (speed > MIN_SPEED)
+    centripetal = r * vx
+    lateral = moving & np.isfinite(ay) & np.isfinite(centripetal) & (np.abs(centripetal) > MIN_LATERAL)
+    if _judge(log, "a_y / (r v_x)", ay, centripetal, lateral, LATERAL_RATIO, LATERAL_CAUSES, judged, "ay",
+              invert=True):
+        judged |= {"r", "vx"}
+    predicted = bicycle_yaw_rate(delta, speed, vehicle, log.sample_time)
+    linear = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
+        & (np.abs(ay) < LINEAR_LATERAL)
+    if not _judge(log, "r / r_model(delta)", r, predicted, linear, STEER_RATIO, STEER_CAUSES, judged, "delta",
+                  invert=True):   # a log beyond the linear range: the tyres saturate, a wider band
+        steering = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
+            & (r * predicted > 0)
+        _judge(log, "r / r_model(delta) beyond the linear range", r, predicted, steering, SATURATED_STEER_RATIO,
+               STEER_CAUSES, judged, "delta", invert=True)
+    return [f"{name} (too little {'motion' if name != 'delta' else 'steering in the linear range'})"
+            for name in need if name not in judged]
+
+
+def _smoothed(x: np.ndarray, window: int) -> np.ndarray:
+    """``x`` averaged over ``window`` samples (centred), NaN where a NaN was in reach: the ratios are
+    taken of smoothed signals, so sensor noise cannot fake a unit error on a gently driven log."""
+    finite = np.isfinite(x)
+    mean = segments.smoothed(np.where(finite, x, 0.0), window)
+    return np.where(segments.smoothed(finite.astype(float), window) > 0.999, mean, np.nan)
+
+
+def bicycle_yaw_rate(delta: np.ndarray, speed: np.ndarray, vehicle: Mapping[str, float], dt: float) -> np.ndarray:
+    """The yaw rate of the linear 2-DOF bicycle model driven by ``delta`` (rad) at ``speed`` (m/s),
+    stepped by its exact solution over each sample (stable at any speed); NaN inputs hold it."""
+    m, iz = vehicle["mass"], vehicle["yaw_inertia"]
+    a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
+    cf, cr = vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]
+    x = np.zeros(2)
+    out = np.full(len(delta), np.nan)
+    for k, (d, v) in enumerate(zip(delta, speed)):
+        if not (np.isfinite(d) and np.isfinite(v)) or v < 1.0:
+            continue
+        A = np.array([[-(cf + cr) / (m * v), (b * cr - a * cf) / (m * v) - v],
+                      [(b * cr - a * cf) / (iz * v), -(a * a * cf + b * b * cr) / (iz * v)]])
+        B = np.array([cf / m, a * cf / iz])
+        steady = -np.linalg.solve(A, B * d)
+        decay = _expm2(A * dt)
+        x = steady + decay @ (x - steady)
+        out[k] = x[1]
+    return out
+
+
+def _expm2(M: np.ndarray) -> np.ndarray:
+    """e^M of a 2 x 2 matrix (scaling and squaring of a short series)."""
+    squarings = max(0, math.ceil(math.log2(max(np.abs(M).sum(axis=1).max(), 1e-12) / 0.25)))
+    S = M / 2**squarings
+    E = np.eye(2) + S + S @ S / 2 + S @ S @ S / 6 + S @ S @ S @ S / 24
+    for _ in range(squarings):
+        E = E @ E
+    return E
+
+
+def _judge(log: Log, relation: str, signal: np.ndarray, predicted: np.ndarray, mask: np.ndarray,
+           expected: tuple[float, float], causes, judged: set[str], column: str, invert: bool = False) -> bool:
+    """Judge one relation on the ``mask``ed samples (True when it could); LogError when the median
+    ratio ``signal / predicted`` lies outside ``expected``."""
+    if np.count_nonzero(mask) < MIN_SAMPLES:
+        return False
+    ratio = float(np.median(signal[mask] / predicted[mask]))
+    if not expected[0] <= ratio <= expected[1]:
+        raise LogError(f"{log.source}: {relation} = {ratio:.3g} over {np.count_nonzero(mask)} samples: expected "
+                       f"{expected[0]:g} to {expected[1]:g}; {_cause(ratio, causes, invert)} "
+                       f"(--no-unit-check to run anyway)")
+    judged.add(column)
+    return True
 
 
 def _cause(ratio: float, causes, invert: bool = False) -> str:
@@ -71,3 +165,4 @@ def _cause(ratio: float, causes, invert: bool = False) -> str:
         return abs(math.log(abs(ratio) * (factor if invert else 1 / factor)))
     name, factor = min(causes, key=lambda cause: miss(cause[1]))
     return name if miss(factor) < 0.5 else "a unit or a sign is wrong"
+
