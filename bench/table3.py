@@ -3,8 +3,9 @@ Table 2 noise, biases compensated) over N seeds; |delta beta| max / mean / RMSE 
 mean ± standard deviation over the seeds, for the kinematic scheme alone, the KF alone, the
 switching estimator and the fusion comparison method; then the outlier and the residual-bias
 scenarios. The kinematic-only and KF-only rows are the switching estimator with its threshold
-forced to 0 and to the largest acceleration a vehicle file allows (1000 m/s^2, never reached; same pre-processing); the "literal a_y" rows switch off the roll
-compensation of the accelerometer (roll_gradient = 0), as the paper does."""
+forced to 0 and to the largest acceleration a vehicle file allows (1000 m/s^2, never reached; same
+pre-processing); the "literal a_y" rows switch off the roll compensation of the accelerometer
+(roll_gradient = 0), as the paper does."""
 
 from __future__ import annotations
 
