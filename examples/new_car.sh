@@ -5,12 +5,12 @@
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 work=${1:-new_car}
-mkdir -p "$work/drive" "$work/track" "$work/holdout"
+mkdir -p "$work/vehicles" "$work/drive" "$work/track" "$work/holdout"
 cd "$work"
 truth="$repo/vehicles/rwd_saloon.toml"
 
 # The engineer's starting file: the C-class file with this car's mass, geometry and I_z typed in.
-python3 - "$repo/vehicles/c_class.toml" my_car.toml <<'PY'
+python3 - "$repo/vehicles/c_class.toml" vehicles/car.toml <<'PY'
 import sys
 from pathlib import Path
 from vsegen.harness.project.vehicles import with_settings
@@ -33,11 +33,13 @@ vsegen simulate fishhook --vehicle "$truth" --out track/fishhook.csv
 vsegen simulate dlc --vehicle "$truth" --set mu=0.5 --out track/dlc_low_friction.csv
 vsegen simulate continuous_dlc --vehicle "$truth" --set speed_kmh=80 --out holdout/continuous_dlc.csv
 
-# 1. identify  2. tune  3. generate  4. verify
-vsegen identify --vehicle my_car.toml --out car.toml --report identify.md \
+# 1. identify  2. tune  3. generate  4. verify: the work folder is a vsegen project (it has vehicles/), and the
+# identified and tuned car stays vehicles/car.toml, so `vsegen generate --check` stays green
+vsegen identify --vehicle vehicles/car.toml --out vehicles/car.toml --report identify.md \
   --log drive/step_small.csv --log drive/step_large.csv --log drive/sine.csv --log drive/lane_change.csv --log drive/weave.csv
-vsegen tune --estimator switching --vehicle car.toml --out tuned.toml \
+vsegen tune --estimator switching --vehicle vehicles/car.toml --out vehicles/car.toml \
   --log track/dlc.csv --log track/step.csv --log track/sine.csv --log track/fishhook.csv --log track/dlc_low_friction.csv \
   --holdout holdout/continuous_dlc.csv
-vsegen generate --vehicle tuned.toml --estimator switching --out generated
-vsegen verify --vehicle tuned.toml --estimator switching
+vsegen generate --estimator switching
+vsegen verify --estimator switching
+vsegen generate --check --estimator switching
