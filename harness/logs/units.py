@@ -3,9 +3,9 @@
 Every relation below holds in any manoeuvre, not only in steady cornering, so a log is judged
 wherever the car moves enough:
 
-* **v_x against the wheel speeds**: v_x is the wheels' rolling speed, v_x = R_eff mean(|omega|);
-* **r against the rear wheels' speed difference**: the unsteered axle turns at
-  r = R_eff (omega_rr - omega_rl) / t_w;
+* **v_x against the wheel speeds**: v_x is the free axle's rolling speed, R_eff mean(|omega|)
+  (at each sample the axle rolling nearest v_x: a driven axle's wheels spin up on a slippery road);
+* **r against that axle's wheel speed difference**: r = R_eff (omega_right - omega_left) / t_w;
 * **a_y against r v_x**: a_y = v_y' + r v_x, and v_y' is small beside r v_x in most samples (the
   body's roll adds g k a_y, a few tens of percent);
 * **delta against the yaw rate through the bicycle model**: the linear 2-DOF model driven by the
@@ -13,7 +13,8 @@ wherever the car moves enough:
   range (a wider band where a log never leaves the nonlinear range).
 
 Each relation gives the median ratio of the logged signal to its prediction over the samples
-where both are large enough. A ratio far from 1 is one line naming the column and the likely
+where both are large enough. A ratio far from 1, with few samples agreeing (a unit is wrong
+everywhere, a spin only from where it starts), is one line naming the column and the likely
 cause (v_x in km/h or mph, r in deg/s, a_y in g, delta in degrees or as the steering-wheel
 angle), exit 2. A column no relation could judge (no wheel speeds, too little motion) is listed
 by :func:`check_units`, so the caller can say that its unit was not checked.
@@ -36,9 +37,9 @@ MIN_SAMPLES = 100
 MIN_SPEED = 5.0
 """m/s: slower samples are not judged (the wheel and yaw relations need motion)."""
 SPEED_RATIO = (0.8, 1.25)
-"""v_x / (R_eff mean |omega|): slip of the driven wheels and tyre radius spread."""
-YAW_RATIO = (0.7, 1.4)
-"""r / (R_eff (omega_rr - omega_rl) / t_w)."""
+"""v_x / (R_eff mean |omega|) of the free axle: tyre radius spread, slip."""
+YAW_RATIO = (0.6, 1.6)
+"""r / (R_eff (omega_right - omega_left) / t_w): steer angle, slip and track spread."""
 LATERAL_RATIO = (0.5, 1.8)
 """a_y / (r v_x) in any manoeuvre: roll adds up to ~30 %, transients, lag and a sliding car the
 rest (a mph speed, the nearest mistake, gives 0.45)."""
@@ -49,11 +50,18 @@ gives 1/15)."""
 SATURATED_STEER_RATIO = (0.15, 4.0)
 """The same where |a_y| exceeds the linear range: saturated tyres yaw less (or, oversteering, more);
 judged on the samples where r turns the way the model does (a sliding car counter-steers)."""
+AGREEING = 0.25
+"""A relation refuses only when fewer than this share of its samples agree with it: a unit is
+wrong on every sample, while a car that spins part way through a log breaks the relations only
+from there on."""
 MIN_YAW_RATE = 0.03
 """rad/s: yaw rates below this say little about a ratio."""
 MIN_LATERAL = 0.5
 """m/s^2: |r v_x| below this says little about a_y's unit."""
 LINEAR_LATERAL = 4.0
+MAX_LATERAL = 15.0
+"""m/s^2: r v_x beyond what any tyre holds is a spinning car (its yaw rate no path curvature), not
+a sample to judge a_y's unit by."""
 SPEED_CAUSES = (("column 'vx' looks like km/h", 3.6), ("column 'vx' looks like mph", 2.23694))
 """(cause, factor by which it grows the ratio)."""
 YAW_CAUSES = (("column 'r' looks like deg/s", 180 / math.pi),)
@@ -62,7 +70,8 @@ LATERAL_CAUSES = (("column 'r' looks like deg/s", 180 / math.pi), ("column 'vx' 
 """(cause, factor by which it shrinks a_y / (r v_x))."""
 STEER_CAUSES = (("column 'delta' looks like degrees", 180 / math.pi),
                 ("column 'delta' looks like the steering-wheel angle (ratio ~15; map it with factor = 1/ratio)", 15.0),
-                ("column 'delta' looks like the steering-wheel angle in degrees", 15.0 * 180 / math.pi))
+                ("column 'delta' looks like the steering-wheel angle in degrees", 15.0 * 180 / math.pi),
+                ("column 'r' looks like deg/s", math.pi / 180))
 """(cause, factor by which it shrinks r / r_model)."""
 WHEELS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 
@@ -78,23 +87,22 @@ def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
     judged: set[str] = set()
     wheels = all(name in log for name in WHEELS)
     if wheels:
-        omega = np.vstack([_smoothed(np.asarray(log[name], dtype=float), window) for name in WHEELS])
-        rolling = vehicle["wheel_radius"] * np.mean(np.abs(omega), axis=0)
+        rolling, yaw = _free_axle(log, vehicle, vx, window)
         moving = np.isfinite(vx) & np.isfinite(rolling) & (rolling > MIN_SPEED)
         _judge(log, "v_x / (R_eff mean |omega|)", vx, rolling, moving, SPEED_RATIO, SPEED_CAUSES, judged, "vx")
-        yaw = vehicle["wheel_radius"] * (omega[3] - omega[2]) / vehicle["track_width"]
         turning = moving & np.isfinite(r) & (np.abs(yaw) > MIN_YAW_RATE)
         _judge(log, "r / (R_eff (omega_rr - omega_rl) / t_w)", r, yaw, turning, YAW_RATIO, YAW_CAUSES, judged, "r")
     speed = rolling if wheels else np.abs(vx)
     moving = np.isfinite(speed) & (speed > MIN_SPEED)
     centripetal = r * vx
-    lateral = moving & np.isfinite(ay) & np.isfinite(centripetal) & (np.abs(centripetal) > MIN_LATERAL)
+    lateral = moving & np.isfinite(ay) & np.isfinite(centripetal) & (np.abs(centripetal) > MIN_LATERAL) \
+        & (np.abs(centripetal) < MAX_LATERAL)
     if _judge(log, "a_y / (r v_x)", ay, centripetal, lateral, LATERAL_RATIO, LATERAL_CAUSES, judged, "ay",
               invert=True):
         judged |= {"r", "vx"}
     predicted = bicycle_yaw_rate(delta, speed, vehicle, log.sample_time)
     linear = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
-        & (np.abs(ay) < LINEAR_LATERAL)
+        & (np.abs(ay) < LINEAR_LATERAL) & (np.abs(centripetal) < LINEAR_LATERAL)
     if not _judge(log, "r / r_model(delta)", r, predicted, linear, STEER_RATIO, STEER_CAUSES, judged, "delta",
                   invert=True):   # a log beyond the linear range: the tyres saturate, a wider band
         steering = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
@@ -103,6 +111,21 @@ def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
                STEER_CAUSES, judged, "delta", invert=True)
     return [f"{name} (too little {'motion' if name != 'delta' else 'steering in the linear range'})"
             for name in need if name not in judged]
+
+
+def _free_axle(log: Log, vehicle: Mapping[str, float], vx: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """(rolling speed R_eff mean |omega|, yaw rate R_eff (omega_right - omega_left) / t_w) of the
+    axle that rolls nearest v_x at each sample: the free one, whose wheels neither spin under
+    drive torque nor lock under braking (on a low-friction road a driven axle's wheels run far
+    ahead of the car)."""
+    omega = {name: _smoothed(np.asarray(log[name], dtype=float), window) for name in WHEELS}
+    radius, track = vehicle["wheel_radius"], vehicle["track_width"]
+    axles = [(radius * (np.abs(omega[left]) + np.abs(omega[right])) / 2, radius * (omega[right] - omega[left]) / track)
+             for left, right in (("omega_fl", "omega_fr"), ("omega_rl", "omega_rr"))]
+    (front, front_yaw), (rear, rear_yaw) = axles
+    with np.errstate(divide="ignore", invalid="ignore"):
+        front_nearer = np.abs(np.log(np.abs(vx / front))) <= np.abs(np.log(np.abs(vx / rear)))
+    return np.where(front_nearer, front, rear), np.where(front_nearer, front_yaw, rear_yaw)
 
 
 def _smoothed(x: np.ndarray, window: int) -> np.ndarray:
@@ -150,8 +173,10 @@ def _judge(log: Log, relation: str, signal: np.ndarray, predicted: np.ndarray, m
     ratio ``signal / predicted`` lies outside ``expected``."""
     if np.count_nonzero(mask) < MIN_SAMPLES:
         return False
-    ratio = float(np.median(signal[mask] / predicted[mask]))
-    if not expected[0] <= ratio <= expected[1]:
+    ratios = signal[mask] / predicted[mask]
+    ratio = float(np.median(ratios))
+    agreeing = float(np.mean((ratios >= expected[0]) & (ratios <= expected[1])))
+    if not expected[0] <= ratio <= expected[1] and agreeing < AGREEING:
         raise LogError(f"{log.source}: {relation} = {ratio:.3g} over {np.count_nonzero(mask)} samples: expected "
                        f"{expected[0]:g} to {expected[1]:g}; {_cause(ratio, causes, invert)} "
                        f"(--no-unit-check to run anyway)")
