@@ -21,7 +21,7 @@ from vsegen.codegen.checks import condition
 from vsegen.codegen.kernel import generate_kernel
 from vsegen.codegen.precision import literal
 from vsegen.model import status, ziggurat
-from vsegen.model.calibration_checks import calibration_checks
+from vsegen.model.calibration_checks import calibration_checks, dynamics_checks
 from vsegen.model.estimator import RNG_WORDS
 from vsegen.model.estimators import DEFINITIONS, SCHEMAS, build
 from vsegen.model.params import VehicleConfig
@@ -109,8 +109,9 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "status_bits": {bit.name: (bit.value, bit.meaning) for bit in status.described((
             *DEFINITIONS[name].status_bits,
             *((status.INVALID_CALIBRATION,) if estimator.parameters.calibratable else ())))},
-        "calibration_checks": [(condition(c, real), c.says) for c in
-                               calibration_checks(SCHEMAS[name], estimator.parameters.names)],
+        "calibration_checks": [(condition(c, real), c.says) for c in (
+            *calibration_checks(SCHEMAS[name], estimator.parameters.names),
+            *dynamics_checks(SCHEMAS[name], estimator.parameters.names, estimator.parameters.values))],
         "invalid_calibration": literal(float(status.INVALID_CALIBRATION), real),
         "status_index": estimator.outputs.index("status"),
         "kernel": kernel,

@@ -5,7 +5,10 @@ So the generated code of a calibratable estimator checks, before every step, eve
 schema makes on the entries of its calibration struct: each number's bounds (``Field.bounds``,
 e.g. mass > 0), the comparisons between keys (``Rule.relation``, e.g. vx_resume > vx_min) and
 the positive definiteness of a symmetric matrix (Sylvester's criterion on its calibrated
-entries, up to 3 x 3). A step with an invalid calibration holds (status INVALID_CALIBRATION).
+entries, up to 3 x 3) and, for an estimator with a discretised bicycle model, that the model's
+state-matrix norm stays within the range its discretisation was planned for (a stiffness of 9e6
+N/rad or a yaw inertia of 5 kg m^2 pass every bound and would make the prediction explode).
+A step with an invalid calibration holds (status INVALID_CALIBRATION).
 A rule that is not a comparison (``Rule.relation`` None) is not repeated; :func:`unchecked_rules`
 lists them (none today, a test keeps it so).
 """
@@ -14,6 +17,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from vsegen.model.bicycle import state_matrix_norm_bound
+from vsegen.model.calibration import CALIBRATION_MARGIN
 from vsegen.model.schema import INPUT_LIMITS, VEHICLE, EstimatorSchema, Field
 
 
@@ -45,7 +50,21 @@ class PositiveDefinite:
     says: str
 
 
-Check = Bound | Relation | PositiveDefinite
+@dataclass(frozen=True)
+class StateMatrixNorm:
+    """:func:`vsegen.model.bicycle.state_matrix_norm_bound` of the entries p[index[key]] (keys
+    :data:`NORM_OPERANDS`) is <= limit (1/s)."""
+
+    index: dict[str, int]
+    limit: float
+    says: str
+
+
+Check = Bound | Relation | PositiveDefinite | StateMatrixNorm
+
+NORM_OPERANDS = ("mass", "yaw_inertia", "cg_to_front_axle", "cg_to_rear_axle", "cornering_stiffness_front",
+                 "cornering_stiffness_rear", "vx_min", "vx_max")
+"""The calibration entries the bicycle model's state matrix norm bound reads."""
 
 
 def calibration_checks(schema: EstimatorSchema, names: tuple[str, ...]) -> tuple[Check, ...]:
@@ -64,6 +83,20 @@ def calibration_checks(schema: EstimatorSchema, names: tuple[str, ...]) -> tuple
         if rule.relation is not None:
             checks += _relation(*rule.relation, index)
     return tuple(checks)
+
+
+def dynamics_checks(schema: EstimatorSchema, names: tuple[str, ...],
+                    values: tuple[float, ...]) -> tuple[Check, ...]:
+    """For an estimator that discretises the bicycle model (a ``discretisation`` setting) with
+    every operand calibrated: the state-matrix norm bound over vx_min..vx_max stays within
+    CALIBRATION_MARGIN times its value at generation, the range the discretisation (the ZOH
+    series' terms and squarings) was planned for."""
+    if "discretisation" not in {f.key for f in schema.fields} or not set(NORM_OPERANDS) <= set(names):
+        return ()
+    value = dict(zip(names, values))
+    index = {key: names.index(key) for key in NORM_OPERANDS}
+    limit = CALIBRATION_MARGIN * state_matrix_norm_bound(value, value["vx_min"], value["vx_max"])
+    return (StateMatrixNorm(index, limit, f"||A(vx)||_inf <= {limit:.6g} 1/s for vx_min <= vx <= vx_max"),)
 
 
 def entry_fields(schema: EstimatorSchema, names: tuple[str, ...]) -> dict[str, Field]:

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from vsegen.model.estimator import Derived
-from vsegen.model.schema import Field, diagonal, nonnegative, positive
+from vsegen.model.schema import SMALLEST_SIGMA, Field, diagonal, nonnegative, positive
 from vsegen.model.signals import Signal
 
 OUTLIER_CAP = 100.0
@@ -49,7 +49,7 @@ def fields(channels: tuple[str, ...]) -> tuple[Field, ...]:
                     "fell below the limit", default=0.0),
         diagonal("sensor_noise", len(channels), f"[{', '.join(channels)}]: {units}",
                  "the sensors' noise, 1 sigma (the consistency monitor's yardstick)",
-                 default=tuple(TABLE_2[c] for c in channels)),
+                 default=tuple(TABLE_2[c] for c in channels), minimum=SMALLEST_SIGMA),
     )
 
 
@@ -120,7 +120,7 @@ def averaged(previous, innovation, settings, sample_time: float):
     n = len(sigma)
     ratio = sum(ca.fmin(innovation[i] * innovation[i] / (sigma[i] * sigma[i]), OUTLIER_CAP)
                 for i in range(n)) / n
-    keep = ca.exp(-sample_time / settings["residual_window"])
+    keep = ca.exp(-sample_time / ca.fabs(settings["residual_window"]))  # a calibrated -0 keeps nothing
     return keep * previous + (1 - keep) * ratio
 
 

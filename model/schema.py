@@ -101,6 +101,11 @@ COMPOUND_MAXIMUM = 1e12
 reaches 1e8 (N*m)^2)."""
 
 
+SMALLEST_SIGMA = 1e-6
+"""The smallest 1-sigma noise a setting the code divides by may take (in its unit: m/s^2, rad/s):
+far below any vehicle sensor, and its square stays a normal float."""
+
+
 def physical_maximum(unit: str) -> float:
     """The largest magnitude of a setting in ``unit`` (:data:`PHYSICAL_MAXIMUM`)."""
     return PHYSICAL_MAXIMUM.get(unit, COMPOUND_MAXIMUM)
@@ -175,10 +180,12 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
 
 
 def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
-             default: tuple[float, ...] | None = None) -> Field:
+             default: tuple[float, ...] | None = None, minimum: float = 0.0) -> Field:
     """The ``size`` diagonal entries of a diagonal covariance, each > 0 (or >= 0 when
-    ``zero_allowed``). Normalised to a tuple of floats."""
-    bound = ">= 0" if zero_allowed else "> 0"
+    ``zero_allowed``; at least ``minimum`` when given, e.g. a noise sigma the code divides by).
+    Normalised to a tuple of floats."""
+    low = (">=", minimum) if minimum > 0.0 else (">=" if zero_allowed else ">", 0.0)
+    bound = f"{low[0]} {low[1]:g}"
     high = physical_maximum(unit)
     expected = f"a list of {size} numbers {bound} and <= {high:g} ({unit}), the diagonal"
 
@@ -189,11 +196,11 @@ def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool =
             entries = tuple(_number(v) for v in value)
         except Invalid:
             raise Invalid(expected) from None
-        if any(v < 0.0 or (v == 0.0 and not zero_allowed) or v > high for v in entries):
+        if any(v < max(minimum, 0.0) or (v == 0.0 and not zero_allowed) or v > high for v in entries):
             raise Invalid(expected)
         return entries
 
-    return Field(key, expected, check, doc, default, ((">=" if zero_allowed else ">", 0.0), ("<=", high)), unit=unit)
+    return Field(key, expected, check, doc, default, (low, ("<=", high)), unit=unit)
 
 
 def vector(key: str, size: int, unit: str, doc: str = "",

@@ -217,3 +217,43 @@ def checks_in_words(config) -> list[str]:
     text = render(config, "kf2dof", "double", "calibratable")["vse_kf2dof.c"]
     table = text.split("vse_kf2dof_calibration_checks[VSE_KF2DOF_N_CALIBRATION_CHECKS] = {")[1].split("};")[0]
     return [line.strip().rstrip(",").strip('"') for line in table.strip().splitlines()]
+
+
+@pytest.mark.parametrize("field,value", [("cornering_stiffness_rear", 9.01421e6), ("yaw_inertia", 5.49587)])
+def test_a_calibration_within_its_bounds_but_beyond_the_planned_dynamics_is_refused(config, field, value):
+    """The calibration fuzzer found it: a rear stiffness of 9e6 N/rad or a yaw inertia of 5.5 kg m^2
+    pass every bound, yet make ||A|| T several times larger than the ZOH series was planned for, and
+    the prediction exploded to Inf. The check of the state-matrix norm refuses them."""
+    estimator = load_tuning_estimator(config, "kf2dof")
+    names = estimator.estimator.parameters.names
+    bad = np.array(calibration_values(config, "kf2dof", names))
+    bad[names.index(field)] = value
+    estimator.set_calibration(bad)
+    failing = estimator.calibration_check()
+    assert failing > 0 and checks_in_words(config)[failing - 1].startswith("||A(vx)||_inf <=")
+    inputs = Case.of("dlc").simulate(config, 100.0, 1).matrix(estimator.estimator.inputs.names)
+    outputs, states = estimator.run(inputs)
+    assert np.isfinite(states).all() and (outputs[:, -1].astype(int) & INVALID_CALIBRATION).all()
+
+
+def test_a_calibrated_residual_window_of_minus_zero_keeps_the_state_finite(config):
+    """-0 passes "residual_window >= 0"; exp(-T / -0) was +Inf and the monitor's mean NaN."""
+    estimator = load_tuning_estimator(config, "kf2dof")
+    names = estimator.estimator.parameters.names
+    calibration = np.array(calibration_values(config, "kf2dof", names))
+    calibration[names.index("residual_window")] = -0.0
+    estimator.set_calibration(calibration)
+    assert estimator.calibration_check() == 0
+    inputs = Case.of("dlc").simulate(config, 100.0, 1).matrix(estimator.estimator.inputs.names)
+    outputs, states = estimator.run(inputs)
+    assert np.isfinite(states).all() and np.isfinite(outputs).all()
+
+
+def test_a_noise_sigma_the_code_divides_by_has_a_physical_minimum(vehicle_text):
+    """A particle filter's measurement sigma of 1e-300 squared to 0 and N_eff became Inf: the
+    schema (and so the generated check) now asks for at least 1e-6."""
+    head, table = vehicle_text.split("[estimator.pf_improved]")
+    table = table.replace("measurement_noise = [0.3, 0.3, 0.01745]", "measurement_noise = [1e-300, 0.3, 0.01745]", 1)
+    text = head + "[estimator.pf_improved]" + table
+    with pytest.raises(ValueError, match=r"measurement_noise.*>= 1e-06"):
+        parse_vehicle(text, "car.toml", "car")

@@ -62,3 +62,14 @@ def test_reference_invariants(config, rows):
         assert p11 > 0 and p22 > 0 and p11 * p22 - p12 * p12 >= -1e-15 * p11 * p22
         rejected = not all(blocks.plausible(config.limits, n, v) for n, v in zip(reference.INPUTS, row))
         assert bool(int(output[3]) & blocks.INVALID_INPUT) == rejected
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "pf_improved"])
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_a_million_steps_with_a_fuzzed_calibration(config, name, real):
+    """The calibratable forms with their calibration struct fuzzed as well (NaN, +-Inf, 1e38, huge,
+    tiny, negative and rescaled values, then mended): never a non-finite state, a failing
+    calibration always holds with INVALID_CALIBRATION, a passing one never does."""
+    report = fuzz_estimator(config, name, real, STEPS, seed=7, params="calibratable")
+    assert report.ok, report.message
+    assert report.steps == STEPS

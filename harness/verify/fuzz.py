@@ -34,8 +34,8 @@ def compiler() -> str:
     return shutil.which("clang") or shutil.which("gcc") or "cc"
 
 
-def fuzz_source(config: VehicleConfig, name: str, real: str) -> str:
-    estimator = build(name, config)
+def fuzz_source(config: VehicleConfig, name: str, real: str, params: str = "baked") -> str:
+    estimator = build(name, config, params)
     names = estimator.states.names
     cov = [i for i, n in enumerate(names) if n.startswith("P_")]
     n = 0
@@ -45,20 +45,26 @@ def fuzz_source(config: VehicleConfig, name: str, real: str) -> str:
     return template_environment(Path(__file__).parent).get_template("fuzz.c.j2").render(
         est=estimator, p=p, P=p.upper(), real=real, cov_n=n, cov_indices=cov,
         limits=[repr(config.limits[LIMIT_KEYS[s]]) for s in estimator.inputs.names],
+        limits_now=[f"(double)fuzz_calibration.{LIMIT_KEYS[s]}" if LIMIT_KEYS[s] in estimator.parameters.names
+                    else repr(config.limits[LIMIT_KEYS[s]]) for s in estimator.inputs.names],
         typical=[repr(signals.INPUT[s].typical) for s in estimator.inputs.names],
-        vx_index=estimator.inputs.index("vx"))
+        vx_index=estimator.inputs.index("vx"),
+        calibration=[repr(float(v)) for v in estimator.parameters.values])
 
 
 def fuzz_estimator(config: VehicleConfig, name: str, real: str, steps: int, seed: int = 1,
-                   files: dict[str, str] | None = None) -> FuzzReport:
+                   files: dict[str, str] | None = None, params: str = "baked") -> FuzzReport:
     """Build ``name``'s generated C (or the given ``files``) with sanitizers and run ``steps``
-    fuzzed steps."""
-    files = files or render(config, name, real)
+    fuzzed steps; a calibratable build (``params``) has its calibration struct fuzzed too, so the
+    generated instance of it is left out."""
+    files = files or render(config, name, real, params)
+    if params == "calibratable":
+        files = {file: text for file, text in files.items() if file != f"vse_{name}_calibration.c"}
     with tempfile.TemporaryDirectory(prefix="vsegen-fuzz-") as tmp:
         folder = Path(tmp)
         for file, text in files.items():
             (folder / file).write_text(text)
-        (folder / "fuzz.c").write_text(fuzz_source(config, name, real))
+        (folder / "fuzz.c").write_text(fuzz_source(config, name, real, params))
         build_result = subprocess.run(
             [compiler(), "-std=c99", "-O1", "-g", *SANITIZE, "-o", "fuzz", "fuzz.c",
              *library_sources(files), "-lm"], cwd=folder, capture_output=True, text=True)

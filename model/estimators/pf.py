@@ -44,6 +44,7 @@ from vsegen.model.schema import (
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
     ROLL_CORRECTION,
+    SMALLEST_SIGMA,
     EstimatorSchema,
     Field,
     Rule,
@@ -74,7 +75,7 @@ PF_FIELDS: tuple[Field, ...] = (
            "97.2 % of the normals) or the spec's Box-Muller, cosine branch (D5: log, cos, sqrt "
            "and two uniforms per normal)", default="ziggurat"),
     diagonal("measurement_noise", 3, "[a_x, a_y, r]: m/s^2, m/s^2, rad/s", "R as standard "
-             "deviations sigma_ax,m, sigma_ay,m, sigma_r,m (1 sigma)"),
+             "deviations sigma_ax,m, sigma_ay,m, sigma_r,m (1 sigma)", minimum=SMALLEST_SIGMA),
     positive("wheel_speed_noise", "m/s", "sigma_vx,w of the logged v_x (observation = "
              "\"wheel_speed\" only)"),
     diagonal("initial_spread", 2, "[v_x, v_y]: m/s", "1-sigma spread of the initial particles' "

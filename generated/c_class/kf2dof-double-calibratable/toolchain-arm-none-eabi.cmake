@@ -5,7 +5,7 @@
 # Options: real=double, params=calibratable.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779
-# Operations: step 648, init 51 (CasADi SX instructions).
+# Operations: step 649, init 51 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779
- * Operations: step 648, init 51 (CasADi SX instructions).
+ * Operations: step 649, init 51 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -57,6 +57,9 @@ static void read_calibration(casadi_real p[27])
 static int first_failing_check(const casadi_real p[27])
 {
     int failing = 0;
+    if (!((p[0] > 0.0) && (p[1] > 0.0) && (p[19] > 0.0) && ((((((p[4] + p[5]) + ((((p[3] * p[5]) - (p[2] * p[4])) < 0.0) ? -((p[3] * p[5]) - (p[2] * p[4])) : ((p[3] * p[5]) - (p[2] * p[4])))) / p[0]) / p[19]) + p[7]) <= 311.4823654390935) && ((((((((p[3] * p[5]) - (p[2] * p[4])) < 0.0) ? -((p[3] * p[5]) - (p[2] * p[4])) : ((p[3] * p[5]) - (p[2] * p[4]))) + (((p[2] * p[2]) * p[4]) + ((p[3] * p[3]) * p[5]))) / p[1]) / p[19]) <= 311.4823654390935))) {    /* ||A(vx)||_inf <= 311.482 1/s for vx_min <= vx <= vx_max */
+        failing = 62;
+    }
     if (!(p[20] > p[19])) {    /* vx_resume > vx_min */
         failing = 61;
     }
@@ -69,13 +72,13 @@ static int first_failing_check(const casadi_real p[27])
     if (!(p[25] <= 1000000000000.0)) {    /* sensor_noise_2 <= 1e+12 */
         failing = 58;
     }
-    if (!(p[25] > 0.0)) {    /* sensor_noise_2 > 0 */
+    if (!(p[25] >= 1e-06)) {    /* sensor_noise_2 >= 1e-06 */
         failing = 57;
     }
     if (!(p[24] <= 1000000000000.0)) {    /* sensor_noise_1 <= 1e+12 */
         failing = 56;
     }
-    if (!(p[24] > 0.0)) {    /* sensor_noise_1 > 0 */
+    if (!(p[24] >= 1e-06)) {    /* sensor_noise_1 >= 1e-06 */
         failing = 55;
     }
     if (!(p[23] <= 10000.0)) {    /* residual_hold <= 10000 */
@@ -312,13 +315,14 @@ const char *const vse_kf2dof_calibration_checks[VSE_KF2DOF_N_CALIBRATION_CHECKS]
     "residual_limit <= 1e+06",
     "residual_hold >= 0",
     "residual_hold <= 10000",
-    "sensor_noise_1 > 0",
+    "sensor_noise_1 >= 1e-06",
     "sensor_noise_1 <= 1e+12",
-    "sensor_noise_2 > 0",
+    "sensor_noise_2 >= 1e-06",
     "sensor_noise_2 <= 1e+12",
     "linear_range >= 0",
     "linear_range <= 1000",
-    "vx_resume > vx_min"
+    "vx_resume > vx_min",
+    "||A(vx)||_inf <= 311.482 1/s for vx_min <= vx <= vx_max"
 };
 
 void vse_kf2dof_init(vse_kf2dof_state *state, const vse_kf2dof_input *first)

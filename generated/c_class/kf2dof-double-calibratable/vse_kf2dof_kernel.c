@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0c6460fa950895a189902c3d26f9ca658c0104fe9ae0269867b4f80d39a47779
- * Operations: step 648, init 51 (CasADi SX instructions).
+ * Operations: step 649, init 51 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -784,6 +784,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][6]=a20;
   a20=-1.0000000000000000e-02;
   a32=arg[2][21];
+  a32=casadi_fabs(a32);
   a20=(a20/a32);
   a20=exp(a20);
   a32=state_7;
@@ -846,7 +847,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_kf2dof_kernel_active: 608 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_active: 609 operations (CasADi SX instructions)
  * arg[0] state[10]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, holding
  * arg[1] input[4]: delta, vx, ay, r

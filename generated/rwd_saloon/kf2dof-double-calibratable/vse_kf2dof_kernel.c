@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 50fb1b07db1a9935e81c33a8a87be4e5340e241b31e3bb00ba6d66d7cf4ff7ec
- * Operations: step 629, init 51 (CasADi SX instructions).
+ * Operations: step 630, init 51 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -765,6 +765,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][6]=a20;
   a20=-1.0000000000000000e-02;
   a33=arg[2][21];
+  a33=casadi_fabs(a33);
   a20=(a20/a33);
   a20=exp(a20);
   a33=state_7;
@@ -827,7 +828,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_kf2dof_kernel_active: 589 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_active: 590 operations (CasADi SX instructions)
  * arg[0] state[10]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, holding
  * arg[1] input[4]: delta, vx, ay, r

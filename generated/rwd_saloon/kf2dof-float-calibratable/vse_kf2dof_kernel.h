@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 50fb1b07db1a9935e81c33a8a87be4e5340e241b31e3bb00ba6d66d7cf4ff7ec
- * Operations: step 629, init 51 (CasADi SX instructions).
+ * Operations: step 630, init 51 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */

@@ -211,19 +211,19 @@ static int first_failing_check(const casadi_real p[28])
     if (!(p[6] <= 1000000000000.0)) {    /* measurement_noise_3 <= 1e+12 */
         failing = 14;
     }
-    if (!(p[6] > 0.0)) {    /* measurement_noise_3 > 0 */
+    if (!(p[6] >= 1e-06)) {    /* measurement_noise_3 >= 1e-06 */
         failing = 13;
     }
     if (!(p[5] <= 1000000000000.0)) {    /* measurement_noise_2 <= 1e+12 */
         failing = 12;
     }
-    if (!(p[5] > 0.0)) {    /* measurement_noise_2 > 0 */
+    if (!(p[5] >= 1e-06)) {    /* measurement_noise_2 >= 1e-06 */
         failing = 11;
     }
     if (!(p[4] <= 1000000000000.0)) {    /* measurement_noise_1 <= 1e+12 */
         failing = 10;
     }
-    if (!(p[4] > 0.0)) {    /* measurement_noise_1 > 0 */
+    if (!(p[4] >= 1e-06)) {    /* measurement_noise_1 >= 1e-06 */
         failing = 9;
     }
     if (!(p[3] <= 10000.0)) {    /* r_max <= 10000 */
@@ -276,11 +276,11 @@ const char *const vse_pf_improved_calibration_checks[VSE_PF_IMPROVED_N_CALIBRATI
     "ay_max <= 1000",
     "r_max > 0",
     "r_max <= 10000",
-    "measurement_noise_1 > 0",
+    "measurement_noise_1 >= 1e-06",
     "measurement_noise_1 <= 1e+12",
-    "measurement_noise_2 > 0",
+    "measurement_noise_2 >= 1e-06",
     "measurement_noise_2 <= 1e+12",
-    "measurement_noise_3 > 0",
+    "measurement_noise_3 >= 1e-06",
     "measurement_noise_3 <= 1e+12",
     "initial_spread_1 > 0",
     "initial_spread_1 <= 1e+12",
