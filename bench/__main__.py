@@ -113,12 +113,14 @@ def main(argv: list[str] | None = None) -> None:
         lines.append(f"| {name} | {ref_us:.1f} | {cas_us:.1f} |")
 
     lines += ["", f"## Fuzzing ({args.fuzz_steps:,} steps per estimator and precision, ASan + UBSan)", "",
-              "| estimator | real | steps | rejected inputs | result |", "|---|---|---|---|---|"]
-    for name in config.estimators:
-        for real in ("double", "float"):
-            report = fuzz_estimator(config, name, real, steps=args.fuzz_steps, seed=2)
-            lines.append(f"| {name} | {real} | {report.steps:,} | {report.rejected:,} | "
-                         f"{'clean' if report.ok else 'FAILED: ' + report.message} |")
+              "| estimator | form | steps | rejected inputs | result |", "|---|---|---|---|---|"]
+    forms = [(name, real, "baked") for name in config.estimators for real in ("double", "float")]
+    forms += [(name, real, "calibratable") for name in ("kf2dof", "pf_improved") for real in ("double", "float")]
+    for name, real, params in forms:
+        report = fuzz_estimator(config, name, real, steps=args.fuzz_steps, seed=2, params=params)
+        form = real if params == "baked" else f"{real}, calibration fuzzed too"
+        lines.append(f"| {name} | {form} | {report.steps:,} | {report.rejected:,} | "
+                     f"{'clean' if report.ok else 'FAILED: ' + report.message} |")
     lines.append("")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     text = "\n".join(lines)
