@@ -270,10 +270,10 @@ def test_verify_explains_a_ziggurat_decision_taken_the_other_way(config, monkeyp
     states, outputs = np.array(states), np.array(outputs)
     case = Case.of("dlc", speed_kmh=80.0)
     monkeypatch.setattr(verify, "DECISION_MARGIN", 0.5)
-    result = verify.against_reference(config, name, case, "float", "baked", inputs, outputs, states)
+    result = verify.against_reference(config, name, case.label, "float", "baked", inputs, outputs, states)
     assert result.ok and result.flips == 1, result
     monkeypatch.setattr(verify, "DECISION_MARGIN", 1e-12)
-    result = verify.against_reference(config, name, case, "float", "baked", inputs, outputs, states)
+    result = verify.against_reference(config, name, case.label, "float", "baked", inputs, outputs, states)
     assert not result.ok
 
 

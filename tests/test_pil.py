@@ -56,7 +56,7 @@ def test_a_changed_value_on_the_target_fails_both_comparisons(config):
     states[500, 0] *= 1.0 + 1e-9          # one state entry, one step, far above double rounding
     wrong = replace(run, states=states)
     assert not pil.against_host(wrong, host, estimator, inputs, board.real, tolerance).ok
-    assert not against_reference(config, "kf2dof", VERIFICATION_SET[0], board.real, "baked", inputs,
+    assert not against_reference(config, "kf2dof", VERIFICATION_SET[0].label, board.real, "baked", inputs,
                                  wrong.outputs, wrong.states).ok
 
 
@@ -89,3 +89,25 @@ def test_every_estimator_runs_under_pil(board, car):
     failures = [(r.reference.estimator, r.reference.case) for r in results if not r.ok]
     assert failures == []
     assert np.isfinite([r.instructions_per_step for r in results]).all()
+
+
+def test_a_recorded_log_replays_on_the_target(tmp_path, vsegen):
+    """`vsegen pil --log` runs the form that will be flashed on a user's log (here a fishhook on
+    the saloon, written without truth as a logger would): equal to the reference and the host build."""
+    vehicle = REPO / "vehicles" / "rwd_saloon.toml"
+    log = tmp_path / "drive.csv"
+    simulated = vsegen("simulate", "fishhook", "--vehicle", vehicle, "--seed", "4", "--no-truth", "--out", log)
+    assert simulated.exit_code == 0
+    result = vsegen("pil", "--vehicle", vehicle, "--log", log, "--estimator", "kf2dof", "--target", "m4f")
+    assert result.exit_code == 0, result.output
+    assert "drive.csv" in result.stdout and "PIL passed" in result.stdout
+
+
+def test_a_log_at_another_rate_is_refused_in_one_line(tmp_path, vsegen):
+    log = tmp_path / "fast.csv"
+    assert vsegen("simulate", "dlc", "--rate", "200", "--out", log).exit_code == 0
+    result = vsegen("pil", "--vehicle", DEFAULT_VEHICLE, "--log", log, "--estimator", "kf2dof", "--target", "m4f")
+    assert result.exit_code != 0
+    expected = "fast.csv: sample time 0.005 s: expected the vehicle file's [estimator] sample_time = 0.01 s"
+    assert expected in result.stderr
+    assert "Traceback" not in result.output

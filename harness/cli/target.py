@@ -18,6 +18,7 @@ from vsegen.harness.cli.common import (
     chosen_estimators,
     console,
     display,
+    read_user_log,
     user_errors,
     vehicle_config,
 )
@@ -38,12 +39,17 @@ from vsegen.harness.sim.scenarios import VERIFICATION_SET
                    "Default: both.")
 @PARAMS_OPTION
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
+@click.option("--log", "log_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Replay this recorded log (CSV or MDF4, at the vehicle file's sample time) instead of the "
+                   "verification scenarios.")
+@click.option("--channels", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Channel map of --log (see docs/integration.md).")
 @user_errors
 def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tuple[str, ...], params: str | None,
-                seed: int) -> None:
+                seed: int, log_path: Path | None, channels: Path | None) -> None:
     """Processor-in-the-loop: run the generated C on an emulated Cortex-M (QEMU) over the
-    verification scenarios; compare with the reference and with the host build of the same
-    precision; report instructions per step, CPU load and stack."""
+    verification scenarios (or a recorded --log); compare with the reference and with the host build
+    of the same precision; report instructions per step, CPU load and stack."""
     from vsegen.harness.target import emulator as pil
 
     missing = pil.available()
@@ -52,6 +58,7 @@ def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tupl
     config = vehicle_config(vehicle)
     params = params or config.codegen["params"]
     names = chosen_estimators(config, estimators)
+    log = _recorded_log(log_path, channels, config) if log_path else None
     failed, costs = 0, Table(title=f"cost on the target, vehicle {config.name}, {1.0 / config.sample_time:g} Hz "
                                    f"(instructions from QEMU -icount; load = instructions x rate / clock, "
                                    f"taking one instruction as one cycle)")
@@ -60,9 +67,15 @@ def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tupl
         costs.add_column(column, justify="left" if column in ("estimator", "target", "real") else "right")
     for board_name in targets or tuple(pil.BOARDS):
         board = pil.BOARDS[board_name]
-        with RunProgress(f"PIL on {board.machine}", {name: len(VERIFICATION_SET) for name in names}) as progress:
-            results = pil.pil(config, names, board_name, params, seed=seed,
-                              on_done=lambda r: progress.done(r.reference.estimator, r.ok))
+        with RunProgress(f"PIL on {board.machine}", {name: 1 if log else len(VERIFICATION_SET)
+                                                     for name in names}) as progress:
+            if log:
+                results = [pil.pil_log(config, name, log, log_path.name, board_name, params) for name in names]
+                for result in results:
+                    progress.done(result.reference.estimator, result.ok)
+            else:
+                results = pil.pil(config, names, board_name, params, seed=seed,
+                                  on_done=lambda r: progress.done(r.reference.estimator, r.ok))
 
         def host_rows(i: int, results=results) -> list[tuple[str, ...]]:
             host = results[i].host
@@ -94,6 +107,16 @@ def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tupl
         sys.exit(1)
     console.print("PIL passed: every run within the verify tolerances of the reference and equal to the host build "
                   "(or within them, step by step)")
+
+
+def _recorded_log(log_path: Path, channels: Path | None, config):
+    """The log to replay on the target, refused in one line unless it is at the generated rate."""
+    log = read_user_log(log_path, channels, config.sample_time, unit_check=config)
+    if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
+        raise UserError(f"{log_path}: sample time {log.sample_time:.6g} s: expected the vehicle file's "
+                        f"[estimator] sample_time = {config.sample_time:g} s, the rate the flashed code runs at "
+                        f"(generate for the log's rate, or resample the log)")
+    return log
 
 
 @click.command()

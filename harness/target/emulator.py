@@ -37,7 +37,7 @@ from vsegen.harness.host.build import WARNING_FLAGS, compile_cached, library_fil
 from vsegen.harness.jobs.pool import ProcessPool
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.target.toolchains import Target, build_for_target, target_for
-from vsegen.harness.verify.compare import Difference, Tolerance, difference, relative_errors
+from vsegen.harness.verify.compare import Difference, Tolerance, as_seen_by, difference, relative_errors
 from vsegen.harness.verify.equivalence import CaseResult, against_reference, case_inputs, prepared
 from vsegen.model.estimator import Estimator, Particles
 from vsegen.model.params import VehicleConfig
@@ -200,12 +200,27 @@ class PilResult:
 def pil_case(config: VehicleConfig, name: str, case: Case, seed: int, board_name: str, params: str) -> PilResult:
     """Build ``name`` for the board (cached), run it on ``case`` under QEMU, compare the run with
     the reference (as `vsegen verify` does) and with the host build of the same precision."""
+    estimator, *_ = prepared(config, name, BOARDS[board_name].real, params)
+    inputs = case_inputs(config, estimator, case, seed, BOARDS[board_name].real)
+    return pil_inputs(config, name, inputs, case.label, board_name, params)
+
+
+def pil_log(config: VehicleConfig, name: str, log, label: str, board_name: str, params: str) -> PilResult:
+    """:func:`pil_case` on a recorded ``log`` (a :class:`~vsegen.harness.logs.table.Log` at the
+    vehicle file's sample time), named ``label`` in the report."""
+    estimator, *_ = prepared(config, name, BOARDS[board_name].real, params)
+    inputs = as_seen_by(BOARDS[board_name].real, log.matrix(estimator.inputs.names))
+    return pil_inputs(config, name, inputs, label, board_name, params)
+
+
+def pil_inputs(config: VehicleConfig, name: str, inputs: np.ndarray, label: str, board_name: str,
+               params: str) -> PilResult:
+    """Run ``name`` on the input rows under QEMU and compare with the reference and the host build."""
     board = BOARDS[board_name]
     estimator, _, host, tolerance = prepared(config, name, board.real, params)
     elf = build(estimator, render(config, name, board.real, params), board)
-    inputs = case_inputs(config, estimator, case, seed, board.real)
     target = run(elf, estimator, inputs, board)
-    return PilResult(board.name, against_reference(config, name, case, board.real, params, inputs, target.outputs,
+    return PilResult(board.name, against_reference(config, name, label, board.real, params, inputs, target.outputs,
                                                    target.states, host_libm=False),
                      against_host(target, host, estimator, inputs, board.real, tolerance),
                      target.instructions_per_step, target.stack_init, target.stack_step)

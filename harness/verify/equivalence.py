@@ -79,7 +79,7 @@ def verify_case(config: VehicleConfig, name: str, case: Case, seed: int, real: s
     estimator, _, compiled, _ = prepared(config, name, real, params)
     inputs = case_inputs(config, estimator, case, seed, real)
     c_out, c_states = compiled.run(inputs)
-    return against_reference(config, name, case, real, params, inputs, c_out, c_states)
+    return against_reference(config, name, case.label, real, params, inputs, c_out, c_states)
 
 
 def case_inputs(config: VehicleConfig, estimator, case: Case, seed: int, real: str) -> np.ndarray:
@@ -88,9 +88,10 @@ def case_inputs(config: VehicleConfig, estimator, case: Case, seed: int, real: s
     return as_seen_by(real, log.matrix(estimator.inputs.names))
 
 
-def against_reference(config: VehicleConfig, name: str, case: Case, real: str, params: str, inputs: np.ndarray,
+def against_reference(config: VehicleConfig, name: str, label: str, real: str, params: str, inputs: np.ndarray,
                       c_out: np.ndarray, c_states: np.ndarray, host_libm: bool = True) -> CaseResult:
-    """A run of ``name``'s C (outputs n x ny, states (n+1) x nx) against the reference: whole
+    """A run of ``name``'s C (outputs n x ny, states (n+1) x nx) on ``inputs`` (the scenario or log
+    ``label``) against the reference: whole
     trajectories and every step from the C's own state. ``host_libm`` False (a run on a target,
     with another libm): a particle filter is checked step by step only, as a float or calibratable
     build is (:func:`_particles_step_by_step`), since an ulp of exp or log parts its trajectory."""
@@ -99,7 +100,7 @@ def against_reference(config: VehicleConfig, name: str, case: Case, real: str, p
     step_scales = np.concatenate([state_scales, estimator.outputs.scales])
     if isinstance(estimator.structure, Particles) and (real == "float" or params == "calibratable"
                                                        or not host_libm):
-        return _particles_step_by_step(estimator, reference, config, case, len(inputs), c_states,
+        return _particles_step_by_step(estimator, reference, config, label, len(inputs), c_states,
                                        c_out, inputs, tolerance, step_scales, real)
     r_out, r_states = run_reference(reference, config, inputs)
     outputs = tuple(
@@ -108,7 +109,7 @@ def against_reference(config: VehicleConfig, name: str, case: Case, real: str, p
     )
     states = difference("state (all entries)", c_states, r_states, tolerance, scale=state_scales)
     stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
-    return CaseResult(name, real, case.label, len(inputs), outputs, states, stepwise)
+    return CaseResult(name, real, label, len(inputs), outputs, states, stepwise)
 
 
 def _check_layouts(config: VehicleConfig, name: str, estimator) -> None:
@@ -157,7 +158,7 @@ allowed to take it the other way: the reference rounds a float build's arithmeti
 and exp and ln correctly; a float libm's expf or logf is off by up to an ulp (6e-8)."""
 
 
-def _particles_step_by_step(estimator, reference, config, case, samples, c_states, c_out, inputs,
+def _particles_step_by_step(estimator, reference, config, label, samples, c_states, c_out, inputs,
                             tolerance, scales, real) -> CaseResult:
     """A particle filter that is not bit-identical to its reference, step by step. Only the
     baked double build on the host is (its trajectory is compared whole); on a target, newlib's
@@ -192,7 +193,7 @@ def _particles_step_by_step(estimator, reference, config, case, samples, c_state
                     for i, s in enumerate(estimator.outputs.signals))
     states = difference("step from the C state", actual, expected[:, :n_state],
                         tolerance, scale=scales[:n_state])
-    return CaseResult(estimator.name, real, case.label, samples, outputs, states, states, flips)
+    return CaseResult(estimator.name, real, label, samples, outputs, states, states, flips)
     # (no whole-trajectory comparison: after the first flip the runs part by design, D5)
 
 
