@@ -257,3 +257,29 @@ def test_a_noise_sigma_the_code_divides_by_has_a_physical_minimum(vehicle_text):
     text = head + "[estimator.pf_improved]" + table
     with pytest.raises(ValueError, match=r"measurement_noise.*>= 1e-06"):
         parse_vehicle(text, "car.toml", "car")
+
+
+def test_the_c_norm_check_draws_its_line_where_the_model_does(config):
+    """The generated check repeats model.bicycle.state_matrix_norm_bound: a rear stiffness that puts
+    the bound just under the limit passes, one just over it fails."""
+    from scipy.optimize import brentq
+
+    from vsegen.model.bicycle import state_matrix_norm_bound
+    from vsegen.model.calibration_checks import dynamics_checks
+
+    estimator = load_tuning_estimator(config, "kf2dof")
+    names = estimator.estimator.parameters.names
+    good = np.array(calibration_values(config, "kf2dof", names))
+    (check,) = dynamics_checks(SCHEMAS["kf2dof"], names, tuple(good))
+
+    def bound_with(stiffness: float) -> float:
+        values = dict(zip(names, good))
+        values["cornering_stiffness_rear"] = stiffness
+        return state_matrix_norm_bound(values, values["vx_min"], values["vx_max"])
+
+    edge = brentq(lambda c: bound_with(c) - check.limit, good[names.index("cornering_stiffness_rear")], 1e8)
+    for stiffness, passes in ((edge * (1 - 1e-9), True), (edge * (1 + 1e-9), False)):
+        calibration = good.copy()
+        calibration[names.index("cornering_stiffness_rear")] = stiffness
+        estimator.set_calibration(calibration)
+        assert (estimator.calibration_check() == 0) == passes, stiffness
