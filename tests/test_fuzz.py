@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vsegen.codegen.generate import render
+from vsegen.codegen.generate import REVIEWED_FORMS, render
 from vsegen.harness.reference import blocks
 from vsegen.harness.reference import kf2dof as reference
 from vsegen.harness.verify.fuzz import fuzz_estimator
@@ -64,8 +64,12 @@ def test_reference_invariants(config, rows):
         assert bool(int(output[3]) & blocks.INVALID_INPUT) == rejected
 
 
-@pytest.mark.parametrize("name", ["kf2dof", "pf_improved"])
-@pytest.mark.parametrize("real", ["double", "float"])
+CALIBRATABLE_FORMS = [(name, real) for name, reviewed in REVIEWED_FORMS.items() for real, params in reviewed
+                      if params == "calibratable"]
+"""The calibratable forms committed to generated/ (kf2dof and pf_improved, double and float)."""
+
+
+@pytest.mark.parametrize("name,real", CALIBRATABLE_FORMS)
 def test_a_million_steps_with_a_fuzzed_calibration(config, name, real):
     """The calibratable forms with their calibration struct fuzzed as well (NaN, +-Inf, 1e38, huge,
     tiny, negative and rescaled values, then mended): never a non-finite state, a failing
