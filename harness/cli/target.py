@@ -89,7 +89,8 @@ def pil_command(vehicle: Path | None, estimators: tuple[str, ...], targets: tupl
         console.print(difference_table(
             f"{board.target.name} under QEMU {board.machine} vs NumPy reference and host build, vehicle "
             f"{config.name}, {board.real}, {params} parameters", [r.reference for r in results], host_rows))
-        explain_differences(board.real, any(r.reference.flips for r in results))
+        explain_differences(board.real, any(r.reference.flips for r in results),
+                            any(r.reference.crossings for r in results))
         failed += sum(not r.ok for r in results)
         for name in names:
             c = pil.cost(config, name, board, params, results)

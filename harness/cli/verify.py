@@ -45,7 +45,7 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
     table = difference_table(f"generated C vs NumPy reference, vehicle {config.name}, "
                               f"T = {config.sample_time} s, {real}, {params} parameters", results)
     console.print(table)
-    explain_differences(real, any(r.flips for r in results))
+    explain_differences(real, any(r.flips for r in results), any(r.crossings for r in results))
     failed = [r for r in results if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
@@ -70,13 +70,16 @@ def difference_table(title: str, results, extra_rows=None) -> Table:
         if result.flips:
             table.add_row(result.estimator, result.case, str(result.samples),
                           "resampling flips", str(result.flips), "-", "explained", "ok")
+        if result.crossings:
+            table.add_row(result.estimator, result.case, str(result.samples),
+                          "decision crossings", str(result.crossings), "-", "explained", "ok")
         for row in (extra_rows(i) if extra_rows else ()):
             table.add_row(result.estimator, result.case, str(result.samples), *row)
         table.add_section()
     return table
 
 
-def explain_differences(real: str, flips: bool) -> None:
+def explain_differences(real: str, flips: bool, crossings: bool = False) -> None:
     """The notes under a difference table."""
     from vsegen.harness.verify.compare import PEAK_FRACTION, TOLERANCES
     from vsegen.harness.verify.equivalence import FLIP_MARGIN
@@ -93,3 +96,8 @@ def explain_differences(real: str, flips: bool) -> None:
                       f"rounding (< {FLIP_MARGIN:g}) of a cumulative weight; each matches the "
                       "reference's step with that point moved across the weight (every step is "
                       "checked from the C's own state)")
+    if crossings:
+        console.print("decision crossings: steps where the C's state and the reference's lay within "
+                      "rounding on two sides of a threshold of the reference's step (proven by "
+                      "bisection: its step jumps between them); the comparison goes on from the "
+                      "reference's step from the C's state (harness/verify/crossings.py)")

@@ -63,6 +63,11 @@ class Difference:
         return self.max_abs == 0.0 if self.integer else self.max_rel <= self.tolerance
 
 
+def peak_guard(run: np.ndarray) -> np.ndarray:
+    """The PEAK_FRACTION x peak |value| guard of each column of ``run`` (rows: samples)."""
+    return np.abs(run).max(axis=0, initial=0.0) * PEAK_FRACTION
+
+
 def difference(name: str, a: np.ndarray, b: np.ndarray, tolerance: Tolerance,
                integer: bool = False, scale=1.0) -> Difference:
     """Worst absolute and guarded relative difference between runs ``a`` and ``b``; ``scale``
@@ -76,10 +81,14 @@ def difference(name: str, a: np.ndarray, b: np.ndarray, tolerance: Tolerance,
                       tolerance.relative, integer)
 
 
-def relative_errors(a: np.ndarray, b: np.ndarray, tolerance: Tolerance, scale=1.0) -> np.ndarray:
-    """The guarded relative difference of every entry of two finite runs (rows: samples)."""
+def relative_errors(a: np.ndarray, b: np.ndarray, tolerance: Tolerance, scale=1.0,
+                    peak: np.ndarray | None = None) -> np.ndarray:
+    """The guarded relative difference of every entry of two finite runs (rows: samples).
+    ``peak`` (per column) replaces the runs' own PEAK_FRACTION x peak |value| guard, e.g. to
+    compare single rows of a run whose peaks are known."""
     magnitude = np.maximum(np.abs(a), np.abs(b))
-    peak = magnitude.max(axis=0, initial=0.0) * PEAK_FRACTION  # per column of a state matrix
+    if peak is None:
+        peak = magnitude.max(axis=0, initial=0.0) * PEAK_FRACTION  # per column of a state matrix
     guard = np.maximum(np.maximum(magnitude, tolerance.floor * np.asarray(scale, float)), peak)
     return np.abs(a - b) / guard
 

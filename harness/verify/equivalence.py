@@ -12,9 +12,9 @@ from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.jobs.pool import ProcessPool
 from vsegen.harness.reference import LONG_DOUBLE, REFERENCES
-from vsegen.harness.reference.loop import run_reference
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.verify.compare import Difference, as_seen_by, difference, for_estimator, relative_errors
+from vsegen.harness.verify.crossings import trajectory_across_decisions
 from vsegen.model.estimator import Particles
 from vsegen.model.estimators import build
 from vsegen.model.params import VehicleConfig
@@ -39,6 +39,10 @@ class CaseResult:
     """Float particle filters: steps whose resampling selected other particles than the
     reference's because a point lay within float rounding of a cumulative weight (explained
     divergences; ``states`` and ``stepwise`` cover every other step)."""
+    crossings: int = 0
+    """Steps where the C's state and the reference's lay within rounding on two sides of a
+    decision of the reference's step, which went on from the C's state
+    (:mod:`harness.verify.crossings`)."""
 
     @property
     def ok(self) -> bool:
@@ -102,14 +106,15 @@ def against_reference(config: VehicleConfig, name: str, label: str, real: str, p
                                                        or not host_libm):
         return _particles_step_by_step(estimator, reference, config, label, len(inputs), c_states,
                                        c_out, inputs, tolerance, step_scales, real)
-    r_out, r_states = run_reference(reference, config, inputs)
+    r_out, r_states, crossings = trajectory_across_decisions(reference, config, inputs, c_states,
+                                                             tolerance, state_scales)
     outputs = tuple(
         difference(s.name, c_out[:, i], r_out[:, i], tolerance, s.integer, s.scale)
         for i, s in enumerate(estimator.outputs.signals)
     )
     states = difference("state (all entries)", c_states, r_states, tolerance, scale=state_scales)
     stepwise = _stepwise(reference, config, c_states, c_out, inputs, tolerance, step_scales)
-    return CaseResult(name, real, label, len(inputs), outputs, states, stepwise)
+    return CaseResult(name, real, label, len(inputs), outputs, states, stepwise, crossings=crossings)
 
 
 def _check_layouts(config: VehicleConfig, name: str, estimator) -> None:
