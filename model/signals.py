@@ -94,6 +94,8 @@ TRUTH = (
     Signal("r_ref", "rad/s", "reference yaw rate, positive counter-clockwise"),
     Signal("mu", "-", "road friction coefficient"),
     Signal("off_course", "-", "1 from where a simulated run touched a cone or spun (latched), else 0"),
+    Signal("bank_ref", "rad", "road bank (cross slope) under the car, positive with the left edge up"),
+    Signal("grade_ref", "rad", "road grade under the car, positive uphill"),
 )
 """Optional ground truth, used only for scoring and plotting."""
 

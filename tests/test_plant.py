@@ -103,7 +103,7 @@ def test_roll_mode_has_the_configured_frequency_and_damping(config):
     jacobian = ca.Function("j", [x, u], [ca.jacobian(equations(config.vehicle, params, x, u)[0], x)])
     state = build_plant(config.vehicle, params, 1e-3).initial_state(20.0)
     roll = [STATE.index("phi"), STATE.index("phi_rate")]
-    block = np.asarray(jacobian(state, [0.0, 0, 0, 0, 0, 1.0]))[np.ix_(roll, roll)]
+    block = np.asarray(jacobian(state, [0.0, 0, 0, 0, 0, 1.0, 0, 0, 0]))[np.ix_(roll, roll)]
     poles = np.linalg.eigvals(block)
     assert np.abs(poles) == pytest.approx(2 * np.pi * 1.4, rel=1e-9)
     assert -poles.real / np.abs(poles) == pytest.approx(0.35, rel=1e-9)

@@ -140,7 +140,7 @@ def test_accelerometers_read_the_specific_force_of_the_rotated_body():
         yaw = Rotation.from_euler("z", psi)
         body = Rotation.from_euler("ZYX", [psi, theta, phi])
         world = yaw.apply([ax, ay, 0.0]) + [0.0, 0.0, GRAVITY]
-        np.testing.assert_allclose(sensors.specific_force(ax, ay, phi, theta),
+        np.testing.assert_allclose(sensors.specific_force(ax, ay, GRAVITY, phi, theta),
                                    body.inv().apply(world), atol=1e-12)
 
 

@@ -9,6 +9,7 @@ path is the centre line, with half-cosine transitions over the change sections.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -84,3 +85,43 @@ def lane_changes(starts: list[float], transitions: list[float], hold: float, veh
                   Gate(up_end, down_start, offset, 1.2 * w + 0.25),
                   Gate(end, end + 15.0, 0.0, 1.3 * w + 0.25)]
     return Course(tuple(knots), tuple(gates), end + 15.0)
+
+
+@dataclass(frozen=True)
+class Bend:
+    """A left-hand bend (a highway curve): ``lead_in`` m straight along x, a clothoid whose
+    curvature rises linearly to 1 / ``radius`` over ``transition`` m, then the arc. No cones.
+    The centre line y(x) is tabulated from the curvature along the path (heading stays below
+    90 degrees over ``length`` m of path)."""
+
+    lead_in: float
+    transition: float
+    radius: float
+    length: float
+
+    def curvature(self, s) -> np.ndarray:
+        """Path curvature (1/m, positive left) at path distance ``s`` (m)."""
+        return np.clip((np.asarray(s, float) - self.lead_in) / self.transition, 0.0, 1.0) / self.radius
+
+    def centre_line(self, x) -> np.ndarray:
+        """Target lateral position y (m, positive left) at x (m)."""
+        xs, ys = _bend_table(self)
+        return np.interp(x, xs, ys)
+
+    def outside(self, x: np.ndarray, y: np.ndarray, vehicle_width: float) -> np.ndarray:
+        return np.zeros(len(x), dtype=bool)
+
+
+@lru_cache(maxsize=8)
+def _bend_table(bend: Bend, step: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) of ``bend``'s centre line every ``step`` m of path, heading integrated from the
+    curvature (trapezoid), position from the heading."""
+    s = np.arange(0.0, bend.length + step, step)
+    kappa = bend.curvature(s)
+    heading = np.concatenate(([0.0], np.cumsum(0.5 * (kappa[1:] + kappa[:-1]) * step)))
+    if heading.max() >= 0.45 * np.pi:
+        raise ValueError(f"a bend of radius {bend.radius} m turns past 80 degrees within "
+                         f"{bend.length:.0f} m: expected a shorter drive or a larger radius")
+    x = np.concatenate(([0.0], np.cumsum(0.5 * (np.cos(heading[1:]) + np.cos(heading[:-1])) * step)))
+    y = np.concatenate(([0.0], np.cumsum(0.5 * (np.sin(heading[1:]) + np.sin(heading[:-1])) * step)))
+    return x, y

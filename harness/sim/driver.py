@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vsegen.harness.sim.two_track import AIR_DENSITY, GRAVITY, static_wheel_loads
+from vsegen.harness.sim.road import FLAT, Road
+from vsegen.harness.sim.two_track import AIR_DENSITY, GRAVITY, STATE, static_wheel_loads
 from vsegen.harness.sim.tyre import cornering_stiffness
 
 BANDWIDTH = 2.0
@@ -20,7 +21,8 @@ STEER_LAG = 0.05
 """First-order lag of the driver's steering (s)."""
 STEER_LIMIT = 0.5
 """Largest front road-wheel angle the driver commands (rad)."""
-STATE_X, STATE_Y, STATE_PSI, STATE_VX, STATE_VY = 0, 1, 2, 3, 4
+STATE_X, STATE_Y, STATE_PSI, STATE_VX, STATE_VY, STATE_DISTANCE = (
+    STATE.index(name) for name in ("X", "Y", "psi", "vx", "vy", "distance"))
 """Indices of the plant state the drivers read (harness.sim.two_track.STATE)."""
 
 
@@ -85,6 +87,8 @@ class SpeedHold:
     kp: float = 1.5
     ki: float = 0.5
     integral: float = field(default=0.0)
+    road: Road = FLAT
+    """The road under the car: the driver feels the grade and feeds forward m g sin(grade)."""
 
     def __call__(self, t: float, state: np.ndarray) -> np.ndarray:
         """Torques (N*m) at fl, fr, rl, rr."""
@@ -92,8 +96,9 @@ class SpeedHold:
         error = self.target(t) - vx
         self.integral += error * self.dt
         m, radius = self.vehicle["mass"], self.vehicle["wheel_radius"]
+        grade = self.road(state[STATE_DISTANCE])[1]
         drag = 0.5 * AIR_DENSITY * self.plant["drag_area"] * vx * abs(vx) + \
-            self.plant["rolling_resistance"] * m * GRAVITY
+            self.plant["rolling_resistance"] * m * GRAVITY + m * GRAVITY * np.sin(grade)
         torque = (m * (self.kp * error + self.ki * self.integral) + drag) * radius
         if torque >= 0:
             front = self.plant["driven_axle"] == "front"

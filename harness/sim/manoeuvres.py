@@ -15,7 +15,9 @@ from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.logs.table import SPIN_SIDESLIP, Log
 from vsegen.harness.sim import course as courses
 from vsegen.harness.sim import sensor_model as sensors
+from vsegen.harness.sim.disturbances import NONE, Disturbances
 from vsegen.harness.sim.driver import PathFollower, SpeedHold, driver_view
+from vsegen.harness.sim.road import FLAT, Road, slope_angle
 from vsegen.harness.sim.simulate import FrictionProfile, Run, simulate, substeps
 from vsegen.harness.sim.two_track import GRAVITY
 from vsegen.model.params import VehicleConfig
@@ -29,7 +31,7 @@ MIN_DLC_DURATION = 10.0
 
 
 def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-        outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None) -> Log:
+        outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None, **disturbances) -> Log:
     """ISO 3888-1 double lane change at constant ``speed_kmh`` on friction ``mu``, path-following
     driver. ``outliers``: seed 000 Fig. 6b gyro spikes; ``bias``: Table 2 sensor biases on;
     ``yaw_moment`` (N*m): rear torque-vectoring pulses (:class:`YawMomentPulses`), logged as
@@ -38,12 +40,12 @@ def dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: 
     course = courses.iso_dlc(LEAD_IN, _width(config))
     duration = max((course.length + RUN_OUT) / speed, MIN_DLC_DURATION)
     return _drive(config, rate_hz, seed, course, speed, duration, _constant(mu), outliers, bias,
-                  progress, YawMomentPulses(yaw_moment))
+                  progress, YawMomentPulses(yaw_moment), Disturbances.of(**disturbances))
 
 
 def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
                    mu_sequence: str, switch_times: str, switch_by: str, duration: float,
-                   outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None) -> Log:
+                   outliers: bool, bias: bool, yaw_moment: float = 0.0, progress=None, **disturbances) -> Log:
     """Seed 000 scenario B: three double lane changes back to back at constant speed, the road
     friction stepping through ``mu_sequence`` (comma-separated) at ``switch_times`` (s, or m of
     travelled distance when ``switch_by`` is "distance"); one DLC per friction segment.
@@ -63,22 +65,23 @@ def continuous_dlc(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: 
     course = courses.lane_changes([x + LEAD_IN for x in segment_starts], transitions, 25.0,
                                   _width(config))
     return _drive(config, rate_hz, seed, course, speed, duration, profile, outliers, bias, progress,
-                  YawMomentPulses(yaw_moment))
+                  YawMomentPulses(yaw_moment), Disturbances.of(**disturbances))
 
 
 def step_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-               delta: float, t_step: float, duration: float, bias: bool, progress=None) -> Log:
+               delta: float, t_step: float, duration: float, bias: bool, progress=None, **disturbances) -> Log:
     """Seed 001's step steer: front road-wheel angle to ``delta`` rad at ``t_step`` s (ramped over
     0.1 s, *assumption*: a true step is not physical), speed held."""
     def steer(t: float, state: np.ndarray) -> float:
         return delta * float(np.clip((t - t_step) / 0.1, 0.0, 1.0))
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress,
+                      disturbances=Disturbances.of(**disturbances))
 
 
 def sine_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
                amplitude: float, frequency: float, duration: float, bias: bool,
-               yaw_moment: float = 0.0, progress=None) -> Log:
+               yaw_moment: float = 0.0, progress=None, **disturbances) -> Log:
     """Seed 003's sine steer: delta = amplitude sin(2 pi f (t - 1)) after 1 s straight, speed held
     (amplitude 0.02 rad and 0.5 Hz are *assumptions*: the seed gives none); ``yaw_moment`` as in
     :func:`dlc`."""
@@ -86,11 +89,11 @@ def sine_steer(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: floa
         return amplitude * np.sin(2 * np.pi * frequency * (t - 1.0)) if t > 1.0 else 0.0
 
     return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress,
-                      YawMomentPulses(yaw_moment))
+                      YawMomentPulses(yaw_moment), Disturbances.of(**disturbances))
 
 
 def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
-             amplitude: float, duration: float, bias: bool, progress=None) -> Log:
+             amplitude: float, duration: float, bias: bool, progress=None, **disturbances) -> Log:
     """Seed 002's fishhook (NHTSA profile, reconstructed): after 1 s straight, steer to
     +amplitude in 0.25 s, hold 0.25 s, to -amplitude in 0.5 s, hold 3 s, back to 0 in 0.5 s."""
     times = np.array([0.0, 1.0, 1.25, 1.5, 2.0, 5.0, 5.5])
@@ -99,19 +102,22 @@ def fishhook(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
     def steer(t: float, state: np.ndarray) -> float:
         return float(np.interp(t, times, values))
 
-    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress,
+                      disturbances=Disturbances.of(**disturbances))
 
 
 def hil_sine(config: VehicleConfig, rate_hz: float, seed: int, mu: float, v_start: float,
              v_end: float, speed_tau: float, frequency: float, ay_start: float, ay_end: float,
-             duration: float, outliers: bool, bias: bool, progress=None) -> Log:
+             duration: float, outliers: bool, bias: bool, progress=None, **disturbances) -> Log:
     """Seed 000 scenario C (HIL with a driver), reconstructed: the pedal is held, so vx rises
     from ``v_start`` towards ``v_end`` (m/s) as v_end - (v_end - v_start) exp(-t / speed_tau);
     the steering is a sine of ``frequency`` Hz whose amplitude grows so that the steady-state
     lateral acceleration it asks for rises linearly from ``ay_start`` to ``ay_end`` times mu g
     over ``duration`` s (*assumptions*: the paper shows the driver's input only in figures).
     The steer angle for a demand a_y at speed vx is a_y l (1 + K_s vx^2) / vx^2."""
-    vehicle = driver_view(config)
+    chosen = Disturbances.of(**disturbances)
+    truth = chosen.truth_car(config)
+    vehicle = driver_view(truth)
     l = vehicle["cg_to_front_axle"] + vehicle["cg_to_rear_axle"]
     ks = vehicle["mass"] / l**2 * (vehicle["cg_to_rear_axle"] / vehicle["cornering_stiffness_front"]
                                    - vehicle["cg_to_front_axle"] / vehicle["cornering_stiffness_rear"])
@@ -127,10 +133,74 @@ def hil_sine(config: VehicleConfig, rate_hz: float, seed: int, mu: float, v_star
         return demand * l * (1 + ks * vx**2) / vx**2 * np.sin(2 * np.pi * frequency * (t - 1.0))
 
     dt = 1.0 / (rate_hz * substeps(rate_hz))
-    hold = SpeedHold(config.vehicle, config.plant, target, dt)
-    run = simulate(config, rate_hz, duration, v_start, steer, hold, _constant(mu),
-                   progress=progress)
-    return _log(config, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool))
+    hold = SpeedHold(truth.vehicle, truth.plant, target, dt, road=chosen.road())
+    run = simulate(truth, rate_hz, duration, v_start, steer, hold, _constant(mu),
+                   progress=progress, road=chosen.road())
+    return _log(truth, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool),
+                disturbances=chosen)
+
+
+def banked_curve(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
+                 radius: float, superelevation: float, duration: float, outliers: bool, bias: bool,
+                 progress=None, **disturbances) -> Log:
+    """A highway bend: 60 m straight, then a left-hand clothoid over 100 m into an arc of
+    ``radius`` m, at constant ``speed_kmh``; the road's superelevation (% toward the inside,
+    the outer edge up) runs off linearly along the clothoid (bank -atan(e/100)), as highway
+    design does (*assumption*: RAA/AASHTO-style runoff over the transition)."""
+    bend = courses.Bend(60.0, 100.0, radius, speed_kmh / 3.6 * duration + 20.0)
+    road = Road((0.0, 60.0, 160.0), (0.0, 0.0, -slope_angle(superelevation)), (0.0, 0.0, 0.0))
+    return _drive(config, rate_hz, seed, bend, speed_kmh / 3.6, duration, _constant(mu), outliers,
+                  bias, progress, disturbances=Disturbances.of(**disturbances), road=road)
+
+
+def crossfall_lane_change(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
+                          mu: float, crossfall: float, duration: float, outliers: bool, bias: bool,
+                          progress=None, **disturbances) -> Log:
+    """Lane changes on a straight road with ``crossfall`` % (drainage to the right, the left
+    edge up): a 3.5 m change to the left over 60 m, 60 m in that lane, and back over 60 m."""
+    course = courses.lane_changes([LEAD_IN], [60.0], 60.0, _width(config))
+    road = Road.constant(bank=slope_angle(crossfall))
+    return _drive(config, rate_hz, seed, course, speed_kmh / 3.6, duration, _constant(mu), outliers,
+                  bias, progress, disturbances=Disturbances.of(**disturbances), road=road)
+
+
+def downhill_brake_curve(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float,
+                         end_speed_kmh: float, deceleration: float, mu: float, radius: float,
+                         downhill: float, duration: float, outliers: bool, bias: bool, progress=None,
+                         **disturbances) -> Log:
+    """Braking into a left-hand bend of ``radius`` m on a ``downhill`` % slope:
+    from ``speed_kmh`` down to ``end_speed_kmh`` at ``deceleration`` m/s^2 from t = 2 s, the
+    clothoid starting at 40 m."""
+    ramp = SpeedRamp(speed_kmh / 3.6, end_speed_kmh / 3.6, 2.0, deceleration)
+    travel = sum(ramp(t) for t in np.arange(0.0, duration, 0.01)) * 0.01
+    bend = courses.Bend(40.0, 40.0, radius, travel + 20.0)
+    road = Road.constant(grade=-slope_angle(downhill))
+    return _drive(config, rate_hz, seed, bend, speed_kmh / 3.6, duration, _constant(mu), outliers,
+                  bias, progress, disturbances=Disturbances.of(**disturbances), road=road,
+                  target=ramp)
+
+
+def crest_dip(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float, mu: float,
+              peak_grade: float, amplitude: float, frequency: float, duration: float, outliers: bool,
+              bias: bool, progress=None, **disturbances) -> Log:
+    """A straight road over a crest and through a dip at ``speed_kmh``: the grade rises to
+    +``peak_grade`` % over 100 m, falls to -``peak_grade`` % over 200 m (the crest) and back to 0 over 100 m
+    (the dip), from 50 m on; gentle sine steering of ``amplitude`` rad at ``frequency`` Hz keeps
+    the car turning (*assumption*: a country road)."""
+    g = slope_angle(peak_grade)
+    chosen = Disturbances.of(**disturbances)
+    road = chosen.road(Road((0.0, 50.0, 150.0, 350.0, 450.0), (0.0,) * 5, (0.0, 0.0, g, -g, 0.0)))
+
+    def steer(t: float, state: np.ndarray) -> float:
+        return amplitude * np.sin(2 * np.pi * frequency * t)
+
+    truth = chosen.truth_car(config)
+    dt = 1.0 / (rate_hz * substeps(rate_hz))
+    hold = SpeedHold(truth.vehicle, truth.plant, lambda t: speed_kmh / 3.6, dt, road=road)
+    run = simulate(truth, rate_hz, duration, speed_kmh / 3.6, steer, hold, _constant(mu),
+                   progress=progress, road=road)
+    return _log(truth, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool),
+                disturbances=chosen)
 
 
 def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
@@ -205,6 +275,21 @@ deterministic, only the sensor noise depends on the seed, so Monte-Carlo runs si
 
 
 @dataclass(frozen=True)
+class SpeedRamp:
+    """A target speed (m/s): ``start`` until ``t0`` s, then changing by ``rate`` m/s^2 toward
+    ``end``, then ``end``."""
+
+    start: float
+    end: float
+    t0: float
+    rate: float
+
+    def __call__(self, t: float) -> float:
+        change = max(t - self.t0, 0.0) * self.rate
+        return max(self.start - change, self.end) if self.end < self.start else min(self.start + change, self.end)
+
+
+@dataclass(frozen=True)
 class YawMomentPulses:
     """A direct yaw moment (N*m, positive counter-clockwise) from rear torque vectoring: pulses of
     alternating sign, ``amplitude`` for 0.6 s every 2 s from t = 1.5 s (*assumption*: a
@@ -235,39 +320,56 @@ class YawMomentPulses:
         return torques
 
 
-def _truth_run(config, rate_hz, course, speed, duration, mu, yaw_moment, progress) -> Run:
-    """The plant driven along ``course`` at ``speed`` (m/s) by the path follower."""
+def _truth_run(config, rate_hz, course, speed, duration, mu, yaw_moment, progress, road, target=None) -> Run:
+    """The plant driven along ``course`` at ``speed`` (m/s; or the speed profile ``target`` of
+    time) by the path follower, on ``road``."""
     dt = 1.0 / (rate_hz * substeps(rate_hz))
     steer = PathFollower(driver_view(config), course.centre_line, dt)
-    hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
+    hold = SpeedHold(config.vehicle, config.plant, target or (lambda t: speed), dt, road=road)
     return simulate(config, rate_hz, duration, speed, steer, yaw_moment.torques(config.vehicle, hold), mu,
-                    progress=progress)
+                    progress=progress, road=road)
 
 
 def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, progress,
-           yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
-    key = (config.truth_fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment)
-    run = RUNS.get(key, lambda: _truth_run(config, rate_hz, course, speed, duration, mu, yaw_moment, progress))
-    hit = course.outside(run.state("X"), run.state("Y"), _width(config))
-    return _log(config, run, seed, outliers, bias, hit, yaw_moment)
+           yaw_moment: YawMomentPulses = YawMomentPulses(),
+           disturbances: Disturbances = NONE, road: Road | None = None,
+           target: SpeedRamp | None = None) -> Log:
+    """The path follower's drive along ``course``, on ``road`` (default: the disturbances'
+    constant bank and grade), logged with the disturbances."""
+    truth = disturbances.truth_car(config)
+    road = disturbances.road(road or FLAT)
+    key = (truth.truth_fingerprint(), rate_hz, course, speed, duration, mu, yaw_moment, road, target)
+    run = RUNS.get(key, lambda: _truth_run(truth, rate_hz, course, speed, duration, mu, yaw_moment,
+                                           progress, road, target))
+    hit = course.outside(run.state("X"), run.state("Y"), _width(truth))
+    return _log(truth, run, seed, outliers, bias, hit, yaw_moment, disturbances)
 
 
 def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress,
-               yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
+               yaw_moment: YawMomentPulses = YawMomentPulses(),
+               disturbances: Disturbances = NONE) -> Log:
+    truth = disturbances.truth_car(config)
     dt = 1.0 / (rate_hz * substeps(rate_hz))
-    hold = SpeedHold(config.vehicle, config.plant, lambda t: speed, dt)
-    run = simulate(config, rate_hz, duration, speed, steer, yaw_moment.torques(config.vehicle, hold),
-                   _constant(mu), progress=progress)
-    return _log(config, run, seed, False, bias, np.zeros(len(run.t), dtype=bool), yaw_moment)
+    road = disturbances.road()
+    hold = SpeedHold(truth.vehicle, truth.plant, lambda t: speed, dt, road=road)
+    run = simulate(truth, rate_hz, duration, speed, steer, yaw_moment.torques(truth.vehicle, hold),
+                   _constant(mu), progress=progress, road=road)
+    return _log(truth, run, seed, False, bias, np.zeros(len(run.t), dtype=bool), yaw_moment, disturbances)
 
 
 def _log(config: VehicleConfig, run: Run, seed: int, outliers: bool, bias: bool,
-         hit_cone: np.ndarray, yaw_moment: YawMomentPulses = YawMomentPulses()) -> Log:
+         hit_cone: np.ndarray, yaw_moment: YawMomentPulses = YawMomentPulses(),
+         disturbances: Disturbances = NONE) -> Log:
     """The log of ``run``; it has an ``mz`` column (the commanded moment) only when a direct yaw
-    moment was applied (``mz`` is an optional column)."""
+    moment was applied (``mz`` is an optional column), and ``bank`` and ``grade`` columns (truth,
+    rad) when the road is not flat."""
     spun = np.maximum.accumulate(np.abs(run.beta) > SPIN_SIDESLIP)
     moment = ({"mz": np.array([yaw_moment(t) for t in run.t])} if yaw_moment.amplitude else {})
-    columns = {"t": run.t, **sensors.measure(config, run, seed, bias, outliers), **moment,
+    measured = sensors.measure(config, run, seed, bias, outliers, disturbances.mounting)
+    measured = disturbances.apply(measured, run.t, seed) if disturbances.options else measured
+    road = ({"bank_ref": run.input("bank"), "grade_ref": run.input("grade")}
+            if np.any(run.input("bank")) or np.any(run.input("grade")) else {})
+    columns = {"t": run.t, **measured, **moment, **road,
                "beta_ref": run.beta, "vx_ref": run.state("vx"), "vy_ref": run.state("vy"),
                "r_ref": run.state("r"), "mu": run.input("mu"),
                "off_course": (hit_cone | spun).astype(float)}

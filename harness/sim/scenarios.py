@@ -14,6 +14,7 @@ from typing import Any
 from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.logs.table import Log
 from vsegen.harness.sim import manoeuvres
+from vsegen.harness.sim.disturbances import OPTIONS as DISTURBANCE_OPTIONS
 from vsegen.harness.sim.log_cache import cached_log, log_key
 from vsegen.model.params import ParameterError, VehicleConfig
 
@@ -26,7 +27,7 @@ class Scenario:
     defaults: dict[str, Any] = field(default_factory=dict)
 
 
-_NOISE = {"bias": False}
+_NOISE = {"bias": False, **DISTURBANCE_OPTIONS}
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
     Scenario("dlc", "ISO 3888-1 double lane change, path-following driver, speed held",
              manoeuvres.dlc, {"speed_kmh": 80.0, "mu": 1.0, "outliers": False, **_NOISE,
@@ -48,6 +49,22 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
              "of growing amplitude", manoeuvres.hil_sine,
              {"mu": 0.85, "v_start": 12.5, "v_end": 30.0, "speed_tau": 15.0, "frequency": 0.25,
               "ay_start": 0.1, "ay_end": 0.7, "duration": 40.0, "outliers": False, **_NOISE}),
+    Scenario("banked_curve", "highway bend R 400 m at 100 km/h, 6 % superelevation run off along "
+             "the clothoid", manoeuvres.banked_curve,
+             {"speed_kmh": 100.0, "mu": 1.0, "radius": 400.0, "superelevation": 6.0, "duration": 14.0,
+              "outliers": False, **_NOISE}),
+    Scenario("crossfall_lane_change", "lane change and back at 100 km/h on a 2.5 % crossfall",
+             manoeuvres.crossfall_lane_change,
+             {"speed_kmh": 100.0, "mu": 1.0, "crossfall": 2.5, "duration": 10.0, "outliers": False,
+              **_NOISE}),
+    Scenario("downhill_brake_curve", "braking 90 -> 50 km/h at 3 m/s^2 into a bend of R 120 m on a "
+             "6 % downhill", manoeuvres.downhill_brake_curve,
+             {"speed_kmh": 90.0, "end_speed_kmh": 50.0, "deceleration": 3.0, "mu": 1.0,
+              "radius": 120.0, "downhill": 6.0, "duration": 10.0, "outliers": False, **_NOISE}),
+    Scenario("crest_dip", "straight over a crest and through a dip (grade 0 -> 8 -> -8 -> 0 %) at "
+             "90 km/h, gentle sine steering", manoeuvres.crest_dip,
+             {"speed_kmh": 90.0, "mu": 1.0, "peak_grade": 8.0, "amplitude": 0.01, "frequency": 0.2,
+              "duration": 22.0, "outliers": False, **_NOISE}),
     Scenario("low_speed", "slow down to a stop, reverse briefly, drive off again (low-speed hold)",
              manoeuvres.low_speed),
     Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range samples in every input",

@@ -22,9 +22,9 @@ All random draws come from one seeded generator: the same seed gives the same lo
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from vsegen.harness.sim.simulate import Run
-from vsegen.harness.sim.two_track import GRAVITY
 from vsegen.model.params import ParameterError, VehicleConfig
 
 GYRO_OUTLIERS = ((2.0, 0.47), (7.0, 0.84))
@@ -32,8 +32,10 @@ GYRO_OUTLIERS = ((2.0, 0.47), (7.0, 0.84))
 WHEELS = ("fl", "fr", "rl", "rr")
 
 
-def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bool) -> dict:
-    """The measured log columns (docs/signals.md) of ``run``."""
+def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bool,
+            mounting: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> dict:
+    """The measured log columns (docs/signals.md) of ``run``, from an IMU mounted on the body
+    with the misalignment ``mounting`` (roll, pitch, yaw in rad: :func:`misaligned`)."""
     if config.sensors is None:
         raise ParameterError(f"{config.source}: no [sensors] table: expected the sensor model to "
                              f"simulate (see vehicles/c_class.toml)")
@@ -41,13 +43,16 @@ def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bo
     rng = np.random.default_rng(seed)
     n = len(run.t)
     phi, theta, r_true = run.truth_of("roll"), run.truth_of("pitch"), run.state("r")
-    ax, ay, _ = specific_force(run.truth_of("ax"), run.truth_of("ay"), phi, theta)
-    lever_x, lever_y, _ = lever_arm_acceleration(
-        np.asarray(plant["sensor_position"]),
-        np.stack([run.truth_of("roll_rate"), run.truth_of("pitch_rate"), r_true]),
+    ax, ay, az = specific_force(run.truth_of("ax"), run.truth_of("ay"), run.truth_of("az"), phi, theta)
+    rates = np.stack([run.truth_of("roll_rate"), run.truth_of("pitch_rate"), r_true])
+    lever = lever_arm_acceleration(
+        np.asarray(plant["sensor_position"]), rates,
         np.stack([run.truth_of("roll_acceleration"), np.zeros(n), run.truth_of("yaw_acceleration")]))
-    ax, ay = ax + lever_x, ay + lever_y
-    r = body_yaw_rate(r_true, phi, theta, run.truth_of("pitch_rate"))
+    force = np.stack([ax, ay, az]) + lever
+    body_rates = np.stack([rates[0], rates[1], body_yaw_rate(r_true, phi, theta, rates[1])])
+    if any(mounting):
+        force, body_rates = misaligned(force, mounting), misaligned(body_rates, mounting)
+    ax, ay, r = force[0], force[1], body_rates[2]
     ax += rng.normal(0.0, sensors["accel_noise"], n) + (sensors["accel_bias"] if bias else 0.0)
     ay += rng.normal(0.0, sensors["accel_noise"], n) + (sensors["accel_bias"] if bias else 0.0)
     r += rng.normal(0.0, sensors["gyro_noise"], n) + (sensors["gyro_bias"] if bias else 0.0)
@@ -60,12 +65,21 @@ def measure(config: VehicleConfig, run: Run, seed: int, bias: bool, outliers: bo
     return {"delta": run.input("delta"), "vx": vx, "ax": ax, "ay": ay, "r": r, **omegas}
 
 
-def specific_force(ax, ay, roll, pitch):
-    """(f_x, f_y, f_z) in body axes (m/s^2) of a body at ``roll``, ``pitch`` (rad) whose CG
-    accelerates by ``ax``, ``ay`` in the yaw-aligned horizontal frame: Rx^T Ry^T [ax, ay, g]."""
-    u = ax * np.cos(pitch) - GRAVITY * np.sin(pitch)
-    w = ax * np.sin(pitch) + GRAVITY * np.cos(pitch)
+def specific_force(ax, ay, az, roll, pitch):
+    """(f_x, f_y, f_z) in body axes (m/s^2) of a body at ``roll``, ``pitch`` (rad, on its
+    suspension) whose CG has the specific forces ``ax``, ``ay``, ``az`` along the road plane's
+    axes (harness.sim.two_track; az = g on a level road): Rx^T Ry^T [ax, ay, az]."""
+    u = ax * np.cos(pitch) - az * np.sin(pitch)
+    w = ax * np.sin(pitch) + az * np.cos(pitch)
     return u, ay * np.cos(roll) + w * np.sin(roll), -ay * np.sin(roll) + w * np.cos(roll)
+
+
+def misaligned(vectors: np.ndarray, mounting: tuple[float, float, float]) -> np.ndarray:
+    """Body-axis ``vectors`` (3 x n) as a sensor rotated on the body by (roll, pitch, yaw)
+    ``mounting`` (rad, z-y-x like the body's attitude) reads them: R_m^T v."""
+    roll, pitch, yaw = mounting
+    rotation = Rotation.from_euler("ZYX", [yaw, pitch, roll])
+    return rotation.inv().apply(vectors.T).T
 
 
 def body_yaw_rate(r, roll, pitch, pitch_rate):

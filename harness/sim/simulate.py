@@ -9,9 +9,11 @@ from functools import lru_cache
 
 import numpy as np
 
+from vsegen.harness.sim.road import FLAT, Road
 from vsegen.harness.sim.two_track import INPUT, STATE, TRUTH, Plant, build_plant
 from vsegen.model.params import ParameterError, VehicleConfig
 
+DISTANCE = STATE.index("distance")
 PLANT_RATE = 1000.0
 """Minimum plant integration rate (Hz); the plant runs at an integer multiple of the log rate."""
 
@@ -83,10 +85,10 @@ def simulate(config: VehicleConfig, rate_hz: float, duration: float, speed: floa
              steer: Callable[[float, np.ndarray], float],
              torques: Callable[[float, np.ndarray], np.ndarray],
              mu: Callable[[float, np.ndarray], float], y0: float = 0.0,
-             progress: Callable[[float], None] | None = None) -> Run:
+             progress: Callable[[float], None] | None = None, road: Road = FLAT) -> Run:
     """Integrate from straight running at ``speed`` (m/s) for ``duration`` s. ``steer``,
-    ``torques`` and ``mu`` are called every plant step with (t, state); ``progress`` (if given)
-    with the fraction done, every simulated second."""
+    ``torques`` and ``mu`` are called every plant step with (t, state), ``road`` with the
+    distance travelled; ``progress`` (if given) with the fraction done, every simulated second."""
     plant = plant_for(config, rate_hz)
     sub = substeps(rate_hz)
     samples = int(round(duration * rate_hz)) + 1
@@ -96,7 +98,8 @@ def simulate(config: VehicleConfig, rate_hz: float, duration: float, speed: floa
     truth = np.zeros((samples, len(TRUTH)))
     for k in range(samples * sub):
         t = k * plant.dt
-        u = np.concatenate(([steer(t, state)], torques(t, state), [mu(t, state)]))
+        u = np.concatenate(([steer(t, state)], torques(t, state), [mu(t, state)],
+                            road(state[DISTANCE])))
         if k % sub == 0:
             states[k // sub], inputs[k // sub], truth[k // sub] = state, u, plant.truth(state, u)
             if progress and (k // sub) % int(rate_hz) == 0:

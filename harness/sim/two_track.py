@@ -1,15 +1,26 @@
 """Two-track vehicle model: planar motion, four wheel spins, lagged load transfer, body roll (a
 damped roll mode or quasi-static) and quasi-static pitch for the sensors on the body.
 
-State (14): X, Y (m, world), psi (rad), vx, vy (m/s, body), r (rad/s), omega_fl, omega_fr, omega_rl,
-omega_rr (rad/s), ax_lt, ay_lt (m/s^2, the accelerations the load transfer follows), phi (rad),
-phi_rate (rad/s): roll angle (ISO: positive with the left side up, i.e. outward in a left turn).
-Input (6): delta (rad, both front wheels), T_fl, T_fr, T_rl, T_rr (N*m, drive minus brake torque at
-each wheel), mu (road friction).
+State (15): X, Y (m, world), psi (rad), vx, vy (m/s, body), r (rad/s, about the road's normal),
+omega_fl, omega_fr, omega_rl, omega_rr (rad/s), ax_lt, ay_lt (m/s^2, the accelerations the load
+transfer follows), phi (rad), phi_rate (rad/s): the body's roll on its suspension (ISO: positive
+with the left side up, i.e. outward in a left turn), distance (m travelled, sqrt(vx^2 + vy^2)
+integrated: where the road profile is read).
+Input (9): delta (rad, both front wheels), T_fl, T_fr, T_rl, T_rr (N*m, drive minus brake torque at
+each wheel), mu (road friction), bank phi_r and grade theta_r (rad) and vertical curvature kappa_v
+(1/m) of the road (harness.sim.road: bank positive with the left edge up, grade positive uphill,
+kappa_v positive in a sag).
+
+The road plane carries the car. Gravity has the components -g sin(theta_r) along x and
+-g sin(phi_r) cos(theta_r) along y of the road plane, and the road's normal carries the normal
+specific force a_z = g cos(phi_r) cos(theta_r) + vx^2 kappa_v. The tyres and the air produce the
+specific forces a_x = (sum Fx - drag) / m and a_y = sum Fy / m (what a body-fixed accelerometer
+reads on a level body, TRUTH "ax", "ay"); the car's kinematic accelerations are those plus gravity's
+components. Wheel loads, load transfer and body roll follow the specific forces.
 
 Wheel i sits at (x_i, y_i) = (a, +t/2), (a, -t/2), (-b, +t/2), (-b, -t/2) (ISO axes). Its loads:
 
-    Fz_i = Fz_static,i -+ m ax_lt h / (2 l) -+ chi_axle m ay_lt h / t
+    Fz_i = Fz_static,i a_z / g -+ m ax_lt h / (2 l) -+ chi_axle m ay_lt h / t
            (front loses, rear gains under acceleration; the left side loses in a left turn)
 
 with chi_front = roll_stiffness_front_share, chi_rear = 1 - chi_front. Wheel-plane velocities from
@@ -17,9 +28,10 @@ vx - r y_i, vy + r x_i rotated by the wheel's steer angle; slips kappa = (omega 
 tan(alpha) = -v_lat/|v| with |v| regularised as sqrt(v_long^2 + 1 m^2/s^2). Tyre forces from
 :mod:`harness.sim.tyre`, rotated back into the body frame. Then
 
-    m (vx' - r vy) = sum Fx - 0.5 rho CdA vx |vx|        m (vy' + r vx) = sum Fy
+    m (vx' - r vy) = sum Fx - 0.5 rho CdA vx |vx| - m g sin(theta_r)
+    m (vy' + r vx) = sum Fy - m g sin(phi_r) cos(theta_r)
     Iz r' = sum (x_i Fy_i - y_i Fx_i)                     I_w omega_i' = T_i - R Fx_i - f_r Fz_i R tanh(omega_i/0.5)
-    tau ax_lt' = ax - ax_lt,  tau ay_lt' = ay - ay_lt     (ax, ay: body accelerations of the CG)
+    tau ax_lt' = ax - ax_lt,  tau ay_lt' = ay - ay_lt     (ax, ay: the specific forces above)
 
 Body roll and pitch (the sensors sit on the body, harness.sim.sensor_model), with k_phi =
 roll_gradient, k_theta = pitch_gradient:
@@ -49,13 +61,14 @@ from vsegen.harness.sim import tyre
 GRAVITY = 9.81
 AIR_DENSITY = 1.2
 STATE = ("X", "Y", "psi", "vx", "vy", "r", "omega_fl", "omega_fr", "omega_rl", "omega_rr",
-         "ax_lt", "ay_lt", "phi", "phi_rate")
-INPUT = ("delta", "T_fl", "T_fr", "T_rl", "T_rr", "mu")
+         "ax_lt", "ay_lt", "phi", "phi_rate", "distance")
+INPUT = ("delta", "T_fl", "T_fr", "T_rl", "T_rr", "mu", "bank", "grade", "vertical_curvature")
 TRUTH = ("ax", "ay", "fz_fl", "fz_fr", "fz_rl", "fz_rr", "fy_front", "fy_rear", "yaw_acceleration",
-         "roll", "roll_rate", "roll_acceleration", "pitch", "pitch_rate")
-"""Algebraic outputs of :meth:`Plant.truth`: body accelerations of the CG (m/s^2), wheel loads (N),
-axle lateral forces in the body frame (N), r' (rad/s^2), roll angle, rate and acceleration (rad,
-rad/s, rad/s^2) and pitch angle and rate (rad, rad/s) as the docstring defines them."""
+         "roll", "roll_rate", "roll_acceleration", "pitch", "pitch_rate", "az")
+"""Algebraic outputs of :meth:`Plant.truth`: specific forces of the CG along the road plane's x
+and y (m/s^2), wheel loads (N), axle lateral forces in the body frame (N), r' (rad/s^2), roll
+angle, rate and acceleration (rad, rad/s, rad/s^2) and pitch angle and rate (rad, rad/s) of the
+body on its suspension, and the normal specific force a_z (m/s^2), as the docstring defines them."""
 
 
 @dataclass
@@ -115,7 +128,9 @@ def equations(vehicle, params, x, u):
     i = dict(zip(INPUT, ca.vertsplit(u)))
     vx, vy, r = s["vx"], s["vy"], s["r"]
 
-    fz_f, fz_r = m * GRAVITY * b / (2 * l), m * GRAVITY * a / (2 * l)
+    bank, grade = i["bank"], i["grade"]
+    az = GRAVITY * ca.cos(bank) * ca.cos(grade) + vx * vx * i["vertical_curvature"]
+    fz_f, fz_r = m * az * b / (2 * l), m * az * a / (2 * l)
     long_shift = m * s["ax_lt"] * h / (2 * l)
     lat_f = chi_f * m * s["ay_lt"] * h / t
     lat_r = (1 - chi_f) * m * s["ay_lt"] * h / t
@@ -158,17 +173,18 @@ def equations(vehicle, params, x, u):
         vx * ca.cos(psi) - vy * ca.sin(psi),
         vx * ca.sin(psi) + vy * ca.cos(psi),
         r,
-        ax + r * vy,
-        ay - r * vx,
+        ax - GRAVITY * ca.sin(grade) + r * vy,
+        ay - GRAVITY * ca.sin(bank) * ca.cos(grade) - r * vx,
         yaw_acceleration,
         *wheel_rates,
         (ax - s["ax_lt"]) / tau,
         (ay - s["ay_lt"]) / tau,
         s["phi_rate"] if _roll_mode(params) else 0.0,
         roll_acceleration if _roll_mode(params) else 0.0,
+        ca.sqrt(vx * vx + vy * vy),
     )
     truth = ca.vertcat(ax, ay, *loads, fy_axle["f"], fy_axle["r"], yaw_acceleration,
-                       roll, roll_rate, roll_acceleration, pitch, pitch_rate)
+                       roll, roll_rate, roll_acceleration, pitch, pitch_rate, az)
     return derivative, truth
 
 
