@@ -43,7 +43,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "| generated ns | hand-written ns | generated M4F float .text / step stack (B) |",
              "|---|---|---|---|---|---|---|---|"]
     text = with_settings(vehicle.read_text(), "estimator.kf2dof", residual_window=0.0,
-                         linear_range=0.0)
+                         linear_range=0.0, frozen_time=0.0)
     for method in ("zoh", "euler"):
         variant = parse_vehicle(text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
                                 str(vehicle), config.name)

@@ -19,6 +19,7 @@ MODEL_INCONSISTENT = 128
 BEYOND_LINEAR_RANGE = 256
 INVALID_CALIBRATION = 512
 DEAD_RECKONING = 1024
+INPUT_FROZEN = 2048
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,9 @@ BITS: tuple[StatusBit, ...] = (
               "v_y is integrated without a measurement and its error bound (drift_acceleration plus the "
               "speed times drift_yaw_rate, integrated since the particles were drawn) exceeds the speed "
               "times tan(drift_limit): beta is suspect"),
+    StatusBit("INPUT_FROZEN", INPUT_FROZEN,
+              "an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time: a "
+              "stuck sensor or CAN signal; the estimate is suspect"),
 )
 """Every status bit, in value order."""
 BY_VALUE: dict[int, StatusBit] = {bit.value: bit for bit in BITS}

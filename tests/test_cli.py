@@ -9,7 +9,7 @@ from locations import DEFAULT_VEHICLE, REPO
 def test_verify_prints_the_table_and_a_progress_line_per_estimator(vsegen):
     result = vsegen.process("verify", "--estimator", "kf2dof", "--estimator", "switching")
     assert result.exit_code == 0, result.stderr
-    assert "verify passed: 26 runs" in result.stdout
+    assert "verify passed: 28 runs" in result.stdout
     assert "dlc(speed_kmh=120.0)" in result.stdout and "max rel diff" in result.stdout
     progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
     assert sorted(progress) == ["verifying kf2dof: ok", "verifying switching: ok"]
@@ -19,7 +19,7 @@ def test_verify_prints_the_table_and_a_progress_line_per_estimator(vsegen):
 def test_verify_default_vehicle_prints_table(vsegen):
     result = vsegen.process("verify")
     assert result.exit_code == 0, result.stderr
-    assert "verify passed: 117 runs" in result.stdout
+    assert "verify passed: 126 runs" in result.stdout
 
 
 def test_generate_check_is_clean_on_the_repository(vsegen):

@@ -312,7 +312,8 @@ def test_a_guarded_step_runs_no_hold_rule_work_on_an_active_sample(vehicle_text)
     does not read the holding flag; the held kernel computes no Kalman update (no division)."""
     from vsegen.harness.project.vehicles import with_settings
     from vsegen.model.params import parse_vehicle
-    text = with_settings(vehicle_text, "estimator.kf2dof", residual_window=0.0, linear_range=0.0)
+    text = with_settings(vehicle_text, "estimator.kf2dof", residual_window=0.0, linear_range=0.0,
+                         frozen_time=0.0)
     config = parse_vehicle(text, "c_class.toml", "c_class")
     estimator = build("kf2dof", config)
     kernel = render(config, "kf2dof")["vse_kf2dof_kernel.c"]

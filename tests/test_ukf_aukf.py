@@ -232,7 +232,9 @@ def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(conf
     assert states[k + 1, holding] == 2                               # held, marked low speed
     resumed = np.flatnonzero(low[:-1] & ~low[1:])[0] + 1             # restarts from this sample
     expected, _ = est.step(est.init(inputs[resumed]), inputs[resumed])
-    assert states[resumed + 1] == pytest.approx(np.array(expected).ravel(), rel=1e-12, abs=1e-15)
+    watching = [i for i, n in enumerate(est.states.names) if n.startswith("frozen_")]  # continues
+    assert np.delete(states[resumed + 1], watching) == pytest.approx(
+        np.delete(np.array(expected).ravel(), watching), rel=1e-12, abs=1e-15)
     assert abs(out[resumed, 1] - inputs[resumed, est.inputs.index("vx")]) < 0.2
     bad = Case.of("invalid_inputs").simulate(config, 100.0)
     inputs = bad.matrix(est.inputs.names)

@@ -33,7 +33,8 @@ def states(config) -> tuple[str, ...]:
     s = config.settings(TABLE)
     kinematic = s["stiffness_regressor"] == "kinematic_slip"
     monitor = s["residual_window"] > 0
-    return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()))
+    return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()),
+            *blocks.frozen_states(s, INPUTS))
 
 
 def _loads(v, ax, ay):
@@ -97,7 +98,8 @@ def init(config, u0):
     p = s["rls_initial_covariance"]
     kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                  "delta_f": first["delta"], "beta_f": 0.0}
-    extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0)}
+    extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0),
+             **blocks.frozen_initial(s, INPUTS, first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
                      first["r"], 0.0, 0.0, 0.0, holding,
                      *(extra[k] for k in states(config)[len(STATES):])])
@@ -108,8 +110,8 @@ def step(config, state, u):
     names = states(config)
     x = dict(zip(names, state))
     inputs = dict(zip(INPUTS, u))
-    active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                         x["holding"] > 0.5)
+    active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                          x["holding"] > 0.5)
     if not active:
         held = dict(x, holding=1.0)
         return (np.array([held[k] for k in names]),
@@ -128,6 +130,10 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
+    if s["frozen_time"] > 0:                # the frozen-signal monitor (beyond the paper)
+        monitor, frozen = blocks.frozen_monitor(x, inputs, ok, s, T, INPUTS)
+        new |= monitor
+        status |= blocks.INPUT_FROZEN if frozen else 0
     X, P, cf, cr = _rls(s, v, T, x, y, A, loads)
 
     # EKF with the previous stiffness [13-15]

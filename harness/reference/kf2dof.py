@@ -18,10 +18,16 @@ def _monitored(config) -> bool:
     return _settings(config)["residual_window"] > 0
 
 
+def _monitors(config) -> tuple[str, ...]:
+    """The consistency and frozen-signal monitors' state entries (those that are on)."""
+    return (*(blocks.MONITOR_STATES if _monitored(config) else ()),
+            *blocks.frozen_states(_settings(config), INPUTS))
+
+
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
     return (INPUTS, ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-                     *(blocks.MONITOR_STATES if _monitored(config) else ()), "holding"), OUTPUTS)
+                     *_monitors(config), "holding"), OUTPUTS)
 
 
 def _settings(config):
@@ -33,8 +39,9 @@ def init(config, u0) -> np.ndarray:
     first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
                                          s["vx_resume"])
     P0 = np.array(s["initial_covariance"])
+    monitors = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **blocks.frozen_initial(s, INPUTS, first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
-                     *([0.0] * len(blocks.MONITOR_STATES) if _monitored(config) else []), holding])
+                     *(monitors[k] for k in _monitors(config)), holding])
 
 
 def step(config, state, u):
@@ -42,7 +49,7 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(INPUTS, u))
-    monitor = list(state[7:-1])                       # the monitor's entries when it is on
+    monitors = dict(zip(_monitors(config), state[7:-1]))    # the monitors' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
@@ -50,7 +57,8 @@ def step(config, state, u):
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])
-        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep, *monitor, 1.0])
+        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep,
+                        *monitors.values(), 1.0])
         return new, np.array([0.0, 0.0, r, float(status)])
 
     def clamp(v):
@@ -68,10 +76,13 @@ def step(config, state, u):
     innovation = z - C @ x - D @ np.array([inputs["delta"]])
     x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
     status |= blocks.beyond_linear_range(inputs["ay"], s)
-    if monitor:
-        updates, suspect, _ = blocks.residual_monitor(dict(zip(blocks.MONITOR_STATES, monitor)),
-                                                      innovation, s, T)
-        monitor = [updates[k] for k in blocks.MONITOR_STATES]
+    if s["frozen_time"] > 0:
+        updates, frozen = blocks.frozen_monitor(monitors, inputs, ok, s, T, INPUTS)
+        monitors.update(updates)
+        status |= blocks.INPUT_FROZEN if frozen else 0
+    if _monitored(config):
+        updates, suspect, _ = blocks.residual_monitor(monitors, innovation, s, T)
+        monitors.update(updates)
         status |= blocks.MODEL_INCONSISTENT if suspect else 0
-    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *monitor, 0.0])
+    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *monitors.values(), 0.0])
     return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

@@ -31,7 +31,8 @@ def state_names(config, table, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
-            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", "holding", *extra)
+            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
+            *blocks.frozen_states(config.settings(table), INPUTS), "holding", *extra)
 
 
 def prefilter(config, table):
@@ -82,8 +83,10 @@ def init(config, table, u0, extra: tuple[str, ...] = ()):
     r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
+    monitor = blocks.frozen_initial(s, INPUTS, first)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, holding, *([0.0] * len(extra))])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *monitor.values(), holding,
+                     *([0.0] * len(extra))])
 
 
 def held(config, table, x, inputs, ok):
@@ -162,5 +165,9 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
-    new, output = scheme(x, updates, r_k, ay_f, status + (blocks.REFERENCE_SUSPECT if suspect else 0), u)
+    monitor, frozen = {}, False
+    if s["frozen_time"] > 0:
+        monitor, frozen = blocks.frozen_monitor(x, inputs, ok, s, config.sample_time, INPUTS)
+    status += (blocks.REFERENCE_SUSPECT if suspect else 0) + (blocks.INPUT_FROZEN if frozen else 0)
+    new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, u)
     return np.array([new[k] for k in names]), np.array(output)

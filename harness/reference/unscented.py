@@ -45,8 +45,9 @@ class Variant:
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
         monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
-        return (("delta", "vx", "ax", "ay", "r", *wheels),
-                (*STATE, *COVARIANCE, *extra, *monitor, "hold_reason"), OUTPUTS)
+        inputs = ("delta", "vx", "ax", "ay", "r", *wheels)
+        return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *blocks.frozen_states(s, inputs),
+                         "hold_reason"), OUTPUTS)
 
     def init(self, config, u0):
         s = config.settings(self.table)
@@ -56,7 +57,8 @@ class Variant:
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
                  if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
                                               if s["residual_window"] > 0 else [])
-        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra
+        frozen = list(blocks.frozen_initial(s, inputs, first).values())
+        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra + frozen
                         + [2 * holding], dtype=float)
 
     def step(self, config, state, u):
@@ -64,13 +66,15 @@ class Variant:
         input_names, state_names, _ = self.names(config)
         x = dict(zip(state_names, state))
         inputs = dict(zip(input_names, u))
-        active, status, _ = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                             x["hold_reason"] > 0.5)
+        active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                              x["hold_reason"] > 0.5)
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
             held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
             return (np.array([held[k] for k in state_names]),
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
+        frozen, stuck = (blocks.frozen_monitor(x, inputs, ok, s, config.sample_time, input_names)
+                         if s["frozen_time"] > 0 else ({}, False))    # from the state as it came in
         if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)
@@ -127,14 +131,13 @@ class Variant:
             monitor, suspect, first_inconsistent = blocks.residual_monitor(x, eps, s, config.sample_time)
             new.update(monitor)
             status |= blocks.MODEL_INCONSISTENT if suspect else 0
-        speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
-        if ((speed_error > 0 and abs(X_new[0] - inputs["vx"]) > speed_error)
-                or (sideslip > 0 and abs(np.arctan2(X_new[1], X_new[0])) > sideslip)
-                or first_inconsistent):
+        if _leaves_the_envelope(s, X_new, inputs["vx"]) or first_inconsistent:
             new = dict(zip(state_names, self.init(config, u)), hold_reason=0.0,   # restart here
                        **{k: new[k] for k in blocks.MONITOR_STATES if k in new})
             X_new = np.array([new[k] for k in STATE], dtype=LD)
             status |= blocks.FILTER_RESTARTED
+        new.update(frozen)
+        status |= blocks.INPUT_FROZEN if stuck else 0
         output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]
         return (np.array([new[k] for k in state_names], dtype=float),
                 np.array(output, dtype=float))
@@ -154,6 +157,14 @@ class Variant:
         return {**{f"qmean_{n}": q_new[i] for i, n in enumerate(STATE)},
                 **{f"qvar_{n}": Q_new[i] for i, n in enumerate(STATE)},
                 "fading": LD(x["fading"]) * f}
+
+def _leaves_the_envelope(s, X, vx: float) -> bool:
+    """Beyond the spec: the estimate is implausible (speed far from the measured one, or a
+    sideslip beyond restart_sideslip) and the filter restarts."""
+    speed_error, sideslip = s["restart_speed_error"], s["restart_sideslip"]
+    return bool((speed_error > 0 and abs(X[0] - vx) > speed_error)
+                or (sideslip > 0 and abs(np.arctan2(X[1], X[0])) > sideslip))
+
 
 def _inverse3(A):
     """Inverse of a 3 x 3 matrix by its adjugate, in the matrix's precision (LAPACK has no

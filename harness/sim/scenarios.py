@@ -149,6 +149,7 @@ VERIFICATION_SET: tuple[Case, ...] = (
     Case.of("hil_sine", mu=0.85),
     Case.of("dlc", speed_kmh=80.0, yaw_moment=1000.0),
     Case.of("sine_steer", yaw_moment=1000.0),
+    Case.of("dlc", speed_kmh=80.0, freeze="r:3:1,ay:5:1,ax:7:1"),
     Case.of("low_speed"),
     Case.of("invalid_inputs"),
 )

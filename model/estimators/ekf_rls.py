@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import consistency, filters, kalman, signals, status
+from vsegen.model import consistency, filters, frozen, kalman, signals, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
@@ -99,6 +99,7 @@ SCHEMA = EstimatorSchema(
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         ROLL_CORRECTION,
         *consistency.fields(CHANNELS),
+        frozen.FIELD,
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
@@ -195,7 +196,7 @@ def states(settings) -> Layout:
     consistency monitor its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
     monitor = consistency.STATES if consistency.enabled(settings) else ()
-    return Layout((*STATES.signals, *kinematic, *monitor))
+    return Layout((*STATES.signals, *kinematic, *monitor, *frozen.states(settings, INPUTS.names)))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -327,7 +328,9 @@ def build(params: Parameters) -> Estimator:
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
     stiffness = _stiffness(config, settings, choices, s, measured)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
-    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf)
+    stuck = frozen.monitor(s, u, ok, guard.active, settings, config.sample_time, INPUTS.names) \
+        if frozen.enabled(choices) else ({}, ca.SX(0))
+    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, stuck)
     init_state = _initial_state(config, settings, choices, layout, u, stiffness.kinematic)
     init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
@@ -395,9 +398,11 @@ def _ekf(config, settings, s: dict, k: _Stiffness, r_m: ca.SX):
                                 settings["measurement_noise"])
 
 
-def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measured, k: _Stiffness, ekf):
+def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measured, k: _Stiffness, ekf,
+           stuck: tuple[dict, ca.SX]):
     """(next state, output): the stiffness-rate weight, the integral method re-seeded from the
-    fused beta, their fusion, the optional consistency monitor and the hold."""
+    fused beta, their fusion, the optional consistency monitor, the frozen-signal monitor's step
+    ``stuck`` (``model.frozen.monitor``) and the hold."""
     vehicle, T = config.vehicle, config.sample_time
     x_ekf, P_ekf, innovation = ekf
     active = guard.active
@@ -412,10 +417,11 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
-    code, monitor = guard.status, {}
+    code, monitor = guard.status, dict(stuck[0])
+    code = code + status.INPUT_FROZEN * stuck[1]
     if consistency.enabled(choices):   # beyond the paper: the monitor of the EKF's yaw-rate innovation
         check = consistency.monitor(s, innovation, settings, T)
-        monitor = {n: keep(value, n) for n, value in check.updates.items()}
+        monitor |= {n: keep(value, n) for n, value in check.updates.items()}
         # ... which concerns the output only while the EKF carries most of it (lambda < 1/2)
         suspect = ca.logic_and(ca.logic_and(active, check.suspect), weight < 0.5)
         code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
@@ -464,6 +470,7 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
         **consistency.initial_entries(consistency.enabled(choices)),
+        **frozen.initial_entries(first, choices, INPUTS.names),
     })
 
 
@@ -473,5 +480,5 @@ DEFINITIONS = (Definition(
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
              "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
              "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT),
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.INPUT_FROZEN),
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)

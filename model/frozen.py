@@ -1,0 +1,87 @@
+"""Frozen-signal monitor shared by the estimators: a stuck sensor, or a CAN signal whose sender
+stopped updating it, repeats its last value. Beyond the papers; the rule it serves: never a
+silently wrong estimate.
+
+The monitored channels are the estimator's inertial inputs among a_x, a_y and r: in operation
+their sensor noise lies far above their resolution (seed 000 Table 2: 0.3 m/s^2 and 1 deg/s against
+ESC resolutions of about 0.01 m/s^2 and 0.1 deg/s), so a real signal never repeats bit for bit for
+long. Per channel c, with u_c held at its last plausible value (model.guard):
+
+    n_c,k = min(n_c,k-1 + 1, N)   if u_c,k == u_c,k-1 (bit for bit),   else 0,
+    N = frozen_time / T (rounded to whole samples),
+
+and the status bit INPUT_FROZEN is raised on an active sample while any n_c reaches N (within
+``frozen_time`` of the freeze). An implausible sample (NaN, out of range) does not count as a
+repetition; INVALID_INPUT reports it. A holding estimator holds the monitor with the rest of its
+state; it watches again from the first active sample. Steering angle, speed and wheel speeds are not monitored:
+they can be constant, quantisation and all, while the car drives straight or at constant speed.
+A logger that records a CAN signal at a multiple of its message rate repeats values by design:
+``frozen_time`` must exceed a few message periods (the default 0.25 s covers 50 ms periods).
+``frozen_time`` = 0 switches the monitor off (no state, no status).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from vsegen.model.schema import nonnegative
+from vsegen.model.signals import INPUT, Signal
+
+CHANNELS = ("ax", "ay", "r")
+"""The inputs the monitor watches, where an estimator reads them."""
+
+FIELD = nonnegative("frozen_time", "s", "beyond the papers: an inertial input (a_x, a_y, r) that "
+                    "repeats its value bit for bit this long raises status INPUT_FROZEN (a stuck "
+                    "sensor or CAN signal); longer than a few CAN message periods; 0 = no monitor",
+                    default=0.25)
+
+
+def channels(inputs: tuple[str, ...]) -> tuple[str, ...]:
+    """The monitored channels among an estimator's ``inputs`` (log column names)."""
+    return tuple(c for c in CHANNELS if c in inputs)
+
+
+def enabled(numeric_settings) -> bool:
+    """Whether the generated code has the monitor (structural: ``frozen_time`` > 0 when it is
+    generated, also in calibratable mode)."""
+    return numeric_settings["frozen_time"] > 0.0
+
+
+def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
+    """The monitor's state entries for an estimator reading ``inputs`` (none when it is off)."""
+    if not enabled(numeric_settings):
+        return ()
+    entries = []
+    for c in channels(inputs):
+        unit = INPUT[c].signal.unit
+        entries += [Signal(f"frozen_{c}_value", unit, f"frozen-signal monitor: last plausible {c}"),
+                    Signal(f"frozen_{c}_repeats", "-", f"frozen-signal monitor: samples {c} has "
+                           "repeated its value (at most frozen_time / T)")]
+    return tuple(entries)
+
+
+def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
+    """The entries at init: the first sample's (neutralised) values, no repetition."""
+    if not enabled(numeric_settings):
+        return {}
+    return {k: v for c in channels(inputs)
+            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", ca.SX(0)))}
+
+
+def monitor(s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
+            inputs: tuple[str, ...]) -> tuple[dict, ca.SX]:
+    """(new state entries, 1 while a channel is frozen) from the state entries ``s``, the raw
+    inputs ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator
+    holds the monitor too); call only when :func:`enabled`. Flags combine by arithmetic, so an
+    active sample's kernel has no branch (model.guard)."""
+    limit = ca.floor(settings["frozen_time"] / sample_time + 0.5)     # whole samples, N
+    updates, frozen = {}, ca.SX(0)
+    for c in channels(inputs):
+        value, count = s[f"frozen_{c}_value"], s[f"frozen_{c}_repeats"]
+        repeated = plausible[c] * (u[c] == value)
+        count_next = repeated * ca.fmin(count + 1, limit)
+        updates[f"frozen_{c}_value"] = ca.if_else(active, ca.if_else(plausible[c], u[c], value), value)
+        updates[f"frozen_{c}_repeats"] = ca.if_else(active, count_next, count)
+        stuck = count_next >= limit
+        frozen = frozen + stuck - frozen * stuck
+    return updates, active * frozen
