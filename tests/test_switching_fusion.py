@@ -8,12 +8,14 @@ import pytest
 
 from vsegen.codegen.generate import render
 from vsegen.harness.host.build import compile_estimator, load_estimator
+from vsegen.harness.project.vehicles import with_settings
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model import status
 from vsegen.model.calibration import baked
 from vsegen.model.estimators import build
 from vsegen.model.estimators.kf2dof import dynamic_update
 from vsegen.model.estimators.kinematic_dynamic import DYN, KIN
+from vsegen.model.params import parse_vehicle
 
 T = 0.01
 
@@ -46,7 +48,16 @@ def test_gyro_outliers_are_rejected(config, estimator, compiled):
         assert states[k + 2][i["r_rejections"]] == 0                                # next accepted
 
 
-def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(config, estimator, compiled):
+@pytest.fixture(scope="module")
+def paper(vehicle_text):
+    """The paper's switching estimator: no learned offset, no bound on the kinematic dwell."""
+    return parse_vehicle(with_settings(vehicle_text, "estimator.switching", offset_memory=0.0,
+                                       kinematic_max_dwell=0.0), "c_class.toml", "c_class")
+
+
+def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(paper):
+    config = paper
+    estimator, compiled = compile_estimator(config, "switching")
     _, inputs, outputs, states, i = run(compiled, estimator, config, Case.of("continuous_dlc"))
     mode = outputs[:, 3].astype(int)
     to_kin = [k for k in range(1, len(mode)) if mode[k - 1] == DYN and mode[k] == KIN]
@@ -127,9 +138,6 @@ def switching_signal(est, states):
 
 
 def with_option(vehicle_text, key, value, table="switching"):
-    from vsegen.harness.project.vehicles import with_settings
-    from vsegen.model.params import parse_vehicle
-
     config = parse_vehicle(with_settings(vehicle_text, f"estimator.{table}", **{key: value}),
                            f"{key}.toml", "c_class")
     assert config.settings(table)[key] == value
@@ -175,6 +183,8 @@ def test_options_are_equivalent_to_the_reference_in_float(vehicle_text, table, k
 
 
 def test_the_yaw_acceleration_check_keeps_genuine_samples_at_the_limit(vehicle_text):
+    vehicle_text = with_settings(vehicle_text, "estimator.switching", offset_memory=0.0,
+                                 kinematic_max_dwell=0.0)        # the paper's kinematic scheme
     """On the fishhook the steady-state reference r_ref is wrong at the grip limit: the paper's check
     rejects genuine gyro samples there (more than 10 in 2.5..4.5 s) and the integrator reuses a stale
     r; the yaw-acceleration bound rejects none of them, and beta is closer to the truth."""
