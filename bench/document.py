@@ -3,7 +3,9 @@ each written by its own command and kept when another command rewrites the rest.
 
 from __future__ import annotations
 
+import argparse
 import subprocess
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
 
@@ -56,3 +58,15 @@ def write_section(report: Path, body: list[str]) -> None:
     previous = report.read_text() if report.exists() else ""
     report.write_text(with_section(previous, body))
     print("\n".join(body))
+
+
+def write_cluster_report(description: str, out: Path, report: Callable[[str | None], list[str]],
+                         argv: list[str] | None = None) -> None:
+    """The command line of a report whose runs go to a Dask cluster: parse ``--scheduler``, write
+    ``report(scheduler)``'s lines to ``out`` and say so."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--scheduler", default=None, help="'local' (default), 'serial' or a Dask "
+                        "scheduler address")
+    args = parser.parse_args(argv)
+    out.write_text("\n".join(report(args.scheduler)) + "\n")
+    print(f"wrote {out}")

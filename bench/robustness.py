@@ -11,13 +11,12 @@ Writes docs/robustness.md; the runs go to the Dask cluster like bench.accuracy's
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 
 from bench import REPO
-from bench.document import provenance
+from bench.document import provenance, write_cluster_report
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.logs.table import SPIN_SIDESLIP
@@ -135,12 +134,7 @@ def report(scheduler: str | None) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scheduler", default=None, help="'local' (default), 'serial' or a Dask "
-                        "scheduler address")
-    args = parser.parse_args(argv)
-    OUT.write_text("\n".join(report(args.scheduler)) + "\n")
-    print(f"wrote {OUT}")
+    write_cluster_report(__doc__.splitlines()[0], OUT, report, argv)
 
 
 if __name__ == "__main__":
