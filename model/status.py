@@ -20,6 +20,7 @@ BEYOND_LINEAR_RANGE = 256
 INVALID_CALIBRATION = 512
 DEAD_RECKONING = 1024
 INPUT_FROZEN = 2048
+SCHEMES_DISAGREE = 4096
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,10 @@ BITS: tuple[StatusBit, ...] = (
     StatusBit("INPUT_FROZEN", INPUT_FROZEN,
               "an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time: a "
               "stuck sensor or CAN signal; the estimate is suspect"),
+    StatusBit("SCHEMES_DISAGREE", SCHEMES_DISAGREE,
+              "the kinematic and the model-based scheme disagree by more than disagreement_limit in "
+              "their share of the output (a road bank, a sensor offset, a frozen or late signal, or a "
+              "model error): the estimate is suspect"),
 )
 """Every status bit, in value order."""
 BY_VALUE: dict[int, StatusBit] = {bit.value: bit for bit in BITS}

@@ -27,6 +27,7 @@ def config():
     return load_vehicle(DEFAULT_VEHICLE)
 
 
+@pytest.mark.slow          # test_every_estimator_runs_under_pil covers it in full
 @pytest.mark.parametrize("name,board", [("kf2dof", "m4f"), ("switching", "m7")])
 def test_one_estimator_per_target_runs_every_verification_scenario(config, name, board):
     results = pil.pil(config, (name,), board, "baked")

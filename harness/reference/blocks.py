@@ -25,6 +25,7 @@ MODEL_INCONSISTENT = 128
 BEYOND_LINEAR_RANGE = 256
 DEAD_RECKONING = 1024
 INPUT_FROZEN = 2048
+SCHEMES_DISAGREE = 4096
 """The status bits the references raise, written here once (docs/signals.md); a test compares them
 with the model's."""
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",

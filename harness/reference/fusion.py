@@ -46,8 +46,11 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
-    beta = (w * kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
-            + (1 - w) * kinematic_dynamic.beta(config, TABLE, xk[0], u[1]))
+    beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
+    beta_kf = kinematic_dynamic.beta(config, TABLE, xk[0], u[1])
+    beta = w * beta_kin + (1 - w) * beta_kf
+    if s["disagreement_limit"] > 0 and w * abs(beta_kin - beta_kf) > s["disagreement_limit"]:
+        status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
            "holding": 0.0, "mode": DYN, **monitor}

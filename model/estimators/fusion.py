@@ -34,7 +34,7 @@ from vsegen.model.estimators.kinematic_dynamic import (
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from vsegen.model.guard import hold, symbolic
 from vsegen.model.layout import Layout
-from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, positive
+from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, nonnegative, positive
 from vsegen.model.signals import Signal
 
 NAME = "fusion"
@@ -43,6 +43,10 @@ SCHEMA = EstimatorSchema(
     fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
                      "integrator towards the KF"),
+            nonnegative("disagreement_limit", "rad", "beyond the paper: status SCHEMES_DISAGREE "
+                        "while w |beta_kin - beta_KF|, the kinematic scheme's pull on the output away "
+                        "from the KF, exceeds this (a bank or an offset drifts the integrator); "
+                        "0 = never", default=0.0),
             *consistency.fields(kf2dof.CHANNELS)),
     rules=LOW_SPEED_RULES)
 
@@ -78,8 +82,13 @@ def build(params: Parameters) -> Estimator:
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"]) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
-    beta = weight * sideslip(vy_kin, vx) + (1 - weight) * result["beta"]
+    beta_kin = sideslip(vy_kin, vx)
+    beta = weight * beta_kin + (1 - weight) * result["beta"]
     code, monitor = pre.status, {}
+    limit = seed.settings["disagreement_limit"]
+    if params.numeric.settings(NAME)["disagreement_limit"] > 0:   # beyond the paper
+        apart = weight * ca.fabs(beta_kin - result["beta"]) > limit
+        code = code + status.SCHEMES_DISAGREE * (active * apart)
     if monitored:   # beyond the paper: the consistency monitor of the KF's innovations
         check = consistency.monitor(s, result["innovation"], seed.settings, T)
         monitor = check.updates
@@ -109,5 +118,5 @@ DEFINITIONS = (Definition(
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
-    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT),
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE),
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)
