@@ -69,13 +69,19 @@ def test_every_estimator_equals_the_reference_in_every_form(config, name, real, 
     check_every_scenario(config, name, real, params)
 
 
+OTHER_CARS = sorted(p.stem for p in VEHICLES.glob("*.toml") if p != DEFAULT_VEHICLE)
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("real,params", [("double", "baked"), *FORMS])
-@pytest.mark.parametrize("car", sorted(p.stem for p in VEHICLES.glob("*.toml") if p != DEFAULT_VEHICLE))
-def test_every_other_shipped_vehicle_verifies_in_every_form(car, real, params):
+@pytest.mark.parametrize("car,real,params", [
+    *((car, real, "baked") for car in OTHER_CARS for real in ("double", "float")),
+    ("rwd_saloon", "float", "calibratable")])
+def test_every_other_shipped_vehicle_verifies(car, real, params):
     """`vsegen verify --vehicle vehicles/<car>.toml --real <real> --params <params>`: every
-    estimator the file configures, every scenario (the default vehicle's forms are the tests
-    above)."""
+    estimator the file configures, every scenario, in both precisions, and the saloon in its most
+    demanding form, float calibratable (where ekf_rls crosses a decision on the fishhook; the
+    default vehicle's forms are the tests above; every form of every car verified in 240 s when
+    the crossings were added, kept out of CI for time)."""
     config = load_vehicle(VEHICLES / f"{car}.toml")
     results = verify(config, tuple(config.estimators), real=real, params=params)
     assert len(results) == len(config.estimators) * len(VERIFICATION_SET)
