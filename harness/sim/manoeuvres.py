@@ -188,19 +188,13 @@ def crest_dip(config: VehicleConfig, rate_hz: float, seed: int, speed_kmh: float
     (the dip), from 50 m on; gentle sine steering of ``amplitude`` rad at ``frequency`` Hz keeps
     the car turning (*assumption*: a country road)."""
     g = slope_angle(peak_grade)
-    chosen = Disturbances.of(**disturbances)
-    road = chosen.road(Road((0.0, 50.0, 150.0, 350.0, 450.0), (0.0,) * 5, (0.0, 0.0, g, -g, 0.0)))
+    road = Road((0.0, 50.0, 150.0, 350.0, 450.0), (0.0,) * 5, (0.0, 0.0, g, -g, 0.0))
 
     def steer(t: float, state: np.ndarray) -> float:
         return amplitude * np.sin(2 * np.pi * frequency * t)
 
-    truth = chosen.truth_car(config)
-    dt = 1.0 / (rate_hz * substeps(rate_hz))
-    hold = SpeedHold(truth.vehicle, truth.plant, lambda t: speed_kmh / 3.6, dt, road=road)
-    run = simulate(truth, rate_hz, duration, speed_kmh / 3.6, steer, hold, _constant(mu),
-                   progress=progress, road=road)
-    return _log(truth, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool),
-                disturbances=chosen)
+    return _open_loop(config, rate_hz, seed, speed_kmh / 3.6, mu, steer, duration, bias, progress,
+                      disturbances=Disturbances.of(**disturbances), road=road, outliers=outliers)
 
 
 def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -> Log:
@@ -347,14 +341,16 @@ def _drive(config, rate_hz, seed, course, speed, duration, mu, outliers, bias, p
 
 def _open_loop(config, rate_hz, seed, speed, mu, steer, duration, bias, progress,
                yaw_moment: YawMomentPulses = YawMomentPulses(),
-               disturbances: Disturbances = NONE) -> Log:
+               disturbances: Disturbances = NONE, road: Road = FLAT, outliers: bool = False) -> Log:
+    """The plant steered by ``steer`` at held ``speed`` (m/s) on ``road`` (plus the disturbances'
+    bank and grade), logged with the disturbances."""
     truth = disturbances.truth_car(config)
     dt = 1.0 / (rate_hz * substeps(rate_hz))
-    road = disturbances.road()
+    road = disturbances.road(road)
     hold = SpeedHold(truth.vehicle, truth.plant, lambda t: speed, dt, road=road)
     run = simulate(truth, rate_hz, duration, speed, steer, yaw_moment.torques(truth.vehicle, hold),
                    _constant(mu), progress=progress, road=road)
-    return _log(truth, run, seed, False, bias, np.zeros(len(run.t), dtype=bool), yaw_moment, disturbances)
+    return _log(truth, run, seed, outliers, bias, np.zeros(len(run.t), dtype=bool), yaw_moment, disturbances)
 
 
 def _log(config: VehicleConfig, run: Run, seed: int, outliers: bool, bias: bool,
