@@ -63,3 +63,12 @@ def test_the_reference_writes_the_model_status_bits():
     assert reference_bits == {name: model_bits[name] for name in reference_bits}
     declared = {status.BY_VALUE[value].name for d in DEFINITIONS.values() for value in d.status_bits}
     assert declared <= set(reference_bits)
+
+
+def test_the_reference_watches_the_model_frozen_channels():
+    """The frozen-signal monitor's channels are written in both (the reference never imports the
+    model); they must agree."""
+    from vsegen.harness.reference import blocks
+    from vsegen.model import frozen
+
+    assert blocks.FROZEN_CHANNELS == frozen.CHANNELS
