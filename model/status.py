@@ -21,6 +21,8 @@ INVALID_CALIBRATION = 512
 DEAD_RECKONING = 1024
 INPUT_FROZEN = 2048
 SCHEMES_DISAGREE = 4096
+LATERAL_INCONSISTENT = 8192
+STEERING_OFFSET = 16384
 
 
 @dataclass(frozen=True)
@@ -68,12 +70,21 @@ BITS: tuple[StatusBit, ...] = (
               "speed times drift_yaw_rate, integrated since the particles were drawn) exceeds the speed "
               "times tan(drift_limit): beta is suspect"),
     StatusBit("INPUT_FROZEN", INPUT_FROZEN,
-              "an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time: a "
-              "stuck sensor or CAN signal; the estimate is suspect"),
+              "an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time, or "
+              "the path curvature changed at a constant steer angle (steer_check_limit): a stuck sensor "
+              "or CAN signal; the estimate is suspect"),
     StatusBit("SCHEMES_DISAGREE", SCHEMES_DISAGREE,
               "the kinematic and the model-based scheme disagree by more than disagreement_limit in "
               "their share of the output (a road bank, a sensor offset, a frozen or late signal, or a "
               "model error): the estimate is suspect"),
+    StatusBit("LATERAL_INCONSISTENT", LATERAL_INCONSISTENT,
+              "in quasi-steady driving the lateral acceleration differs from r v_x by more than "
+              "lateral_check_limit on average: a road bank, an accelerometer offset or mounting tilt, "
+              "a yaw-rate or speed error; the estimate is suspect"),
+    StatusBit("STEERING_OFFSET", STEERING_OFFSET,
+              "the steering-angle zero learned in straight driving (steering_offset) is beyond "
+              "steering_offset_limit: the steering-angle sensor needs its zero calibrated; the "
+              "model-based estimate is suspect"),
 )
 """Every status bit, in value order."""
 BY_VALUE: dict[int, StatusBit] = {bit.value: bit for bit in BITS}

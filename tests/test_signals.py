@@ -72,3 +72,11 @@ def test_the_reference_watches_the_model_frozen_channels():
     from vsegen.model import frozen
 
     assert blocks.FROZEN_CHANNELS == frozen.CHANNELS
+
+
+def test_the_reference_crosschecks_the_model_inputs():
+    """The cross-checks' inputs are written in both; they must agree."""
+    from vsegen.harness.reference import monitors
+    from vsegen.model import crosscheck
+
+    assert monitors.CROSSCHECK_INPUTS == crosscheck.INPUTS

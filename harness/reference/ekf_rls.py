@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import blocks
+from vsegen.harness.reference import blocks, monitors
 
 TABLE = "ekf_rls"
 GRAVITY = blocks.GRAVITY
@@ -34,7 +34,7 @@ def states(config) -> tuple[str, ...]:
     kinematic = s["stiffness_regressor"] == "kinematic_slip"
     monitor = s["residual_window"] > 0
     return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()),
-            *blocks.frozen_states(s, INPUTS))
+            *monitors.states(s, INPUTS))
 
 
 def _loads(v, ax, ay):
@@ -99,7 +99,7 @@ def init(config, u0):
     kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                  "delta_f": first["delta"], "beta_f": 0.0}
     extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0),
-             **blocks.frozen_initial(s, INPUTS, first)}
+             **monitors.initial(s, INPUTS, first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
                      first["r"], 0.0, 0.0, 0.0, holding,
                      *(extra[k] for k in states(config)[len(STATES):])])
@@ -130,11 +130,10 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
-    if s["frozen_time"] > 0:                # the frozen-signal monitor (beyond the paper)
-        monitor, frozen = blocks.frozen_monitor(x, inputs, ok, s, T, INPUTS)
-        new |= monitor
-        status |= blocks.INPUT_FROZEN if frozen else 0
-    X, P, cf, cr = _rls(s, v, T, x, y, A, loads)
+    watched, flags = monitors.step(x, inputs, ok, s, T, INPUTS, config.vehicle["wheelbase"])
+    new |= watched                          # the input monitors (beyond the paper)
+    status |= flags
+    X, P, cf, cr = _rls(s, v, T, x, y, A, loads, trusted=flags == 0)
 
     # EKF with the previous stiffness [13-15]
     Pe = blocks.unpacked([x[k] for k in EKF_P], 2)
@@ -199,11 +198,12 @@ def _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot):
     return new, y, A, (fl, fr, rl, rr)
 
 
-def _rls(s, v, T, x, y, A, loads):
-    """RLS [30-33] on excited samples, clamped to the stiffness band: (X, P, C_f, C_r)."""
+def _rls(s, v, T, x, y, A, loads, trusted: bool):
+    """RLS [30-33] on excited samples while the input monitors raise nothing (``trusted``; beyond
+    the paper), clamped to the stiffness band: (X, P, C_f, C_r)."""
     X = np.array([x["c0_1"], x["c0_2"]])
     P = blocks.unpacked([x[k] for k in RLS_P], 2)
-    if min(abs(A[0, 0]), abs(A[1, 1])) >= s["slip_min"]:
+    if trusted and min(abs(A[0, 0]), abs(A[1, 1])) >= s["slip_min"]:
         tau = s["forgetting_factor"] ** (T / 0.001)
         K = P @ A.T @ np.linalg.inv(tau * np.eye(2) + A @ P @ A.T)
         X = X + K @ (y - A @ X)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import blocks
+from vsegen.harness.reference import blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
 OUTPUTS = ("beta", "vy", "r", "status")
@@ -18,16 +18,16 @@ def _monitored(config) -> bool:
     return _settings(config)["residual_window"] > 0
 
 
-def _monitors(config) -> tuple[str, ...]:
-    """The consistency and frozen-signal monitors' state entries (those that are on)."""
+def _monitor_states(config) -> tuple[str, ...]:
+    """The consistency and input monitors' state entries (those that are on)."""
     return (*(blocks.MONITOR_STATES if _monitored(config) else ()),
-            *blocks.frozen_states(_settings(config), INPUTS))
+            *monitors.states(_settings(config), INPUTS))
 
 
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
     return (INPUTS, ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-                     *_monitors(config), "holding"), OUTPUTS)
+                     *_monitor_states(config), "holding"), OUTPUTS)
 
 
 def _settings(config):
@@ -39,9 +39,9 @@ def init(config, u0) -> np.ndarray:
     first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
                                          s["vx_resume"])
     P0 = np.array(s["initial_covariance"])
-    monitors = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **blocks.frozen_initial(s, INPUTS, first)}
+    entries = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **monitors.initial(s, INPUTS, first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
-                     *(monitors[k] for k in _monitors(config)), holding])
+                     *(entries[k] for k in _monitor_states(config)), holding])
 
 
 def step(config, state, u):
@@ -49,7 +49,7 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(INPUTS, u))
-    monitors = dict(zip(_monitors(config), state[7:-1]))    # the monitors' entries when they are on
+    entries = dict(zip(_monitor_states(config), state[7:-1]))    # the monitors' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
@@ -58,7 +58,7 @@ def step(config, state, u):
     if not active:
         P0 = np.array(s["initial_covariance"])
         new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep,
-                        *monitors.values(), 1.0])
+                        *entries.values(), 1.0])
         return new, np.array([0.0, 0.0, r, float(status)])
 
     def clamp(v):
@@ -76,13 +76,12 @@ def step(config, state, u):
     innovation = z - C @ x - D @ np.array([inputs["delta"]])
     x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
     status |= blocks.beyond_linear_range(inputs["ay"], s)
-    if s["frozen_time"] > 0:
-        updates, frozen = blocks.frozen_monitor(monitors, inputs, ok, s, T, INPUTS)
-        monitors.update(updates)
-        status |= blocks.INPUT_FROZEN if frozen else 0
+    updates, flags = monitors.step(entries, inputs, ok, s, T, INPUTS, config.vehicle["wheelbase"])
+    entries.update(updates)
+    status |= flags
     if _monitored(config):
-        updates, suspect, _ = blocks.residual_monitor(monitors, innovation, s, T)
-        monitors.update(updates)
+        updates, suspect, _ = blocks.residual_monitor(entries, innovation, s, T)
+        entries.update(updates)
         status |= blocks.MODEL_INCONSISTENT if suspect else 0
-    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *monitors.values(), 0.0])
+    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0])
     return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

@@ -9,7 +9,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.signal
 
-from vsegen.harness.reference import blocks
+from vsegen.harness.reference import blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1
@@ -32,7 +32,7 @@ def state_names(config, table, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
             "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-            *blocks.frozen_states(config.settings(table), INPUTS), "holding", *extra)
+            *monitors.states(config.settings(table), INPUTS), "holding", *extra)
 
 
 def prefilter(config, table):
@@ -83,7 +83,7 @@ def init(config, table, u0, extra: tuple[str, ...] = ()):
     r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
-    monitor = blocks.frozen_initial(s, INPUTS, first)
+    monitor = monitors.initial(s, INPUTS, first)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
                      0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *monitor.values(), holding,
                      *([0.0] * len(extra))])
@@ -165,9 +165,7 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
-    monitor, frozen = {}, False
-    if s["frozen_time"] > 0:
-        monitor, frozen = blocks.frozen_monitor(x, inputs, ok, s, config.sample_time, INPUTS)
-    status += (blocks.REFERENCE_SUSPECT if suspect else 0) + (blocks.INPUT_FROZEN if frozen else 0)
+    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, INPUTS, config.vehicle["wheelbase"])
+    status += (blocks.REFERENCE_SUSPECT if suspect else 0) + flags
     new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, u)
     return np.array([new[k] for k in names]), np.array(output)

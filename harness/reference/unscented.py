@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vsegen.harness.reference import blocks
+from vsegen.harness.reference import blocks, monitors
 
 LD = np.longdouble
 STATE = ("u", "v", "gamma", "moment", "ax", "ay")
@@ -46,7 +46,7 @@ class Variant:
                  if self.adaptive else ())
         monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
         inputs = ("delta", "vx", "ax", "ay", "r", *wheels)
-        return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *blocks.frozen_states(s, inputs),
+        return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *monitors.states(s, inputs),
                          "hold_reason"), OUTPUTS)
 
     def init(self, config, u0):
@@ -57,8 +57,8 @@ class Variant:
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
                  if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
                                               if s["residual_window"] > 0 else [])
-        frozen = list(blocks.frozen_initial(s, inputs, first).values())
-        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra + frozen
+        watched = list(monitors.initial(s, inputs, first).values())
+        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra + watched
                         + [2 * holding], dtype=float)
 
     def step(self, config, state, u):
@@ -73,8 +73,8 @@ class Variant:
             return (np.array([held[k] for k in state_names]),
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
-        frozen, stuck = (blocks.frozen_monitor(x, inputs, ok, s, config.sample_time, input_names)
-                         if s["frozen_time"] > 0 else ({}, False))    # from the state as it came in
+        watched, flags = monitors.step(x, inputs, ok, s, config.sample_time, input_names,
+                                       config.vehicle["wheelbase"])    # from the state as it came in
         if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)
@@ -136,8 +136,8 @@ class Variant:
                        **{k: new[k] for k in blocks.MONITOR_STATES if k in new})
             X_new = np.array([new[k] for k in STATE], dtype=LD)
             status |= blocks.FILTER_RESTARTED
-        new.update(frozen)
-        status |= blocks.INPUT_FROZEN if stuck else 0
+        new.update(watched)
+        status |= flags
         output = [np.arctan2(X_new[1], X_new[0]), *X_new[[0, 1, 2, 3, 4, 5]], status]
         return (np.array([new[k] for k in state_names], dtype=float),
                 np.array(output, dtype=float))

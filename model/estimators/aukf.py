@@ -34,7 +34,7 @@ from typing import Any
 
 import casadi as ca
 
-from vsegen.model import consistency, frozen, kalman, signals, status, unscented
+from vsegen.model import consistency, input_monitors, kalman, signals, status, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
@@ -86,7 +86,7 @@ UKF_FIELDS: tuple[Field, ...] = (
     ROLL_CORRECTION,
     *consistency.fields(("ax", "ay", "r")),
     consistency.LINEAR_RANGE,
-    frozen.FIELD,
+    *input_monitors.FIELDS,
     *LOW_SPEED_FIELDS,
 )
 """Seed 002's UKF on the 3-DOF HSRI model (docs/methods.md, seed 002 §3, §5)."""
@@ -143,7 +143,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
         *(consistency.STATES if consistency.enabled(settings) else ()),
-        *frozen.states(settings, inputs.names),
+        *input_monitors.states(settings, inputs.names),
         signals.HOLD_REASON,
     ))
     outputs = Layout((
@@ -284,7 +284,7 @@ def _initial_state(sym: _Symbols) -> ca.SX:
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if sym.adaptive else {}),
         **consistency.initial_entries(sym.monitored),
-        **frozen.initial_entries(first, sym.params.numeric.settings(sym.name), sym.inputs_layout.names),
+        **input_monitors.initial_entries(first, sym.params.numeric.settings(sym.name), sym.inputs_layout.names),
         "hold_reason": 2 * holding,
     })
 
@@ -390,10 +390,9 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
         suspect = ca.logic_and(active, check.suspect)
         rising = ca.logic_and(active, check.first)
         extra = {**extra, **check.updates}
-    stuck, frozen_now = {}, ca.SX(0)
-    if frozen.enabled(sym.params.numeric.settings(sym.name)):    # from the state as it came in
-        stuck, frozen_now = frozen.monitor(kept, u, guard.plausible, active, settings,
-                                           sym.params.config.sample_time, sym.inputs_layout.names)
+    stuck, flags = input_monitors.monitor(kept, u, guard.plausible, active, settings,    # from the state as it came in
+                                          sym.params.numeric.settings(sym.name), sym.params.config.sample_time,
+                                          sym.inputs_layout.names, sym.params.config.vehicle["wheelbase"])
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, **stuck, "hold_reason": ca.SX(0)})
@@ -406,7 +405,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
     code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
             + ca.if_else(restarted, status.FILTER_RESTARTED, 0)
             + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
-            + status.INPUT_FROZEN * frozen_now
+            + flags
             + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
                          status.BEYOND_LINEAR_RANGE, 0))
     output = sym.outputs.pack({
@@ -437,7 +436,7 @@ def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
 _UKF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.COVARIANCE_REPAIRED, status.FILTER_RESTARTED,
-               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE, status.INPUT_FROZEN)
+               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE, *input_monitors.STATUS_BITS)
 _UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
 DEFINITIONS = (
     Definition(name=PLAIN_NAME, build=build_plain, schema=UKF_SCHEMA, tunable=_UKF_TUNABLE,

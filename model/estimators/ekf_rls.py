@@ -9,7 +9,8 @@ reconstructed; numbers in brackets are the spec's):
   load-proportional left/right split and lateral force coefficients f_L, f_R (B3);
   alpha_eq = |delta - L r / vx| [18];
 * RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32], forgetting factor tau^(T / 1 ms)
-  (B6), updated only while alpha_eq >= alpha_min, trace(P) bounded by p_max, X clamped to
+  (B6), updated only while alpha_eq >= alpha_min (and, beyond the paper, no input monitor raises a
+  bit: model.input_monitors), trace(P) bounded by p_max, X clamped to
   [0.3, 1.5] C0_nom [33]; C_f, C_r [24, 25]; ``stiffness = "constant"`` gives the plain EKF with
   the vehicle file's C_f, C_r;
 * per-axle regressors, X = [C0_f, C0_r] against each axle's slip angle [3], updated while both
@@ -39,7 +40,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import consistency, filters, frozen, kalman, signals, status
+from vsegen.model import consistency, filters, input_monitors, kalman, signals, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
@@ -99,7 +100,7 @@ SCHEMA = EstimatorSchema(
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         ROLL_CORRECTION,
         *consistency.fields(CHANNELS),
-        frozen.FIELD,
+        *input_monitors.FIELDS,
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
@@ -196,7 +197,7 @@ def states(settings) -> Layout:
     consistency monitor its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
     monitor = consistency.STATES if consistency.enabled(settings) else ()
-    return Layout((*STATES.signals, *kinematic, *monitor, *frozen.states(settings, INPUTS.names)))
+    return Layout((*STATES.signals, *kinematic, *monitor, *input_monitors.states(settings, INPUTS.names)))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -326,11 +327,11 @@ def build(params: Parameters) -> Estimator:
     vx_min = settings["vx_min"]
     vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
-    stiffness = _stiffness(config, settings, choices, s, measured)
+    monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
+                                      INPUTS.names, config.vehicle["wheelbase"])
+    stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=monitors[1] > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
-    stuck = frozen.monitor(s, u, ok, guard.active, settings, config.sample_time, INPUTS.names) \
-        if frozen.enabled(choices) else ({}, ca.SX(0))
-    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, stuck)
+    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, monitors)
     init_state = _initial_state(config, settings, choices, layout, u, stiffness.kinematic)
     init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
@@ -345,9 +346,11 @@ def build(params: Parameters) -> Estimator:
                                                  params.numeric.sample_time))
 
 
-def _stiffness(config, settings, choices, s: dict, m: _Measured) -> _Stiffness:
+def _stiffness(config, settings, choices, s: dict, m: _Measured, inputs_suspect) -> _Stiffness:
     """Filtered r_dot, the axle forces' regression (per ``stiffness_regressor``), wheel loads and
-    the RLS update of the load-normalised stiffness, excited samples only, clamped."""
+    the RLS update of the load-normalised stiffness, clamped, on excited samples while no input
+    monitor raises a bit (``inputs_suspect``: a frozen, offset or inconsistent input would teach
+    it a stiffness that steady driving, where any stiffness fits, never corrects)."""
     vehicle, T = config.vehicle, config.sample_time
     regressor = choices["stiffness_regressor"]
     c0_nom = nominal_c0(vehicle)
@@ -376,7 +379,7 @@ def _stiffness(config, settings, choices, s: dict, m: _Measured) -> _Stiffness:
     P_rls = kalman.unpack_symmetric(ca.vertcat(*[s[n] for n in _RLS]), 2)
     forgetting = settings["forgetting_factor"] ** (T / REFERENCE_PERIOD)
     X_upd, P_upd = rls_update(X, P_rls, y, A, forgetting, settings["rls_covariance_max"])
-    excited = excitation >= settings["slip_min"]
+    excited = ca.logic_and(excitation >= settings["slip_min"], ca.logic_not(inputs_suspect))
     low, high = settings["stiffness_min"] * c0_nom, settings["stiffness_max"] * c0_nom
     X_next = ca.fmin(ca.fmax(ca.if_else(excited, X_upd, X), low), high)
     P_rls_next = ca.if_else(excited, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_rls))
@@ -399,10 +402,10 @@ def _ekf(config, settings, s: dict, k: _Stiffness, r_m: ca.SX):
 
 
 def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measured, k: _Stiffness, ekf,
-           stuck: tuple[dict, ca.SX]):
+           monitors: tuple[dict, ca.SX]):
     """(next state, output): the stiffness-rate weight, the integral method re-seeded from the
-    fused beta, their fusion, the optional consistency monitor, the frozen-signal monitor's step
-    ``stuck`` (``model.frozen.monitor``) and the hold."""
+    fused beta, their fusion, the optional consistency monitor, the input monitors' step
+    ``monitors`` (``model.input_monitors.monitor``) and the hold."""
     vehicle, T = config.vehicle, config.sample_time
     x_ekf, P_ekf, innovation = ekf
     active = guard.active
@@ -417,8 +420,7 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
-    code, monitor = guard.status, dict(stuck[0])
-    code = code + status.INPUT_FROZEN * stuck[1]
+    monitor, code = dict(monitors[0]), guard.status + monitors[1]
     if consistency.enabled(choices):   # beyond the paper: the monitor of the EKF's yaw-rate innovation
         check = consistency.monitor(s, innovation, settings, T)
         monitor |= {n: keep(value, n) for n, value in check.updates.items()}
@@ -470,7 +472,7 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
         **consistency.initial_entries(consistency.enabled(choices)),
-        **frozen.initial_entries(first, choices, INPUTS.names),
+        **input_monitors.initial_entries(first, choices, INPUTS.names),
     })
 
 
@@ -480,5 +482,5 @@ DEFINITIONS = (Definition(
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
              "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
              "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.INPUT_FROZEN),
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, *input_monitors.STATUS_BITS),
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model import consistency, discretize, frozen, kalman, signals, status
+from vsegen.model import consistency, discretize, input_monitors, kalman, signals, status
 from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import KF_MEASUREMENT_NOISE, Definition, Estimator, Tunable, make_guarded
@@ -32,7 +32,7 @@ NAME = "kf2dof"
 CHANNELS = ("ay", "r")
 """The KF's measured channels (the consistency monitor's sensor_noise order)."""
 SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *consistency.fields(CHANNELS), consistency.LINEAR_RANGE,
-                                 frozen.FIELD),
+                                 *input_monitors.FIELDS),
                          rules=LOW_SPEED_RULES)
 
 INPUTS = Layout(signals.inputs("delta", "vx", "ay", "r"))
@@ -47,7 +47,7 @@ def states(settings) -> Layout:
         Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
         *(consistency.STATES if consistency.enabled(settings) else ()),
-        *frozen.states(settings, INPUTS.names),
+        *input_monitors.states(settings, INPUTS.names),
         signals.HOLDING,
     ))
 
@@ -161,10 +161,9 @@ def build(params: Parameters) -> Estimator:
     code = guard.status + ca.if_else(
         ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
         status.BEYOND_LINEAR_RANGE, 0)
-    monitor = {}
-    if frozen.enabled(params.numeric.settings(NAME)):
-        monitor, stuck = frozen.monitor(s, u, ok, active, settings, config.sample_time, INPUTS.names)
-        code = code + status.INPUT_FROZEN * stuck
+    monitor, flags = input_monitors.monitor(s, u, ok, active, settings, params.numeric.settings(NAME),
+                                            config.sample_time, INPUTS.names, config.vehicle["wheelbase"])
+    code = code + flags
     if monitored:
         check = consistency.monitor(s, result["innovation"], settings, config.sample_time)
         monitor |= {k: ca.if_else(active, v, s[k]) for k, v in check.updates.items()}
@@ -192,7 +191,7 @@ def build(params: Parameters) -> Estimator:
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
         **consistency.initial_entries(monitored),
-        **frozen.initial_entries(first, params.numeric.settings(NAME), INPUTS.names),
+        **input_monitors.initial_entries(first, params.numeric.settings(NAME), INPUTS.names),
         "holding": holding,
     })
     init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
@@ -205,5 +204,5 @@ DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1)},
     status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE,
-                 status.INPUT_FROZEN),
+                 *input_monitors.STATUS_BITS),
     derived={**KF_MEASUREMENT_NOISE, **consistency.derived(CHANNELS)}),)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import filters, frozen, kalman, signals, status
+from vsegen.model import filters, input_monitors, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import BEYOND_LINEAR, Tunable
@@ -26,9 +26,9 @@ INPUTS = kf2dof.INPUTS
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 _KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
 DYN, KIN = 0, 1
-STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT, status.INPUT_FROZEN)
+STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT, *input_monitors.STATUS_BITS)
 """What seed 000's estimators can raise: the hold rule's bits, the reliability checks' time-out and
-the frozen-signal monitor's."""
+the input monitors'."""
 
 YAW_RATE_CHECKS = ("reference", "yaw_acceleration")
 KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
@@ -50,7 +50,7 @@ KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
     positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
     ROLL_CORRECTION,
-    frozen.FIELD,
+    *input_monitors.FIELDS,
 )
 """Seed 000's pre-processing and switching settings (docs/methods.md, seed 000 §3)."""
 
@@ -75,7 +75,7 @@ def window(params: Parameters, table: str) -> int:
 
 def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal, ...] = ()) -> Layout:
     """The state layout; ``extra`` are an estimator's own entries (0 at init, kept while holding),
-    ``monitors`` the frozen-signal monitor's (``model.frozen``)."""
+    ``monitors`` the input monitors' (``model.input_monitors``)."""
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -137,8 +137,8 @@ class KinematicDynamic:
         self.T = params.config.sample_time
         self.n_median = window(params, table)
         self.extra = extra
-        self.frozen = frozen.states(params.numeric.settings(table), INPUTS.names)
-        self.layout = states(self.n_median, extra, self.frozen)
+        self.monitors = input_monitors.states(params.numeric.settings(table), INPUTS.names)
+        self.layout = states(self.n_median, extra, self.monitors)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
@@ -183,10 +183,10 @@ class KinematicDynamic:
         history = [ay_b] + [s[f"ay_b_hist_{i}"] for i in range(1, self.n_median)]
         suspect = ca.logic_or(r_check.forced, ay_check.forced)
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
-        monitor = {}
-        if self.frozen:
-            monitor, stuck = frozen.monitor(s, u, ok, active, settings, self.T, INPUTS.names)
-            code = code + status.INPUT_FROZEN * stuck
+        monitor, flags = input_monitors.monitor(s, u, ok, active, settings,
+                                                self.params.numeric.settings(self.table), self.T,
+                                                INPUTS.names, self.params.config.vehicle["wheelbase"])
+        code = code + flags
 
         def keep(name, value):
             return ca.if_else(active, value, s[name])
@@ -239,7 +239,7 @@ class KinematicDynamic:
             "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0,
-            **frozen.initial_entries(first, self.params.numeric.settings(self.table), INPUTS.names),
+            **input_monitors.initial_entries(first, self.params.numeric.settings(self.table), INPUTS.names),
             "holding": holding,
             **{entry.name: ca.SX(0) for entry in self.extra},
         })

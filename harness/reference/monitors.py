@@ -1,0 +1,88 @@
+"""The input monitors in plain Python (model.input_monitors): the frozen-signal monitor
+(``blocks.frozen_*``) and the cross-checks of the inputs against each other (model.crosscheck),
+written from their equations, not from the model's code."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from vsegen.harness.reference import blocks
+
+CROSSCHECK_INPUTS = ("delta", "vx", "ay", "r")
+CHECKS = {"lateral_check_limit": ("lateral_residual",), "steering_offset_limit": ("steering_offset",),
+          "steer_check_limit": ("curvature", "steady_curvature")}
+"""Each cross-check: the setting that switches it on (> 0), its state entries."""
+
+
+def _on(settings, limit_key) -> bool:
+    return settings[limit_key] > 0
+
+
+def _crosschecked(settings, inputs) -> bool:
+    return all(n in inputs for n in CROSSCHECK_INPUTS) and any(_on(settings, key) for key in CHECKS)
+
+
+def states(settings, inputs) -> tuple[str, ...]:
+    """The state entries of the monitors that are on: the frozen-signal monitor's, then the
+    cross-checks' (quasi-steady detector, then each check's that is on)."""
+    checks = ()
+    if _crosschecked(settings, inputs):
+        checks = ("steady_delta", "steady_samples",
+                  *(name for key, names in CHECKS.items() if _on(settings, key) for name in names))
+    return (*blocks.frozen_states(settings, inputs), *checks)
+
+
+def initial(settings, inputs, first: Mapping[str, float]) -> dict:
+    """The monitors' entries at init: the frozen monitor's, a quasi-steady stretch starting at the
+    first sample's steer angle, nothing learned."""
+    entries = blocks.frozen_initial(settings, inputs, first)
+    for name in states(settings, inputs)[len(entries):]:
+        entries[name] = first["delta"] if name == "steady_delta" else 0.0
+    return entries
+
+
+def _low_pass(previous: float, value: float, T: float, time_constant: float) -> float:
+    return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
+
+
+def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
+         inputs, wheelbase: float) -> tuple[dict, int]:
+    """(new entries, status bits) of the monitors that are on; call only on an active sample (a
+    holding estimator holds its monitors)."""
+    new, code = {}, 0
+    if settings["frozen_time"] > 0:
+        new, frozen = blocks.frozen_monitor(x, u, ok, settings, T, inputs)
+        code = blocks.INPUT_FROZEN if frozen else 0
+    if not _crosschecked(settings, inputs):
+        return new, code
+    steady_samples = math.floor(settings["steady_time"] / T + 0.5)
+    if abs(u["delta"] - x["steady_delta"]) * u["vx"] ** 2 / wheelbase > settings["steady_band"]:
+        new["steady_delta"], new["steady_samples"] = u["delta"], 0.0      # a new stretch starts
+    else:
+        new["steady_delta"] = x["steady_delta"]
+        new["steady_samples"] = min(x["steady_samples"] + 1.0, steady_samples)
+    steady = new["steady_samples"] >= steady_samples
+    if _on(settings, "lateral_check_limit"):
+        residual = x["lateral_residual"]
+        if steady and abs(u["ay"]) <= settings["lateral_check_range"]:
+            residual = _low_pass(residual, u["ay"] - u["r"] * u["vx"], T, settings["lateral_check_time"])
+        new["lateral_residual"] = residual
+        code |= blocks.LATERAL_INCONSISTENT if abs(residual) > settings["lateral_check_limit"] else 0
+    if _on(settings, "steering_offset_limit"):
+        offset = x["steering_offset"]
+        if (steady and abs(u["ay"]) <= settings["steering_offset_range"]
+                and u["vx"] >= settings["steering_offset_speed"]):
+            offset = _low_pass(offset, u["delta"] - wheelbase * u["r"] / u["vx"], T,
+                               settings["steering_offset_time"])
+        new["steering_offset"] = offset
+        code |= blocks.STEERING_OFFSET if abs(offset) > settings["steering_offset_limit"] else 0
+    if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady
+        curvature = _low_pass(x["curvature"], u["r"] / u["vx"], T, settings["steer_check_time"])
+        turned_steady = steady and x["steady_samples"] < steady_samples
+        new["curvature"] = curvature
+        new["steady_curvature"] = curvature if turned_steady else x["steady_curvature"]
+        if steady and abs(u["ay"]) <= settings["steer_check_range"]:
+            change = (curvature - new["steady_curvature"]) * u["vx"] ** 2
+            code |= blocks.INPUT_FROZEN if abs(change) > settings["steer_check_limit"] else 0
+    return new, code

@@ -1,0 +1,167 @@
+"""Cross-checks of the inputs against each other, as production ESC software checks its sensors.
+Beyond the papers; the rule they serve: never a silently wrong estimate.
+
+The checks look at *quasi-steady* driving only, where the kinematics give a relation between the
+inputs that no tyre parameter enters. A sample is quasi-steady when the steer angle has stayed
+near the value delta_0 it had ``steady_time`` ago, |delta - delta_0| v_x^2 / l <= ``steady_band``
+(the change of a_y the steer change would ask for in a kinematic turn; the stretch restarts
+whenever it leaves the band), so the yaw rate and the lateral velocity have settled:
+
+* **lateral check** (status LATERAL_INCONSISTENT): with v_y' = 0 the lateral specific force is
+  a_y = r v_x. While quasi-steady and |a_y| <= ``lateral_check_range`` (where body roll adds at
+  most about 0.1 m/s^2 to a body-fixed accelerometer), the residual a_y - r v_x is averaged,
+
+      e_k = e_k-1 + (1 - exp(-T / lateral_check_time)) (a_y - r v_x - e_k-1),
+
+  and held outside those stretches. |e| > ``lateral_check_limit`` raises the bit: a road bank
+  (g sin(phi_r) in a_y: 0.51 m/s^2 for 3 deg), an accelerometer offset or mounting tilt, a yaw-rate
+  or speed error. Every estimator that integrates a_y or trusts a_y against r is suspect then.
+* **steering-angle zero** (status STEERING_OFFSET): driving straight (quasi-steady, |a_y| <=
+  ``steering_offset_range``, v_x >= ``steering_offset_speed``), the road-wheel angle of the
+  kinematic (Ackermann) turn is l r / v_x; understeer adds K_us a_y, below 0.001 rad per m/s^2 for
+  passenger cars, so the zero is learned as
+
+      d_k = d_k-1 + (1 - exp(-T / steering_offset_time)) (delta - l r / v_x - d_k-1)
+
+  and |d| > ``steering_offset_limit`` raises the bit: the steering-angle sensor's zero is off (a
+  service calibration, an alignment or a sensor exchange), so every model-based scheme sees a
+  steer angle the car does not have. The learned zero d is a state (``steering_offset``).
+* **steer angle follows the car** (status INPUT_FROZEN): at a constant steer angle the path
+  curvature r / v_x stays constant once settled (understeer changes it by a few per cent with the
+  speed). With the curvature low-passed,
+
+      kappa_k = kappa_k-1 + (1 - exp(-T / steer_check_time)) (r / v_x - kappa_k-1),
+
+  kappa_0 = kappa when the stretch turns quasi-steady, the change of the lateral acceleration the
+  path asks for, (kappa - kappa_0) v_x^2, is checked while the stretch lasts and |a_y| <=
+  ``steer_check_range`` (away from the friction limit, where the path does bend away at a held
+  steer angle); beyond ``steer_check_limit`` it raises the bit: the car turns while
+  its steer angle stands still, a steering-angle signal frozen at any value (a bit-for-bit
+  repetition test cannot tell a steering wheel held still from a stuck sensor).
+
+A holding estimator holds the checks with the rest of its state. A limit of 0 switches its check
+off (no state, no status; the quasi-steady detector exists while any is on).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from vsegen.model import status
+from vsegen.model.schema import nonnegative, positive
+from vsegen.model.signals import Signal
+
+INPUTS = ("delta", "vx", "ay", "r")
+"""The inputs the checks read; an estimator without all of them has no cross-checks."""
+
+FIELDS = (
+    positive("steady_time", "s", "beyond the papers: the steer angle must stay within steady_band "
+             "this long before the cross-checks take a sample as quasi-steady", default=0.3),
+    positive("steady_band", "m/s^2", "a quasi-steady stretch ends when the steer angle has moved "
+             "so far that a kinematic turn would change a_y by this, |delta - delta_0| v_x^2 / l",
+             default=0.2),
+    nonnegative("lateral_check_limit", "m/s^2", "beyond the papers: the mean of a_y - r v_x in "
+                "quasi-steady driving beyond this raises status 8192 LATERAL_INCONSISTENT (a road "
+                "bank, an accelerometer offset or tilt, a yaw-rate or speed error); 0 = no check",
+                default=0.0),
+    positive("lateral_check_time", "s", "time constant of the lateral check's mean", default=0.5),
+    positive("lateral_check_range", "m/s^2", "the lateral check samples only while |a_y| is below "
+             "this (body roll's share of a_y stays small)", default=1.5),
+    nonnegative("steering_offset_limit", "rad", "beyond the papers: the steering-angle zero learned "
+                "in straight driving beyond this raises status 16384 STEERING_OFFSET; 0 = no "
+                "learning", default=0.0),
+    positive("steering_offset_time", "s", "time constant of the learned steering-angle zero",
+             default=5.0),
+    positive("steering_offset_range", "m/s^2", "the steering zero is learned only while |a_y| is "
+             "below this (straight driving)", default=0.5),
+    positive("steering_offset_speed", "m/s", "the steering zero is learned only at or above this "
+             "speed (a gyro bias b shifts it by l b / v_x)", default=15.0),
+    nonnegative("steer_check_limit", "m/s^2", "beyond the papers: at a constant steer angle, a "
+                "change of the path's lateral acceleration (r - kappa_0 v_x) v_x beyond this raises "
+                "status 2048 INPUT_FROZEN (a frozen steering-angle signal); 0 = no check", default=0.0),
+    positive("steer_check_time", "s", "time constant of the steer check's low-passed path curvature",
+             default=0.1),
+    positive("steer_check_range", "m/s^2", "the steer check runs only while |a_y| is below this (the "
+             "friction limit, where the path bends away at a held steer angle, lies beyond it)",
+             default=6.0),
+)
+
+_STEADY = (Signal("steady_delta", "rad", "cross-checks: steer angle at the start of the quasi-steady "
+                  "stretch"),
+           Signal("steady_samples", "-", "cross-checks: samples the stretch has lasted (at most "
+                  "steady_time / T)"))
+_CHECKS = (
+    ("lateral_check_limit", (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x "
+                                    "in quasi-steady driving"),)),
+    ("steering_offset_limit", (Signal("steering_offset", "rad", "learned steering-angle zero (road "
+                                      "wheel)"),)),
+    ("steer_check_limit", (Signal("curvature", "1/m", "steer check: low-passed path curvature r / v_x"),
+                           Signal("steady_curvature", "1/m", "steer check: low-passed path curvature "
+                                  "when the stretch turned quasi-steady"))),
+)
+"""Each check: the setting whose value > 0 switches it on, and its state entries (0 at init)."""
+
+
+def _on(numeric_settings, limit_key: str) -> bool:
+    return numeric_settings[limit_key] > 0.0
+
+
+def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
+    """Whether an estimator reading ``inputs`` has any cross-check (structural: a limit > 0 when
+    it is generated, also in calibratable mode)."""
+    return all(name in inputs for name in INPUTS) and any(_on(numeric_settings, key) for key, _ in _CHECKS)
+
+
+def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
+    """The checks' state entries (none when all are off)."""
+    if not enabled(numeric_settings, inputs):
+        return ()
+    return (*_STEADY, *(entry for key, entries in _CHECKS if _on(numeric_settings, key) for entry in entries))
+
+
+def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
+    """The entries at init: a stretch starting at the first sample, nothing learned."""
+    return {entry.name: first["delta"] if entry.name == "steady_delta" else ca.SX(0)
+            for entry in states(numeric_settings, inputs)}
+
+
+def _gain(sample_time: float, time_constant):
+    return 1 - ca.exp(-sample_time / time_constant)
+
+
+def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float,
+            wheelbase) -> tuple[dict, dict]:
+    """(new state entries, {status bit: 1 while raised}) from the state entries ``s``, the inputs
+    ``u`` (plausible on an active sample) and the guard's ``active`` flag; call only when
+    :func:`enabled`. The flags are arithmetic (no branch in an active kernel)."""
+    limit = ca.floor(settings["steady_time"] / sample_time + 0.5)
+    moved = ca.fabs(u["delta"] - s["steady_delta"]) * u["vx"] * u["vx"] > settings["steady_band"] * wheelbase
+    samples = (1 - moved) * ca.fmin(s["steady_samples"] + 1, limit)
+    steady = samples >= limit
+    updates = {"steady_delta": ca.if_else(moved, u["delta"], s["steady_delta"]), "steady_samples": samples}
+    raised = {}
+    if _on(numeric_settings, "lateral_check_limit"):
+        sampled = steady * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
+        residual = s["lateral_residual"] + sampled * _gain(sample_time, settings["lateral_check_time"]) * (
+            u["ay"] - u["r"] * u["vx"] - s["lateral_residual"])
+        updates["lateral_residual"] = residual
+        raised[status.LATERAL_INCONSISTENT] = ca.fabs(residual) > settings["lateral_check_limit"]
+    if _on(numeric_settings, "steering_offset_limit"):
+        sampled = steady * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
+            u["vx"] >= settings["steering_offset_speed"])
+        offset = s["steering_offset"] + sampled * _gain(sample_time, settings["steering_offset_time"]) * (
+            u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
+            - s["steering_offset"])
+        updates["steering_offset"] = offset
+        raised[status.STEERING_OFFSET] = ca.fabs(offset) > settings["steering_offset_limit"]
+    if _on(numeric_settings, "steer_check_limit"):
+        curvature = s["curvature"] + _gain(sample_time, settings["steer_check_time"]) * (
+            u["r"] / u["vx"] - s["curvature"])
+        turned_steady = steady * (s["steady_samples"] < limit)
+        reference = ca.if_else(turned_steady, curvature, s["steady_curvature"])
+        checked = steady * (ca.fabs(u["ay"]) <= settings["steer_check_range"])
+        change = (curvature - reference) * u["vx"] * u["vx"]
+        updates |= {"curvature": curvature, "steady_curvature": reference}
+        raised[status.INPUT_FROZEN] = checked * (ca.fabs(change) > settings["steer_check_limit"])
+    return ({k: ca.if_else(active, v, s[k]) for k, v in updates.items()},
+            {bit: active * flag for bit, flag in raised.items()})

@@ -1,0 +1,54 @@
+"""The input monitors a sideslip estimator carries beyond its method, behind one interface: the
+frozen-signal monitor (``model.frozen``, status INPUT_FROZEN) and the cross-checks of the inputs
+against each other (``model.crosscheck``, status LATERAL_INCONSISTENT and STEERING_OFFSET).
+
+An estimator lists :data:`FIELDS` in its schema, puts :func:`states` in its state layout and
+:func:`initial_entries` in its initial state, and adds the code :func:`monitor` returns to its
+status; each monitor that is off (its setting 0) has no state and no code.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from vsegen.model import crosscheck, frozen, status
+from vsegen.model.signals import Signal
+
+FIELDS = (frozen.FIELD, *crosscheck.FIELDS)
+STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET)
+"""The bits the monitors can raise."""
+
+
+def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
+    """Whether an estimator reading ``inputs`` has any input monitor (structural)."""
+    return frozen.enabled(numeric_settings) or crosscheck.enabled(numeric_settings, inputs)
+
+
+def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
+    """The monitors' state entries (those that are on)."""
+    return (*frozen.states(numeric_settings, inputs), *crosscheck.states(numeric_settings, inputs))
+
+
+def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
+    """The monitors' entries at init from the first sample ``first`` (neutralised inputs)."""
+    return {**frozen.initial_entries(first, numeric_settings, inputs),
+            **crosscheck.initial_entries(first, numeric_settings, inputs)}
+
+
+def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_settings,
+            sample_time: float, inputs: tuple[str, ...], wheelbase) -> tuple[dict, ca.SX]:
+    """(new state entries, status code) of the monitors that are on, from the state entries
+    ``s`` as they came in, the raw inputs ``u``, their plausibility flags and the guard's
+    ``active`` flag (a holding estimator holds its monitors); ``settings`` the estimator's
+    (numbers or calibration symbols), ``numeric_settings`` their numbers (which monitors exist),
+    ``wheelbase`` l in m."""
+    updates, raised = {}, {}
+    if frozen.enabled(numeric_settings):
+        updates, raised[status.INPUT_FROZEN] = frozen.monitor(s, u, plausible, active, settings,
+                                                              sample_time, inputs)
+    if crosscheck.enabled(numeric_settings, inputs):
+        checked, flags = crosscheck.monitor(s, u, active, settings, numeric_settings, sample_time, wheelbase)
+        updates |= checked
+        for bit, flag in flags.items():     # a bit two monitors raise counts once
+            raised[bit] = flag + raised[bit] - flag * raised[bit] if bit in raised else flag
+    return updates, sum((bit * flag for bit, flag in raised.items()), ca.SX(0))

@@ -1,0 +1,104 @@
+"""The cross-checks of the inputs (model.crosscheck): a bank or an accelerometer offset raises
+LATERAL_INCONSISTENT, a steering-angle zero error STEERING_OFFSET within 60 s of ordinary driving,
+a steering angle frozen in a manoeuvre INPUT_FROZEN within 1 s; undisturbed drives raise none of
+them, on both truth cars; a limit of 0 removes its check."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from locations import VEHICLES
+
+from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.sim.scenarios import Case
+from vsegen.model.estimators import build
+from vsegen.model.status import INPUT_FROZEN, LATERAL_INCONSISTENT, STEERING_OFFSET
+
+CARS = ("c_class", "rwd_saloon")
+CHECKED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
+UNDISTURBED = ("dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook", "hil_sine", "crest_dip",
+               "downhill_brake_curve", "crossfall_lane_change")
+
+
+def _car(name: str):
+    return load_vehicle(VEHICLES / f"{name}.toml")
+
+
+def _raised(config, estimator: str, case: Case, bit: int) -> np.ndarray:
+    """The times (s) at which ``estimator`` raises ``bit`` on ``case``."""
+    log = case.simulate(config, 1.0 / config.sample_time)
+    status = run_estimator(config, estimator, log)["status"].astype(int)
+    return log["t"][(status & bit) > 0]
+
+
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("scenario", UNDISTURBED)
+def test_undisturbed_drives_raise_no_cross_check(car, scenario):
+    """Every undisturbed manoeuvre, the friction limit and a 2.5 % crossfall included: no bit."""
+    config = _car(car)
+    for bit in (LATERAL_INCONSISTENT, STEERING_OFFSET, INPUT_FROZEN):
+        assert _raised(config, "switching", Case.of(scenario), bit).size == 0, bit
+
+
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("case", [Case.of("banked_curve"), Case.of("dlc", ay_offset=0.5),
+                                  Case.of("crossfall_lane_change", crossfall=6.0)])
+def test_a_bank_or_an_accelerometer_offset_is_lateral_inconsistency(car, case):
+    """The 6 % superelevated curve, a 0.5 m/s^2 offset, a 6 % crossfall (each about 0.5 m/s^2 of
+    a_y - r v_x)."""
+    assert _raised(_car(car), "switching", case, LATERAL_INCONSISTENT).size
+
+
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_steering_zero_error_of_0_2_degrees_is_flagged_within_60_s_of_ordinary_driving(car, sign):
+    """A 0.2 deg road-wheel zero error (about 3 deg at the steering wheel) on a 60 s drive with a
+    lane change, flat and on a 2.5 % crossfall; a 0.3 deg/s gyro bias alone is not taken for one."""
+    config = _car(car)
+    offset = sign * math.radians(0.2)
+    for crossfall in (0.0, 2.5):
+        case = Case.of("crossfall_lane_change", duration=60.0, crossfall=crossfall, steer_offset=offset)
+        flagged = _raised(config, "switching", case, STEERING_OFFSET)
+        assert flagged.size and flagged[0] < 60.0
+    biased = Case.of("crossfall_lane_change", duration=60.0, gyro_bias=math.radians(0.3))
+    assert _raised(config, "switching", biased, STEERING_OFFSET).size == 0
+
+
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("start", [3.0, 4.0, 5.0, 6.0])
+def test_a_steering_angle_frozen_in_a_manoeuvre_is_flagged_within_1_s(car, start):
+    """The steering signal stuck at any point of the double lane change."""
+    flagged = _raised(_car(car), "switching", Case.of("dlc", freeze=f"delta:{start}:1.5"), INPUT_FROZEN)
+    assert flagged.size and start < flagged[0] <= start + 1.0
+
+
+@pytest.mark.parametrize("name", CHECKED)
+def test_every_checked_estimator_raises_the_bits(config, name):
+    """Each estimator carries the same checks (model.input_monitors): the offset and the steering
+    zero error are seen by all."""
+    case = Case.of("crossfall_lane_change", duration=30.0, crossfall=0.0, ay_offset=0.5,
+                   steer_offset=math.radians(0.3))
+    assert _raised(config, name, case, LATERAL_INCONSISTENT).size
+    assert _raised(config, name, case, STEERING_OFFSET).size
+
+
+def test_a_limit_of_zero_removes_its_check(variant):
+    off = variant("estimator.kf2dof", lateral_check_limit=0.0, steering_offset_limit=0.0, steer_check_limit=0.0)
+    entries = {"steady_delta", "lateral_residual", "steering_offset", "curvature"}
+    assert not entries & set(build("kf2dof", off).states.names)
+    only_lateral = variant("estimator.kf2dof", steering_offset_limit=0.0, steer_check_limit=0.0)
+    names = set(build("kf2dof", only_lateral).states.names)
+    assert "lateral_residual" in names and not {"steering_offset", "curvature"} & names
+
+
+def test_ekf_rls_learns_no_stiffness_from_a_frozen_yaw_rate(config):
+    """The RLS stops while an input monitor raises a bit, so a yaw rate stuck for 1.5 s in a
+    steady corner leaves the stiffness, and after the freeze the sideslip angle, near right."""
+    case = Case.of("step_steer", freeze="r:3:1.5")
+    log = case.simulate(config, 1.0 / config.sample_time)
+    estimate = run_estimator(config, "ekf_rls", log)
+    after = log["t"] > 4.5
+    assert np.max(np.abs(np.degrees(estimate["beta"][after] - log["beta_ref"][after]))) < 1.0
