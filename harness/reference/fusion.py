@@ -16,8 +16,10 @@ OUTPUTS = ("beta", "vy", "r", "weight", "status")
 
 
 def extra(config) -> tuple[str, ...]:
-    """fusion's own state entries: the consistency monitor's mean when it is on."""
-    return blocks.MONITOR_STATES if config.settings(TABLE)["residual_window"] > 0 else ()
+    """fusion's own state entries: the learned offset and the consistency monitor's mean, when on."""
+    s = config.settings(TABLE)
+    return (*(("kin_offset",) if s["offset_memory"] > 0 else ()),
+            *(blocks.MONITOR_STATES if s["residual_window"] > 0 else ()))
 
 
 def names(config):
@@ -37,13 +39,18 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
+    offset, learned = x.get("kin_offset", 0.0), {}     # beyond the paper: the kinematic offset
+    if s["offset_memory"] > 0:
+        learned["kin_offset"] = kinematic_dynamic.learned_offset(s, T, offset, ay_f, updates["ay_last"],
+                                                                 updates["r_last"], u[1])
     xk, P, innovation = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
-                                                 x["vx_prev"], u, r_k)
+                                                 x["vx_prev"], u, r_k,
+                                                 ay_offset=s["offset_sensor_share"] * offset)
     monitor = {}
     if "residual" in x:                       # the consistency monitor (beyond the paper)
         monitor, suspect, _ = blocks.residual_monitor(x, innovation, s, T)
         status |= blocks.MODEL_INCONSISTENT if suspect else 0
-    vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"])
+    vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
     beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
@@ -53,5 +60,5 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
         status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
-           "holding": 0.0, "mode": DYN, **monitor}
+           "holding": 0.0, "mode": DYN, **monitor, **learned}
     return new, [beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]

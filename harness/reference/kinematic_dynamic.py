@@ -128,9 +128,19 @@ def preprocess(config, table, x, u):
     return new, r_k, float(np.median(history)), r_forced or ay_forced
 
 
-def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
-    """The 2-DOF KF: predict with the previous inputs, update with z = [a_y,m, r_k]; returns
-    (x, P, the prior innovation z - C x- - D delta)."""
+def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float, vx: float,
+                   allowed: bool = True) -> float:
+    """The kinematic offset c (beyond the paper): learned towards a_y - r v_x (the checked
+    ``ay``, ``r``) while ``allowed`` and near straight, |a_y,f - c| and |r v_x| below offset_band."""
+    band = s["offset_band"]
+    if not (allowed and abs(ay_f - offset) < band and abs(r * vx) < band):
+        return offset
+    return offset + (1 - math.exp(-T / s["offset_memory"])) * (ay - r * vx - offset)
+
+
+def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
+    """The 2-DOF KF: predict with the previous inputs, update with z = [a_y,m - ay_offset, r_k];
+    returns (x, P, the prior innovation z - C x- - D delta)."""
     s = config.settings(table)
     T = config.sample_time
     A, B, _, _ = blocks.bicycle(config.vehicle, clamp(config, table, vx_prev))
@@ -138,7 +148,7 @@ def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k):
     xk, P = blocks.kf_predict(np.array([vy, r]), P, Phi, Gamma, np.array([delta_prev]),
                               np.array(s["process_noise"]) * T)
     _, _, C, D = blocks.bicycle(config.vehicle, clamp(config, table, u[1]))
-    z = np.array([roll_corrected(config, table, u[2]), r_k])
+    z = np.array([roll_corrected(config, table, u[2]) - ay_offset, r_k])
     innovation = z - C @ xk - D @ np.array([u[0]])
     x_new, P_new = blocks.kf_update(xk, P, z, C, D, np.array([u[0]]), np.array(s["measurement_noise"]))
     return x_new, P_new, innovation

@@ -53,10 +53,9 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
             status += blocks.KINEMATIC_DWELL_LIMITED
         new["kin_samples"] = x["kin_samples"] + (1.0 if mode == KIN else 0.0) if above else 0.0
     new["mode"] = mode
-    straight = abs(ay_f - offset) < s["offset_band"] and abs(r_k * u[1]) < s["offset_band"]
-    if s["offset_memory"] > 0 and mode == DYN and straight:     # beyond the paper: learn the offset
-        gain = 1 - math.exp(-config.sample_time / s["offset_memory"])
-        new["kin_offset"] = offset + gain * (new["ay_last"] - new["r_last"] * u[1] - offset)
+    if s["offset_memory"] > 0:               # beyond the paper: learned in near-straight dynamic driving
+        new["kin_offset"] = kinematic_dynamic.learned_offset(s, config.sample_time, offset, ay_f, new["ay_last"],
+                                                             new["r_last"], u[1], allowed=mode == DYN)
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]
         vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)  # [E14]
@@ -67,7 +66,9 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         else:
             vy0, r0 = x["vy"], x["r"]
             P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
-        xk, P, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k)
+        sensor = s["offset_sensor_share"] * new["kin_offset"] if s["offset_memory"] > 0 else 0.0
+        xk, P, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k,
+                                            ay_offset=sensor)   # beyond the paper: the offset's sensor share
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
     new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)

@@ -4,7 +4,9 @@ Both schemes run at every sample on the shared seed-000 pre-processing: the KF (
 ``dynamic_update``, this table's settings) and the kinematic integrator with an integral correction
 towards the KF, vy_kin += T (a_y,k-1 - r_k-1 vx_k-1) + T k_c (vy_KF,k-1 - vy_kin,k-1). The output
 is the weighted fusion beta = w beta_kin + (1 - w) beta_KF (and likewise vy), with
-w = clamp(|a_y,f| / (2 a_yT), 0, 1). Hold rule as the switching estimator.
+w = clamp(|a_y,f| / (2 a_yT), 0, 1). Hold rule as the switching estimator. Beyond the paper, as
+switching: the learned kinematic offset c (model.estimators.kinematic_offset; the integrator takes
+a_y - r v_x - c, the KF a_y - offset_sensor_share c).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from vsegen.model.estimator import (
     Tunable,
     make_guarded,
 )
-from vsegen.model.estimators import kf2dof
+from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     INPUTS,
@@ -47,6 +49,7 @@ SCHEMA = EstimatorSchema(
                         "while w |beta_kin - beta_KF|, the kinematic scheme's pull on the output away "
                         "from the KF, exceeds this (a bank or an offset drifts the integrator); "
                         "0 = never", default=0.0),
+            *kinematic_offset.FIELDS,
             *consistency.fields(kf2dof.CHANNELS)),
     rules=LOW_SPEED_RULES)
 
@@ -61,8 +64,10 @@ OUTPUTS = Layout((
 
 def build(params: Parameters) -> Estimator:
     """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
-    monitored = consistency.enabled(params.numeric.settings(NAME))
-    seed = KinematicDynamic(params, NAME, consistency.STATES if monitored else ())
+    numeric = params.numeric.settings(NAME)
+    monitored = consistency.enabled(numeric)
+    seed = KinematicDynamic(params, NAME, (*kinematic_offset.states(numeric),
+                                           *(consistency.STATES if monitored else ())))
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
     inputs, u = INPUTS.symbols("input")
@@ -72,14 +77,22 @@ def build(params: Parameters) -> Estimator:
     weight = ca.fmin(ca.fmax(ca.fabs(pre.ay_filtered) / (2 * seed.settings["threshold"]), 0), 1)
 
     ok = pre.guard.plausible  # the KF runs every sample: feed it plausible values only
+    offset, learned = ca.SX(0), {}
+    if kinematic_offset.enabled(numeric):    # learned in near-straight driving, used from the next sample
+        offset = s["kin_offset"]
+        learning = ca.logic_and(active, kinematic_offset.near_straight(
+            seed.settings, pre.ay_filtered, pre.r_checked, u["vx"], offset))
+        learned = {"kin_offset": kinematic_offset.learned(seed.settings, T, offset, pre.updates["ay_last"],
+                                                          pre.updates["r_last"], u["vx"], learning)}
     result = kf2dof.dynamic_update(params, NAME)(
         x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),
-        vx=hold(u["vx"], ok["vx"], seed.vx_min), ay=hold(seed.roll_corrected(u["ay"]), ok["ay"], 0),
+        vx=hold(u["vx"], ok["vx"], seed.vx_min),
+        ay=hold(seed.roll_corrected(u["ay"]) - kinematic_offset.sensor_part(seed.settings, offset), ok["ay"], 0),
         r_meas=pre.r_checked,
         **params.keyword())
     vy_kf = result["x_next"][0]
-    vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"]) \
+    vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"] - offset) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta_kin = sideslip(vy_kin, vx)
@@ -95,7 +108,7 @@ def build(params: Parameters) -> Estimator:
         code = code + ca.if_else(ca.logic_and(active, check.suspect), status.MODEL_INCONSISTENT, 0)
     running = seed.advanced({**s, **pre.updates}, u, {
         "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
-        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor})
+        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor, **learned})
     holding = seed.held({**s, **pre.updates}, u, guard.plausible)
     next_state = ca.if_else(active, layout.pack(running), layout.pack(holding))
     output = OUTPUTS.pack({

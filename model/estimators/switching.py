@@ -36,7 +36,7 @@ from vsegen.model.estimator import (
     make_functions,
     make_schemes,
 )
-from vsegen.model.estimators import kf2dof
+from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     DYN,
@@ -67,13 +67,7 @@ SCHEMA = EstimatorSchema(
                      "threshold (adaptive_memory > 0 only)", default=0.8),
             positive("adaptive_max", "m/s^2", "upper bound of the adaptive threshold "
                      "(adaptive_memory > 0 only)", default=2.5),
-            nonnegative("offset_memory", "s", "beyond the paper: time constant of the learned "
-                        "kinematic offset c, the mean of a_y - r v_x while the dynamic scheme runs "
-                        "(accelerometer and gyro biases; v_y' averages to 0); the kinematic scheme "
-                        "integrates a_y - r v_x - c; 0 = off (the paper)", default=0.0),
-            positive("offset_band", "m/s^2", "the offset is learned only while |a_y,f - c| and |r v_x| "
-                     "are below this (near-straight driving, where v_y' and the roll and lever-arm "
-                     "terms vanish; offset_memory > 0 only)", default=0.5),
+            *kinematic_offset.FIELDS,
             nonnegative("kinematic_max_dwell", "s", "beyond the paper: longest stay in the kinematic "
                         "scheme while |a_y,f| stays above the threshold; then the dynamic scheme takes "
                         "over (status KINEMATIC_DWELL_LIMITED) until |a_y,f| falls below it; 0 = "
@@ -81,8 +75,6 @@ SCHEMA = EstimatorSchema(
     rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 HOLD = 2
 PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
-OFFSET = Signal("kin_offset", "m/s^2", "learned kinematic offset c: mean of a_y - r v_x in the dynamic "
-                                      "scheme (offset_memory)")
 DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f| last fell below the "
                                    "threshold (kinematic_max_dwell)")
 
@@ -92,25 +84,8 @@ def extra_states(settings) -> tuple[Signal, ...]:
     dwell counter (kinematic_max_dwell > 0) and the learned offset (offset_memory > 0)."""
     return (*((PEAK,) if settings["adaptive_memory"] > 0.0 else ()),
             *((DWELL,) if settings["kinematic_max_dwell"] > 0.0 else ()),
-            *((OFFSET,) if settings["offset_memory"] > 0.0 else ()))
+            *kinematic_offset.states(settings))
 
-
-def near_straight(seed: KinematicDynamic, active, mode, pre, vx, offset):
-    """Whether the offset learns on this sample: active, the dynamic scheme, and |a_y,f - c| and
-    |r v_x| both below offset_band (straight driving, where a_y - r v_x = v_y' is 0; centred on
-    the learned c, so that an accelerometer bias near the band does not truncate what is learned)."""
-    band = seed.settings["offset_band"]
-    return ca.logic_and(ca.logic_and(active, mode == DYN),
-                        ca.logic_and(ca.fabs(pre.ay_filtered - offset) < band,
-                                     ca.fabs(pre.r_checked * vx) < band))
-
-
-def learned_offset(seed: KinematicDynamic, previous, ay_checked, r_checked, vx, learning):
-    """c_k = c_k-1 + (1 - exp(-T / offset_memory)) (a_y - r v_x - c_k-1) while ``learning`` (the
-    sample is :func:`near_straight`), else c_k-1: what the accelerometer and gyro
-    biases add to the kinematic derivative a_y - r v_x, which is 0 in near-straight driving."""
-    gain = 1 - ca.exp(-seed.T / seed.settings["offset_memory"])
-    return ca.if_else(learning, previous + gain * (ay_checked - r_checked * vx - previous), previous)
 
 OUTPUTS = Layout((
     Signal("beta", "rad", "sideslip angle at the CG, atan2(vy, vx) of the active scheme"),
@@ -183,11 +158,13 @@ def build(params: Parameters) -> Estimator:
         mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
         extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
-    if OFFSET in seed.extra:
-        extra["kin_offset"] = learned_offset(seed, s["kin_offset"], pre.updates["ay_last"],
-                                             pre.updates["r_last"], u["vx"],
-                                             near_straight(seed, active, mode, pre, u["vx"],
-                                                           s["kin_offset"]))
+    if kinematic_offset.OFFSET in seed.extra:    # learned in near-straight dynamic driving
+        learning = ca.logic_and(ca.logic_and(active, mode == DYN),
+                                kinematic_offset.near_straight(seed.settings, pre.ay_filtered, pre.r_checked,
+                                                               u["vx"], s["kin_offset"]))
+        extra["kin_offset"] = kinematic_offset.learned(seed.settings, T, s["kin_offset"], pre.updates["ay_last"],
+                                                       pre.updates["r_last"], u["vx"], learning)
+    offset = (lambda m: m["kin_offset"]) if kinematic_offset.OFFSET in seed.extra else (lambda m: 0)
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
@@ -212,7 +189,8 @@ def build(params: Parameters) -> Estimator:
                        ca.if_else(from_kin, c["r_prev"], m["r"]))
         P = ca.if_else(from_kin, seed.P0, ca.vertcat(*[m[n] for n in COVARIANCE]))
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
-                        delta=v["delta"], vx=v["vx"], ay=seed.roll_corrected(v["ay"]),
+                        delta=v["delta"], vx=v["vx"],
+                        ay=seed.roll_corrected(v["ay"]) - kinematic_offset.sensor_part(seed.settings, offset(m)),
                         r_meas=c["r_checked"],
                         **params.keyword())
         vy = result["x_next"][0]
@@ -223,8 +201,7 @@ def build(params: Parameters) -> Estimator:
 
     def kinematic(m, c, v):
         start = ca.if_else(c["mode_prev"] == DYN, m["vy"], m["vy_kin"])
-        offset = m["kin_offset"] if OFFSET in seed.extra else 0
-        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - offset)
+        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - offset(m))
         return (seed.advanced(m, v, {"vy_kin": vy_kin}),
                 output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))
