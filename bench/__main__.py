@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, pil, seed003, versus_hand
+from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, options_cost, pil, seed003, versus_hand
 from bench.document import provenance, section_of, with_section
 from bench.measure import CC, FLAGS, generated_driver, write_inputs
 from vsegen.codegen.generate import REVIEWED_FORMS, render
@@ -91,6 +91,7 @@ def main(argv: list[str] | None = None) -> None:
                          f"{driver.ns_per_step(inputs_file):.1f} | {driver.text_bytes} | "
                          f"{target.text if target else '-'} | {target.stack_step if target else '-'} |")
 
+    lines += ["", *options_cost.section(args.vehicle, log, folder), ""]
     lines += ["", *versus_hand.section(args.vehicle, log, folder), ""]
 
     if any(isinstance(build(name, config).structure, Particles) for name in config.estimators):

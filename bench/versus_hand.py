@@ -19,6 +19,7 @@ from vsegen.harness.logs.table import Log
 from vsegen.harness.project.vehicles import load_vehicle, with_settings
 from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.target.toolchains import available, build_for_target, target_for
+from vsegen.model import input_monitors
 from vsegen.model.estimators import build
 from vsegen.model.params import parse_vehicle
 
@@ -35,7 +36,8 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "derived once, 1/vx once, P as three entries, closed-form 2x2 inverse with one "
              "division, no pointer checks); tested equal to the reference. The generated kf2dof "
              "here has the monitors of the shipped file off (residual_window = 0, linear_range "
-             f"= 0), as the hand-written one has none. Log: {LOG_CASE.label}, {len(log)} steps. "
+             "= 0, the input monitors' limits 0), as the hand-written one has none. "
+             f"Log: {LOG_CASE.label}, {len(log)} steps. "
              "Cortex-M4F: arm-none-eabi-gcc -O2, linked to the API (`vsegen size`'s build); the "
              "ZOH's series is unrolled (its terms and squarings: the Makefile's zoh_series note), "
              "the hand-written twin loops over them.", "",
@@ -43,7 +45,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "| generated ns | hand-written ns | generated M4F float .text / step stack (B) |",
              "|---|---|---|---|---|---|---|---|"]
     text = with_settings(vehicle.read_text(), "estimator.kf2dof", residual_window=0.0,
-                         linear_range=0.0, frozen_time=0.0)
+                         linear_range=0.0, **input_monitors.OFF)
     for method in ("zoh", "euler"):
         variant = parse_vehicle(text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
                                 str(vehicle), config.name)

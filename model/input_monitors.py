@@ -17,6 +17,8 @@ from vsegen.model.signals import Signal
 FIELDS = (frozen.FIELD, *crosscheck.FIELDS)
 STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET)
 """The bits the monitors can raise."""
+OFF = {"frozen_time": 0.0, "lateral_check_limit": 0.0, "steering_offset_limit": 0.0, "steer_check_limit": 0.0}
+"""The settings that switch every monitor off (no state, no code)."""
 
 
 def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:

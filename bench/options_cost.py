@@ -1,0 +1,75 @@
+"""python -m bench.options_cost: what the real-road options of the shipped vehicle file cost
+(docs/robustness.md): instructions per step of each sideslip estimator that has them, as shipped
+and with them off, in the section "What the real-road options cost" of docs/benchmarks.md (also
+written by ``python -m bench``).
+
+The options: the input monitors (frozen-signal monitor and cross-checks, model.input_monitors),
+the learned kinematic offset (model.estimators.kinematic_offset), switching's bounded kinematic
+dwell and fusion's disagreement check; each is one setting away from the papers' estimator.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+from bench import BENCHMARKS, DEFAULT_VEHICLE
+from bench.document import provenance, write_section
+from bench.measure import generated_driver, write_inputs
+from vsegen.codegen.generate import render
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import Case
+from vsegen.model import input_monitors
+from vsegen.model.estimators import build
+from vsegen.model.params import parse_vehicle
+
+SECTION = "## What the real-road options cost"
+LOG_CASE = Case.of("continuous_dlc")
+OPTIONS_OFF = {**input_monitors.OFF, "offset_memory": 0.0, "kinematic_max_dwell": 0.0, "disagreement_limit": 0.0}
+"""Every real-road option at its off value (an estimator has some of them)."""
+
+
+def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
+    """Markdown lines of the section, measured on ``log``."""
+    config = load_vehicle(vehicle)
+    lines = [SECTION, "",
+             f"{provenance('python -m bench.options_cost')} (also written by `python -m bench`): "
+             "instructions per step (callgrind, double, -O2) of each estimator with real-road options, "
+             f"as shipped and with those options off (their settings 0). Log: {LOG_CASE.label}, "
+             f"{len(log)} steps.", "",
+             "| estimator | options on in the shipped file | shipped | options off | cost |",
+             "|---|---|---|---|---|"]
+    for name in config.estimators:
+        settings = config.settings(name)
+        on = {key: off for key, off in OPTIONS_OFF.items() if settings.get(key, 0.0) != off}
+        if not on:
+            continue
+        variant = parse_vehicle(with_settings(vehicle.read_text(), f"estimator.{name}", **on), str(vehicle),
+                                config.name)
+        counts = []
+        for which in (config, variant):
+            estimator = build(name, which)
+            inputs = log.matrix(estimator.inputs.names)
+            driver = generated_driver(estimator, render(which, name, "double"), "double")
+            counts.append(driver.instructions_per_step(write_inputs(inputs, folder), len(inputs)))
+        shipped, off = counts
+        lines.append(f"| {name} | {', '.join(on)} | {shipped:.1f} | {off:.1f} | "
+                     f"+{shipped - off:.0f} ({100 * (shipped / off - 1):.0f} %) |")
+    return lines
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
+    parser.add_argument("--out", type=Path, default=BENCHMARKS)
+    args = parser.parse_args(argv)
+    config = load_vehicle(args.vehicle)
+    log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
+    lines = section(args.vehicle, log, Path(tempfile.mkdtemp(prefix="vsegen-bench-")))
+    write_section(args.out, lines)
+
+
+if __name__ == "__main__":
+    main()
