@@ -23,6 +23,7 @@ INPUT_FROZEN = 2048
 SCHEMES_DISAGREE = 4096
 LATERAL_INCONSISTENT = 8192
 STEERING_OFFSET = 16384
+YAW_RATE_MISMATCH = 32768
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,10 @@ BITS: tuple[StatusBit, ...] = (
               "the steering-angle zero learned in straight driving (steering_offset) is beyond "
               "steering_offset_limit: the steering-angle sensor needs its zero calibrated; the "
               "model-based estimate is suspect"),
+    StatusBit("YAW_RATE_MISMATCH", YAW_RATE_MISMATCH,
+              "the yaw rate differs from the non-driven wheels' speed difference by more than "
+              "wheel_check_limit on average: a gyro offset, drift or freeze, or a wheel-speed fault; "
+              "the estimate is suspect"),
 )
 """Every status bit, in value order."""
 BY_VALUE: dict[int, StatusBit] = {bit.value: bit for bit in BITS}

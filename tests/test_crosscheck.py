@@ -1,7 +1,8 @@
-"""The cross-checks of the inputs (model.crosscheck): a bank or an accelerometer offset raises
-LATERAL_INCONSISTENT, a steering-angle zero error STEERING_OFFSET within 60 s of ordinary driving,
-a steering angle frozen in a manoeuvre INPUT_FROZEN within 1 s; undisturbed drives raise none of
-them, on both truth cars; a limit of 0 removes its check."""
+"""The cross-checks of the inputs (model.crosscheck, model.wheel_yaw): a bank or an accelerometer
+offset raises LATERAL_INCONSISTENT, a steering-angle zero error STEERING_OFFSET within 60 s of
+ordinary driving, a steering angle frozen in a manoeuvre INPUT_FROZEN within 1 s, a gyro that
+disagrees with the non-driven wheels YAW_RATE_MISMATCH; undisturbed drives raise none of them, on
+both truth cars; a limit of 0 removes its check."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import build
-from vsegen.model.status import INPUT_FROZEN, LATERAL_INCONSISTENT, STEERING_OFFSET
+from vsegen.model.status import INPUT_FROZEN, LATERAL_INCONSISTENT, STEERING_OFFSET, YAW_RATE_MISMATCH
 
 CARS = ("c_class", "rwd_saloon")
 CHECKED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
@@ -102,3 +103,23 @@ def test_ekf_rls_learns_no_stiffness_from_a_frozen_yaw_rate(config):
     estimate = run_estimator(config, "ekf_rls", log)
     after = log["t"] > 4.5
     assert np.max(np.abs(np.degrees(estimate["beta"][after] - log["beta_ref"][after]))) < 1.0
+
+
+@pytest.mark.parametrize("car", CARS)
+def test_the_yaw_rate_is_checked_against_the_non_driven_wheels(car):
+    """ukf and aukf read wheel speeds: every undisturbed drive (braking in a bend and the synthetic
+    low-speed log included) passes; a yaw rate frozen in the DLC or a 3.4 deg/s gyro offset raises
+    YAW_RATE_MISMATCH, a 0.3 deg/s offset with drift does not."""
+    config = _car(car)
+    for scenario in (*UNDISTURBED, "banked_curve", "low_speed"):
+        assert _raised(config, "ukf", Case.of(scenario), YAW_RATE_MISMATCH).size == 0, scenario
+    frozen = _raised(config, "aukf", Case.of("dlc", freeze="r:3:1.5"), YAW_RATE_MISMATCH)
+    assert frozen.size and 3.0 < frozen[0] <= 4.0
+    assert _raised(config, "ukf", Case.of("dlc", gyro_bias=0.06), YAW_RATE_MISMATCH).size
+    drift = Case.of("dlc", gyro_bias=math.radians(0.3), gyro_drift=0.001)
+    assert _raised(config, "ukf", drift, YAW_RATE_MISMATCH).size == 0
+
+
+def test_without_wheel_speeds_there_is_no_yaw_rate_check(config):
+    assert "wheel_yaw_residual" in build("ukf", config).states.names
+    assert "wheel_yaw_residual" not in build("kf2dof", config).states.names

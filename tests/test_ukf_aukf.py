@@ -15,7 +15,7 @@ from vsegen.harness.reference.loop import run_reference
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.harness.verify.compare import as_seen_by
 from vsegen.harness.verify.equivalence import verify_estimator
-from vsegen.model import status, three_dof, unscented
+from vsegen.model import input_monitors, status, three_dof, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import baked
 from vsegen.model.estimators import aukf
@@ -232,7 +232,7 @@ def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(conf
     assert states[k + 1, holding] == 2                               # held, marked low speed
     resumed = np.flatnonzero(low[:-1] & ~low[1:])[0] + 1             # restarts from this sample
     expected, _ = est.step(est.init(inputs[resumed]), inputs[resumed])
-    watching = [i for i, n in enumerate(est.states.names) if n.startswith("frozen_")]  # continues
+    watching = [est.states.index(s.name) for s in input_monitors.states(config.settings("ukf"), est.inputs.names)]
     assert np.delete(states[resumed + 1], watching) == pytest.approx(
         np.delete(np.array(expected).ravel(), watching), rel=1e-12, abs=1e-15)
     assert abs(out[resumed, 1] - inputs[resumed, est.inputs.index("vx")]) < 0.2
@@ -294,6 +294,8 @@ def test_an_estimate_outside_the_envelope_restarts_the_filter(config, variant):
     monitor = est.states.index("residual")         # the consistency monitor's mean carries on
     assert states[301][monitor] > 0.0
     restart[monitor] = states[301][monitor]
+    for entry in input_monitors.states(config.settings("ukf"), est.inputs.names):   # and the input monitors
+        restart[est.states.index(entry.name)] = states[301][est.states.index(entry.name)]
     assert states[301] == pytest.approx(restart, rel=1e-12, abs=1e-15)
     assert out[300, 1] == inputs[300, est.inputs.index("vx")] and out[300, 0] == 0.0
     never = variant("estimator.ukf", restart_speed_error=0.0, restart_sideslip=0.0,

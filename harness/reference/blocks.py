@@ -28,6 +28,7 @@ INPUT_FROZEN = 2048
 SCHEMES_DISAGREE = 4096
 LATERAL_INCONSISTENT = 8192
 STEERING_OFFSET = 16384
+YAW_RATE_MISMATCH = 32768
 """The status bits the references raise, written here once (docs/signals.md); a test compares them
 with the model's."""
 LIMIT_OF = {"delta": "delta_max", "vx": "vx_max", "ax": "ax_max", "ay": "ay_max", "r": "r_max",

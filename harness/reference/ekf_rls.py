@@ -130,7 +130,7 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
-    watched, flags = monitors.step(x, inputs, ok, s, T, INPUTS, config.vehicle["wheelbase"])
+    watched, flags = monitors.step(x, inputs, ok, s, T, INPUTS, config.vehicle)
     new |= watched                          # the input monitors (beyond the paper)
     status |= flags
     X, P, cf, cr = _rls(s, v, T, x, y, A, loads, trusted=flags == 0)

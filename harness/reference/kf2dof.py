@@ -76,7 +76,7 @@ def step(config, state, u):
     innovation = z - C @ x - D @ np.array([inputs["delta"]])
     x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
     status |= blocks.beyond_linear_range(inputs["ay"], s)
-    updates, flags = monitors.step(entries, inputs, ok, s, T, INPUTS, config.vehicle["wheelbase"])
+    updates, flags = monitors.step(entries, inputs, ok, s, T, INPUTS, config.vehicle)
     entries.update(updates)
     status |= flags
     if _monitored(config):

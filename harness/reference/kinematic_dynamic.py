@@ -175,7 +175,7 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
-    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, INPUTS, config.vehicle["wheelbase"])
+    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, INPUTS, config.vehicle)
     status += (blocks.REFERENCE_SUSPECT if suspect else 0) + flags
     new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, u)
     return np.array([new[k] for k in names]), np.array(output)

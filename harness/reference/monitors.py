@@ -1,6 +1,7 @@
 """The input monitors in plain Python (model.input_monitors): the frozen-signal monitor
-(``blocks.frozen_*``) and the cross-checks of the inputs against each other (model.crosscheck),
-written from their equations, not from the model's code."""
+(``blocks.frozen_*``), the cross-checks of the inputs against each other (model.crosscheck) and
+the yaw rate against the non-driven wheels (model.wheel_yaw), written from their equations, not
+from the model's code."""
 
 from __future__ import annotations
 
@@ -23,14 +24,24 @@ def _crosschecked(settings, inputs) -> bool:
     return all(n in inputs for n in CROSSCHECK_INPUTS) and any(_on(settings, key) for key in CHECKS)
 
 
+def _wheel_axle(settings) -> tuple[str, str]:
+    axle = "r" if settings["wheel_check_axle"] == "rear" else "f"
+    return f"omega_{axle}l", f"omega_{axle}r"
+
+
+def _wheel_checked(settings, inputs) -> bool:
+    return _on(settings, "wheel_check_limit") and all(n in inputs for n in ("delta", "ax", "r", *_wheel_axle(settings)))
+
+
 def states(settings, inputs) -> tuple[str, ...]:
     """The state entries of the monitors that are on: the frozen-signal monitor's, then the
-    cross-checks' (quasi-steady detector, then each check's that is on)."""
+    cross-checks' (quasi-steady detector, then each check's that is on), the yaw-rate check's."""
     checks = ()
     if _crosschecked(settings, inputs):
         checks = ("steady_delta", "steady_samples",
                   *(name for key, names in CHECKS.items() if _on(settings, key) for name in names))
-    return (*blocks.frozen_states(settings, inputs), *checks)
+    wheels = ("wheel_yaw_residual",) if _wheel_checked(settings, inputs) else ()
+    return (*blocks.frozen_states(settings, inputs), *checks, *wheels)
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -47,15 +58,31 @@ def _low_pass(previous: float, value: float, T: float, time_constant: float) -> 
 
 
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
-         inputs, wheelbase: float) -> tuple[dict, int]:
+         inputs, vehicle: Mapping[str, float]) -> tuple[dict, int]:
     """(new entries, status bits) of the monitors that are on; call only on an active sample (a
     holding estimator holds its monitors)."""
     new, code = {}, 0
     if settings["frozen_time"] > 0:
         new, frozen = blocks.frozen_monitor(x, u, ok, settings, T, inputs)
         code = blocks.INPUT_FROZEN if frozen else 0
-    if not _crosschecked(settings, inputs):
-        return new, code
+    if _crosschecked(settings, inputs):
+        checked, flags = _crosschecks(x, u, settings, T, vehicle["wheelbase"])
+        new, code = new | checked, code | flags
+    if _wheel_checked(settings, inputs):        # r against the free-rolling axle's speed difference
+        left, right = _wheel_axle(settings)
+        steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
+        wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
+        residual = x["wheel_yaw_residual"]
+        if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+            residual = _low_pass(residual, u["r"] - wheel_yaw_rate, T, settings["wheel_check_time"])
+        new["wheel_yaw_residual"] = residual
+        code |= blocks.YAW_RATE_MISMATCH if abs(residual) > settings["wheel_check_limit"] else 0
+    return new, code
+
+
+def _crosschecks(x, u, settings, T: float, wheelbase: float) -> tuple[dict, int]:
+    """(new entries, status bits) of the cross-checks that are on (model.crosscheck)."""
+    new, code = {}, 0
     steady_samples = math.floor(settings["steady_time"] / T + 0.5)
     if abs(u["delta"] - x["steady_delta"]) * u["vx"] ** 2 / wheelbase > settings["steady_band"]:
         new["steady_delta"], new["steady_samples"] = u["delta"], 0.0      # a new stretch starts

@@ -74,7 +74,7 @@ class Variant:
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
         watched, flags = monitors.step(x, inputs, ok, s, config.sample_time, input_names,
-                                       config.vehicle["wheelbase"])    # from the state as it came in
+                                       config.vehicle)    # from the state as it came in
         if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)

@@ -213,13 +213,16 @@ def low_speed(config: VehicleConfig, rate_hz: float, seed: int, progress=None) -
     vy = vx * np.tan((b / l - m * a * vx**2 / (l**2 * cr)) * delta * gain)
     rng = np.random.default_rng(seed)
     noise = config.sensors or {"accel_noise": 0.3, "gyro_noise": np.deg2rad(1.0)}
-    omega = vx / vehicle["wheel_radius"]
+    half_track, radius = vehicle["track_width"] / 2, vehicle["wheel_radius"]
+    rear = {side: (vx + sign * r * half_track) / radius for side, sign in (("l", -1), ("r", 1))}
+    front = {side: ((vx + sign * r * half_track) * np.cos(delta) + (vy + a * r) * np.sin(delta)) / radius
+             for side, sign in (("l", -1), ("r", 1))}     # free rolling, along each wheel's heading
     return Log({
         "t": t, "delta": delta, "vx": vx,
         "ax": np.gradient(vx, t) + rng.normal(0, noise["accel_noise"], len(t)),
         "ay": vx * r + rng.normal(0, noise["accel_noise"], len(t)),
         "r": r + rng.normal(0, noise["gyro_noise"], len(t)),
-        "omega_fl": omega, "omega_fr": omega, "omega_rl": omega, "omega_rr": omega,
+        "omega_fl": front["l"], "omega_fr": front["r"], "omega_rl": rear["l"], "omega_rr": rear["r"],
         "beta_ref": np.arctan2(vy, vx), "vx_ref": vx, "vy_ref": vy, "r_ref": r,
         "mu": np.ones_like(t), "off_course": np.zeros_like(t),
     }, source="<simulated low_speed>", notes={"run": "synthetic, no plant"})

@@ -392,7 +392,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
         extra = {**extra, **check.updates}
     stuck, flags = input_monitors.monitor(kept, u, guard.plausible, active, settings,    # from the state as it came in
                                           sym.params.numeric.settings(sym.name), sym.params.config.sample_time,
-                                          sym.inputs_layout.names, sym.params.config.vehicle["wheelbase"])
+                                          sym.inputs_layout.names, sym.params.config.vehicle)
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, **stuck, "hold_reason": ca.SX(0)})

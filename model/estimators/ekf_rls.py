@@ -328,7 +328,7 @@ def build(params: Parameters) -> Estimator:
     vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
     monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
-                                      INPUTS.names, config.vehicle["wheelbase"])
+                                      INPUTS.names, config.vehicle)
     stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=monitors[1] > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
     next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, monitors)

@@ -162,7 +162,7 @@ def build(params: Parameters) -> Estimator:
         ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
         status.BEYOND_LINEAR_RANGE, 0)
     monitor, flags = input_monitors.monitor(s, u, ok, active, settings, params.numeric.settings(NAME),
-                                            config.sample_time, INPUTS.names, config.vehicle["wheelbase"])
+                                            config.sample_time, INPUTS.names, config.vehicle)
     code = code + flags
     if monitored:
         check = consistency.monitor(s, result["innovation"], settings, config.sample_time)

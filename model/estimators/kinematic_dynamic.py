@@ -185,7 +185,7 @@ class KinematicDynamic:
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
         monitor, flags = input_monitors.monitor(s, u, ok, active, settings,
                                                 self.params.numeric.settings(self.table), self.T,
-                                                INPUTS.names, self.params.config.vehicle["wheelbase"])
+                                                INPUTS.names, self.params.config.vehicle)
         code = code + flags
 
         def keep(name, value):

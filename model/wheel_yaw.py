@@ -1,0 +1,71 @@
+"""Yaw rate against the non-driven wheels' speed difference, the gyro check of production ESC
+software. Beyond the papers; the rule it serves: never a silently wrong estimate.
+
+Freely rolling wheels on a rigid axle of track t differ in speed by the yaw rate: the rear wheels'
+centres move at v_x -+ r t/2, the steered front wheels' along their heading, so
+
+    r_w = R (omega_right - omega_left) / (t cos(delta))     (front axle; rear: cos = 1),
+
+R the rolling radius. The axle must be the non-driven one (``wheel_check_axle``): drive torque
+makes a driven wheel slip, and so does braking (the unloaded inner wheel of a braked bend slips
+most: 3 times the yaw rate in the downhill braking bend), so the check samples only while the
+car neither brakes nor accelerates hard, |a_x| <= ``wheel_check_ax`` (the speed in the logs comes
+from the wheels, so their slip does not show against it). The gyro is compared with r_w through a
+low-pass, held between samples,
+
+    m_k = m_k-1 + (1 - exp(-T / wheel_check_time)) (r - r_w - m_k-1),
+
+and |m| > ``wheel_check_limit`` raises status YAW_RATE_MISMATCH: a gyro offset or drift, a frozen
+or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. An estimator has
+the check when it reads that axle's wheel speeds (the UKFs in their "wheel_speeds" mode) and
+``wheel_check_limit`` > 0; a holding estimator holds it.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from vsegen.model.schema import choice, nonnegative, positive
+from vsegen.model.signals import Signal
+
+FIELDS = (
+    choice("wheel_check_axle", ("rear", "front"), "beyond the papers: the non-driven axle whose "
+           "wheel speeds the yaw-rate check reads", default="rear"),
+    nonnegative("wheel_check_limit", "rad/s", "beyond the papers: the mean of the yaw rate minus the "
+                "non-driven wheels' yaw rate beyond this raises status 32768 YAW_RATE_MISMATCH (a "
+                "gyro offset, drift or freeze); 0 = no check (also without wheel speeds)", default=0.0),
+    positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean", default=0.2),
+    positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
+             "(no braking or drive torque to make the wheels slip)", default=1.0),
+)
+STATE = Signal("wheel_yaw_residual", "rad/s", "yaw-rate check: mean of r minus the non-driven wheels' "
+                                              "yaw rate")
+
+
+def wheels(numeric_settings) -> tuple[str, str]:
+    """(left, right) wheel-speed inputs of the checked axle."""
+    axle = "r" if numeric_settings["wheel_check_axle"] == "rear" else "f"
+    return f"omega_{axle}l", f"omega_{axle}r"
+
+
+def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
+    """Whether an estimator reading ``inputs`` has the check (structural)."""
+    return numeric_settings["wheel_check_limit"] > 0.0 and all(
+        name in inputs for name in ("delta", "ax", "r", *wheels(numeric_settings)))
+
+
+def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
+    """The check's state entry (0 at init), none when it is off."""
+    return (STATE,) if enabled(numeric_settings, inputs) else ()
+
+
+def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float, vehicle) -> tuple[dict, ca.SX]:
+    """(new state entries, 1 while the yaw rates disagree); call only when :func:`enabled`."""
+    left, right = wheels(numeric_settings)
+    steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
+    wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
+    rolling = ca.fabs(u["ax"]) <= settings["wheel_check_ax"]
+    gain = 1 - ca.exp(-sample_time / settings["wheel_check_time"])
+    residual = s[STATE.name] + rolling * gain * (u["r"] - wheel_yaw_rate - s[STATE.name])
+    return ({STATE.name: ca.if_else(active, residual, s[STATE.name])},
+            active * (ca.fabs(residual) > settings["wheel_check_limit"]))
