@@ -60,6 +60,27 @@ ROADS = (Case.of("banked_curve"), Case.of("crossfall_lane_change"), Case.of("dlc
          Case.of("downhill_brake_curve"), Case.of("crest_dip"))
 
 
+COPING = [
+    "How the shipped estimators cope (docs/estimators.md has the equations and the figures):", "",
+    "* every model-based one (kf2dof, switching, fusion, ekf_rls, ukf, aukf) checks its inputs "
+    "(model/input_monitors.py): a_x, a_y or r repeated bit for bit and a steer angle that stands "
+    "still while the car turns (2048 INPUT_FROZEN), a_y against r·v_x in quasi-steady driving "
+    "(8192 LATERAL_INCONSISTENT: a bank or an offset), the steering-angle zero learned in straight "
+    "driving (16384 STEERING_OFFSET), and where it reads wheel speeds (ukf, aukf) the yaw rate "
+    "against the non-driven wheels (32768 YAW_RATE_MISMATCH); ekf_rls learns no stiffness while "
+    "any of them is raised;",
+    "* switching and fusion learn the kinematic offset c of a bank or an accelerometer offset in "
+    "near-straight driving, integrate a_y − r·v_x − c and let their KF take 0.4 c off its a_y "
+    "(a bank and an offset cannot be told apart from a_y and r; 0.4 balances their worst cases); "
+    "switching bounds its kinematic dwell (64), fusion flags its schemes parting (4096);",
+    "* the particle filters integrate v_y without a measurement and flag it (1024 DEAD_RECKONING): "
+    "under a bank or an offset they are 3–15° off, and say so.",
+    "",
+    "Each option costs instructions: docs/benchmarks.md, \"What the real-road options cost\".",
+]
+"""The report's summary of what each estimator does against the disturbances."""
+
+
 def matrix() -> list[tuple[str, str, Case]]:
     """(car, disturbance name, case) of every run of the report."""
     runs = [(car, name, Case.of(m.scenario, **dict(m.options), **options))
@@ -112,7 +133,8 @@ def report(scheduler: str | None) -> list[str]:
              "Each cell: β RMSE (°) / β max |error| (°) / longest stretch of |β error| > 2° with "
              f"status 0 (s; **bold** beyond {SILENT_DURATION} s: silently wrong) / for a fault that "
              f"starts at {FAULT_AT:g} s, the time from its start to the first non-zero status (s; "
-             "'never': no status bit). Samples from a spin on (|β| > 15°) are not scored.", ""]
+             "'never': no status bit). Samples from a spin on (|β| > 15°) are not scored.", "",
+             *COPING, ""]
     for car in CARS:
         lines += [f"## {car}", "", "| manoeuvre | disturbance | " + " | ".join(names) + " |",
                   "|---|---|" + "---|" * len(names)]

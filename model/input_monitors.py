@@ -17,8 +17,10 @@ from vsegen.model import crosscheck, frozen, status, wheel_yaw
 from vsegen.model.signals import Signal
 
 FIELDS = (frozen.FIELD, *crosscheck.FIELDS, *wheel_yaw.FIELDS)
-STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET, status.YAW_RATE_MISMATCH)
-"""The bits the monitors can raise."""
+STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET)
+"""The bits the monitors can raise in every estimator that has them; YAW_RATE_MISMATCH too where
+the estimator reads wheel speeds (:data:`WHEEL_STATUS_BITS`)."""
+WHEEL_STATUS_BITS = (*STATUS_BITS, status.YAW_RATE_MISMATCH)
 OFF = {"frozen_time": 0.0, "lateral_check_limit": 0.0, "steering_offset_limit": 0.0, "steer_check_limit": 0.0,
        "wheel_check_limit": 0.0}
 """The settings that switch every monitor off (no state, no code)."""
