@@ -133,12 +133,13 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
             wheelbase) -> tuple[dict, dict]:
     """(new state entries, {status bit: 1 while raised}) from the state entries ``s``, the inputs
     ``u`` (plausible on an active sample) and the guard's ``active`` flag; call only when
-    :func:`enabled`. The flags are arithmetic (no branch in an active kernel)."""
+    :func:`enabled`. Flags and selections are arithmetic, f a + (1 - f) b for a flag f (exact for
+    f in {0, 1}), so an active guarded kernel has no branch (model.guard)."""
     limit = ca.floor(settings["steady_time"] / sample_time + 0.5)
     moved = ca.fabs(u["delta"] - s["steady_delta"]) * u["vx"] * u["vx"] > settings["steady_band"] * wheelbase
     samples = (1 - moved) * ca.fmin(s["steady_samples"] + 1, limit)
     steady = samples >= limit
-    updates = {"steady_delta": ca.if_else(moved, u["delta"], s["steady_delta"]), "steady_samples": samples}
+    updates = {"steady_delta": moved * u["delta"] + (1 - moved) * s["steady_delta"], "steady_samples": samples}
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = steady * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
@@ -158,7 +159,7 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
         curvature = s["curvature"] + _gain(sample_time, settings["steer_check_time"]) * (
             u["r"] / u["vx"] - s["curvature"])
         turned_steady = steady * (s["steady_samples"] < limit)
-        reference = ca.if_else(turned_steady, curvature, s["steady_curvature"])
+        reference = turned_steady * curvature + (1 - turned_steady) * s["steady_curvature"]
         checked = steady * (ca.fabs(u["ay"]) <= settings["steer_check_range"])
         change = (curvature - reference) * u["vx"] * u["vx"]
         updates |= {"curvature": curvature, "steady_curvature": reference}

@@ -80,10 +80,8 @@ def build(params: Parameters) -> Estimator:
     offset, learned = ca.SX(0), {}
     if kinematic_offset.enabled(numeric):    # learned in near-straight driving, used from the next sample
         offset = s["kin_offset"]
-        learning = ca.logic_and(active, kinematic_offset.near_straight(
-            seed.settings, pre.ay_filtered, pre.r_checked, u["vx"], offset))
-        learned = {"kin_offset": kinematic_offset.learned(seed.settings, T, offset, pre.updates["ay_last"],
-                                                          pre.updates["r_last"], u["vx"], learning)}
+        learned = {"kin_offset": kinematic_offset.update(seed.settings, T, offset, pre,
+                                                         hold(u["vx"], ok["vx"], seed.vx_min), active)}
     result = kf2dof.dynamic_update(params, NAME)(
         x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),

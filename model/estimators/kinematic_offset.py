@@ -64,7 +64,15 @@ def near_straight(settings, ay_filtered, r_checked, vx, offset):
 def learned(settings, sample_time: float, previous, ay, r, vx, learning):
     """c_k from c_k-1 = ``previous`` and the checked a_y, r and the speed, while ``learning``."""
     gain = 1 - ca.exp(-sample_time / settings["offset_memory"])
-    return ca.if_else(learning, previous + gain * (ay - r * vx - previous), previous)
+    return previous + learning * gain * (ay - r * vx - previous)     # arithmetic: no branch
+
+
+def update(settings, sample_time: float, previous, pre, vx, allowed):
+    """c_k for this sample from c_k-1 = ``previous``, the shared pre-processing ``pre`` (filtered
+    and checked a_y, r) and the speed ``vx`` (finite: the held value on an implausible sample, as
+    the update is arithmetic): learned while ``allowed`` and :func:`near_straight`."""
+    learning = ca.logic_and(allowed, near_straight(settings, pre.ay_filtered, pre.r_checked, vx, previous))
+    return learned(settings, sample_time, previous, pre.updates["ay_last"], pre.updates["r_last"], vx, learning)
 
 
 def sensor_part(settings, offset):

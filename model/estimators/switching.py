@@ -47,6 +47,7 @@ from vsegen.model.estimators.kinematic_dynamic import (
     KinematicDynamic,
 )
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
+from vsegen.model.guard import hold
 from vsegen.model.layout import Layout
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 from vsegen.model.signals import Signal
@@ -159,12 +160,9 @@ def build(params: Parameters) -> Estimator:
         extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
     if kinematic_offset.OFFSET in seed.extra:    # learned in near-straight dynamic driving
-        learning = ca.logic_and(ca.logic_and(active, mode == DYN),
-                                kinematic_offset.near_straight(seed.settings, pre.ay_filtered, pre.r_checked,
-                                                               u["vx"], s["kin_offset"]))
-        extra["kin_offset"] = kinematic_offset.learned(seed.settings, T, s["kin_offset"], pre.updates["ay_last"],
-                                                       pre.updates["r_last"], u["vx"], learning)
-    offset = (lambda m: m["kin_offset"]) if kinematic_offset.OFFSET in seed.extra else (lambda m: 0)
+        speed = hold(u["vx"], pre.guard.plausible["vx"], seed.vx_min)      # finite on every sample
+        extra["kin_offset"] = kinematic_offset.update(seed.settings, T, s["kin_offset"], pre, speed,
+                                                      ca.logic_and(active, mode == DYN))
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
@@ -190,7 +188,8 @@ def build(params: Parameters) -> Estimator:
         P = ca.if_else(from_kin, seed.P0, ca.vertcat(*[m[n] for n in COVARIANCE]))
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
                         delta=v["delta"], vx=v["vx"],
-                        ay=seed.roll_corrected(v["ay"]) - kinematic_offset.sensor_part(seed.settings, offset(m)),
+                        ay=seed.roll_corrected(v["ay"])
+                        - kinematic_offset.sensor_part(seed.settings, m.get("kin_offset", 0)),
                         r_meas=c["r_checked"],
                         **params.keyword())
         vy = result["x_next"][0]
@@ -201,7 +200,7 @@ def build(params: Parameters) -> Estimator:
 
     def kinematic(m, c, v):
         start = ca.if_else(c["mode_prev"] == DYN, m["vy"], m["vy_kin"])
-        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - offset(m))
+        vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - m.get("kin_offset", 0))
         return (seed.advanced(m, v, {"vy_kin": vy_kin}),
                 output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
                        c["status"]))

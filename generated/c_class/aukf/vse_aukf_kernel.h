@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: ef4a3989b157a0cb6d0abd144ef5a6e7e8b243af6cbf053ef4d8f1ae4e37c88e
- * Operations: step 7821, init 120 (CasADi SX instructions).
+ * Operations: step 7828, init 120 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

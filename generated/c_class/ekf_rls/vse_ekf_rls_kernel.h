@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: aadfbf344a59f572dd426d74d076a56733eacb63e0be474e4fa5a20143dd9557
- * Operations: step 590, init 114 (CasADi SX instructions).
+ * Operations: step 589, init 114 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: d515ff285ba4d45ec1c97c96231f543acdd11ba49628ee4db212f66f3391d193
- * Operations: step 836, init 99 (CasADi SX instructions).
+ * Operations: step 832, init 99 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -923,21 +923,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a22=(a22*a09);
   a22=(a22*a09);
   a34=(a34<a22);
-  a22=((a34!=0.)?a08:0);
-  a12=(a34==0.);
-  a12=((a12!=0.)?a04:0);
-  a22=(a22+a12);
-  res[0][25]=a22;
+  a22=(a34*a08);
   a34=(a15-a34);
+  a04=(a34*a04);
+  a22=(a22+a04);
+  res[0][25]=a22;
   a22=state_26;
-  a12=(a22+a15);
-  a04=30.;
-  a12=casadi_fmin(a12,a04);
-  a34=(a34*a12);
+  a04=(a22+a15);
+  a12=30.;
+  a04=casadi_fmin(a04,a12);
+  a34=(a34*a04);
   res[0][26]=a34;
-  a12=state_27;
+  a04=state_27;
   a27=1.9801326693244747e-02;
-  a34=(a04<=a34);
+  a34=(a12<=a34);
   a44=casadi_fabs(a01);
   a48=1.5000000000000000e+00;
   a35=(a44<=a48);
@@ -945,10 +944,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a35=(a27*a35);
   a32=(a07*a09);
   a01=(a01-a32);
-  a01=(a01-a12);
+  a01=(a01-a04);
   a35=(a35*a01);
-  a12=(a12+a35);
-  res[0][27]=a12;
+  a04=(a04+a35);
+  res[0][27]=a04;
   a35=state_28;
   a01=1.9980013326669210e-03;
   a32=(a44<=a28);
@@ -972,14 +971,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=(a08*a07);
   a01=(a01+a08);
   res[0][29]=a01;
-  a22=(a22<a04);
+  a22=(a22<a12);
   a22=(a34*a22);
-  a04=((a22!=0.)?a01:0);
-  a22=(a22==0.);
+  a12=(a22*a01);
+  a22=(a15-a22);
   a08=state_30;
-  a22=((a22!=0.)?a08:0);
-  a04=(a04+a22);
-  res[0][30]=a04;
+  a22=(a22*a08);
+  a12=(a12+a22);
+  res[0][30]=a12;
   a22=0.;
   res[0][31]=a22;
   a08=casadi_fmin(a03,a05);
@@ -1005,41 +1004,38 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=(a06<a28);
   a08=((a08!=0.)&&(a06!=0.));
   a08=((a15!=0.)&&(a08!=0.));
+  a27=(a27*a08);
   a18=(a18-a03);
   a18=(a18-a21);
   a27=(a27*a18);
-  a27=(a21+a27);
-  a27=((a08!=0.)?a27:0);
-  a08=(a08==0.);
-  a08=((a08!=0.)?a21:0);
-  a27=(a27+a08);
-  res[0][32]=a27;
-  a27=9.5122942450071402e-01;
-  a08=state_33;
-  a27=(a27*a08);
-  a08=4.8770575499285984e-02;
+  a21=(a21+a27);
+  res[0][32]=a21;
+  a21=9.5122942450071402e-01;
+  a27=state_33;
+  a21=(a21*a27);
+  a27=4.8770575499285984e-02;
   a00=casadi_sq(a00);
   a00=(a00/a30);
   a30=100.;
   a00=casadi_fmin(a00,a30);
   a26=casadi_sq(a26);
-  a21=3.0460720900000001e-04;
-  a26=(a26/a21);
+  a18=3.0460720900000001e-04;
+  a26=(a26/a18);
   a26=casadi_fmin(a26,a30);
   a00=(a00+a26);
   a26=2.;
   a00=(a00/a26);
-  a08=(a08*a00);
-  a27=(a27+a08);
-  res[0][33]=a27;
-  a27=(a23<a27);
-  a30=((a27!=0.)?a30:0);
-  a08=(a27==0.);
+  a27=(a27*a00);
+  a21=(a21+a27);
+  res[0][33]=a21;
+  a21=(a23<a21);
+  a30=((a21!=0.)?a30:0);
+  a27=(a21==0.);
   a00=state_34;
   a26=(a00-a15);
   a26=casadi_fmax(a26,a22);
-  a08=((a08!=0.)?a26:0);
-  a30=(a30+a08);
+  a27=((a27!=0.)?a26:0);
+  a30=(a30+a27);
   res[0][34]=a30;
   a07=casadi_fabs(a07);
   a07=(a07/a10);
@@ -1048,15 +1044,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=(a25/a11);
   a10=atan(a10);
   a30=(a07*a10);
-  a08=(a15-a07);
+  a27=(a15-a07);
   a11=(a47/a11);
   a11=atan(a11);
-  a26=(a08*a11);
+  a26=(a27*a11);
   a30=(a30+a26);
   res[1][0]=a30;
   a25=(a07*a25);
-  a08=(a08*a47);
-  a25=(a25+a08);
+  a27=(a27*a47);
+  a25=(a25+a27);
   res[1][1]=a25;
   res[1][2]=a20;
   res[1][3]=a07;
@@ -1067,7 +1063,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=6.;
   a44=(a44<=a24);
   a34=(a34*a44);
-  a01=(a01-a04);
+  a01=(a01-a12);
   a01=(a01*a09);
   a01=(a01*a09);
   a01=casadi_fabs(a01);
@@ -1083,8 +1079,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a42=(a42-a34);
   a23=(a23*a42);
   a42=8192.;
-  a12=casadi_fabs(a12);
-  a38=(a38<a12);
+  a04=casadi_fabs(a04);
+  a38=(a38<a04);
   a42=(a42*a38);
   a23=(a23+a42);
   a42=16384.;
@@ -1103,17 +1099,17 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a23=(a23*a42);
   a17=(a17+a23);
   a22=(a22<a00);
-  a27=((a27!=0.)||(a22!=0.));
-  a15=((a15!=0.)&&(a27!=0.));
-  a27=128.;
-  a15=((a15!=0.)?a27:0);
+  a21=((a21!=0.)||(a22!=0.));
+  a15=((a15!=0.)&&(a21!=0.));
+  a21=128.;
+  a15=((a15!=0.)?a21:0);
   a17=(a17+a15);
   res[1][4]=a17;
   return 0;
 }
 
 /*
- * vse_fusion_kernel_active: 798 operations (CasADi SX instructions)
+ * vse_fusion_kernel_active: 794 operations (CasADi SX instructions)
  * arg[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,

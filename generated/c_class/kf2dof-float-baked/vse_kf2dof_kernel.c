@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 146badc979b36e40196315c676d36e4b1b485c8a0da8194b660f13712c72dfaa
- * Operations: step 695, init 59 (CasADi SX instructions).
+ * Operations: step 694, init 59 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
@@ -791,21 +791,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=(a06*a01);
   a06=(a06*a01);
   a16=(a16<a06);
-  a06=((a16!=0.f)?a03:0);
-  a07=(a16==0.f);
-  a07=((a07!=0.f)?a02:0);
-  a06=(a06+a07);
-  res[0][13]=a06;
+  a06=(a16*a03);
   a16=(a00-a16);
+  a02=(a16*a02);
+  a06=(a06+a02);
+  res[0][13]=a06;
   a06=state_14;
-  a07=(a06+a00);
-  a02=30.f;
-  a07=casadi_fmin(a07,a02);
-  a16=(a16*a07);
+  a02=(a06+a00);
+  a07=30.f;
+  a02=casadi_fmin(a02,a07);
+  a16=(a16*a02);
   res[0][14]=a16;
-  a07=state_15;
+  a02=state_15;
   a26=1.9801326693244747e-02f;
-  a16=(a02<=a16);
+  a16=(a07<=a16);
   a20=casadi_fabs(a21);
   a22=1.5000000000000000e+00f;
   a25=(a20<=a22);
@@ -813,10 +812,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a26=(a26*a25);
   a25=(a05*a01);
   a21=(a21-a25);
-  a21=(a21-a07);
+  a21=(a21-a02);
   a26=(a26*a21);
-  a07=(a07+a26);
-  res[0][15]=a07;
+  a02=(a02+a26);
+  res[0][15]=a02;
   a26=state_16;
   a21=1.9980013326669210e-03f;
   a08=(a20<=a08);
@@ -841,14 +840,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a03*a05);
   a21=(a21+a03);
   res[0][17]=a21;
-  a06=(a06<a02);
+  a06=(a06<a07);
   a06=(a16*a06);
-  a02=((a06!=0.f)?a21:0);
-  a06=(a06==0.f);
+  a07=(a06*a21);
+  a06=(a00-a06);
   a03=state_18;
-  a06=((a06!=0.f)?a03:0);
-  a02=(a02+a06);
-  res[0][18]=a02;
+  a06=(a06*a03);
+  a07=(a07+a06);
+  res[0][18]=a07;
   res[0][19]=a17;
   a04=(a10/a04);
   a04=atanf(a04);
@@ -864,7 +863,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=6.f;
   a20=(a20<=a10);
   a16=(a16*a20);
-  a21=(a21-a02);
+  a21=(a21-a07);
   a21=(a21*a01);
   a21=(a21*a01);
   a21=casadi_fabs(a21);
@@ -881,8 +880,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a30=(a30*a11);
   a11=8192.f;
   a16=4.0000000000000002e-01f;
-  a07=casadi_fabs(a07);
-  a16=(a16<a07);
+  a02=casadi_fabs(a02);
+  a16=(a16<a02);
   a11=(a11*a16);
   a30=(a30+a11);
   a11=16384.f;
@@ -903,7 +902,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_kf2dof_kernel_active: 657 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_active: 656 operations (CasADi SX instructions)
  * arg[0] state[20]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,

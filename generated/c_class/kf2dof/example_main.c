@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 146badc979b36e40196315c676d36e4b1b485c8a0da8194b660f13712c72dfaa
- * Operations: step 695, init 59 (CasADi SX instructions).
+ * Operations: step 694, init 59 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: fdbc88873f2a54001645b59665d1e32ee4bcd55eb293447a7bdfc60996d04e02
- * Operations: step 7614, init 105 (CasADi SX instructions).
+ * Operations: step 7621, init 105 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: bed879cb72d0d951ef9380331d6e0abe4c115174b33810be9180fb4bfb86b02a
- * Operations: step 7751, init 118 (CasADi SX instructions).
+ * Operations: step 7758, init 118 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

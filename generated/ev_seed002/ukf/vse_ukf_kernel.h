@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: ed1373beaa562c5a4b1f48fdb8fb9de973cec404f14f9efd1ec8f8b2d00e0578
- * Operations: step 7543, init 103 (CasADi SX instructions).
+ * Operations: step 7550, init 103 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

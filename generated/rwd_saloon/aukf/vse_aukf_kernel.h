@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: a3d71779b2580ec44011d7440eee4994a3ce4d4bab897844685068256b77e490
- * Operations: step 7824, init 120 (CasADi SX instructions).
+ * Operations: step 7831, init 120 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

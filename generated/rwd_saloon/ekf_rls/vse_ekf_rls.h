@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3a22a27e20458a0d62b92c529dd3e0981e4989ef6b4174b5030e2d0b6c507f58
- * Operations: step 590, init 114 (CasADi SX instructions).
+ * Operations: step 589, init 114 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

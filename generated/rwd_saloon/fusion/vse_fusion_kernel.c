@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3a411c17a408fd73fbd58e981b7621acce290da5e779dc1ce7658d9ee940d3ee
- * Operations: step 818, init 99 (CasADi SX instructions).
+ * Operations: step 814, init 99 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -904,21 +904,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40*a09);
   a40=(a40*a09);
   a34=(a34<a40);
-  a40=((a34!=0.)?a08:0);
-  a22=(a34==0.);
-  a22=((a22!=0.)?a04:0);
-  a40=(a40+a22);
-  res[0][25]=a40;
+  a40=(a34*a08);
   a34=(a15-a34);
+  a04=(a34*a04);
+  a40=(a40+a04);
+  res[0][25]=a40;
   a40=state_26;
-  a22=(a40+a15);
-  a04=30.;
-  a22=casadi_fmin(a22,a04);
-  a34=(a34*a22);
+  a04=(a40+a15);
+  a22=30.;
+  a04=casadi_fmin(a04,a22);
+  a34=(a34*a04);
   res[0][26]=a34;
-  a22=state_27;
+  a04=state_27;
   a44=1.9801326693244747e-02;
-  a34=(a04<=a34);
+  a34=(a22<=a34);
   a27=casadi_fabs(a01);
   a43=1.5000000000000000e+00;
   a47=(a27<=a43);
@@ -926,10 +925,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a47=(a44*a47);
   a35=(a07*a09);
   a01=(a01-a35);
-  a01=(a01-a22);
+  a01=(a01-a04);
   a47=(a47*a01);
-  a22=(a22+a47);
-  res[0][27]=a22;
+  a04=(a04+a47);
+  res[0][27]=a04;
   a47=state_28;
   a01=1.9980013326669210e-03;
   a35=(a27<=a28);
@@ -953,14 +952,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=(a08*a07);
   a01=(a01+a08);
   res[0][29]=a01;
-  a40=(a40<a04);
+  a40=(a40<a22);
   a40=(a34*a40);
-  a04=((a40!=0.)?a01:0);
-  a40=(a40==0.);
+  a22=(a40*a01);
+  a40=(a15-a40);
   a08=state_30;
-  a40=((a40!=0.)?a08:0);
-  a04=(a04+a40);
-  res[0][30]=a04;
+  a40=(a40*a08);
+  a22=(a22+a40);
+  res[0][30]=a22;
   a40=0.;
   res[0][31]=a40;
   a08=casadi_fmin(a03,a05);
@@ -986,59 +985,56 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=(a06<a28);
   a08=((a08!=0.)&&(a06!=0.));
   a08=((a15!=0.)&&(a08!=0.));
+  a44=(a44*a08);
   a18=(a18-a03);
   a18=(a18-a21);
   a44=(a44*a18);
-  a44=(a21+a44);
-  a44=((a08!=0.)?a44:0);
-  a08=(a08==0.);
-  a08=((a08!=0.)?a21:0);
-  a44=(a44+a08);
-  res[0][32]=a44;
-  a44=9.5122942450071402e-01;
-  a08=state_33;
-  a44=(a44*a08);
-  a08=4.8770575499285984e-02;
+  a21=(a21+a44);
+  res[0][32]=a21;
+  a21=9.5122942450071402e-01;
+  a44=state_33;
+  a21=(a21*a44);
+  a44=4.8770575499285984e-02;
   a00=casadi_sq(a00);
-  a21=8.9640360000000002e-02;
-  a00=(a00/a21);
-  a21=100.;
-  a00=casadi_fmin(a00,a21);
+  a18=8.9640360000000002e-02;
+  a00=(a00/a18);
+  a18=100.;
+  a00=casadi_fmin(a00,a18);
   a26=casadi_sq(a26);
-  a18=3.0660010000000006e-04;
-  a26=(a26/a18);
-  a26=casadi_fmin(a26,a21);
+  a03=3.0660010000000006e-04;
+  a26=(a26/a03);
+  a26=casadi_fmin(a26,a18);
   a00=(a00+a26);
   a26=2.;
   a00=(a00/a26);
-  a08=(a08*a00);
-  a44=(a44+a08);
-  res[0][33]=a44;
-  a44=(a23<a44);
-  a21=((a44!=0.)?a21:0);
-  a08=(a44==0.);
+  a44=(a44*a00);
+  a21=(a21+a44);
+  res[0][33]=a21;
+  a21=(a23<a21);
+  a18=((a21!=0.)?a18:0);
+  a44=(a21==0.);
   a00=state_34;
   a26=(a00-a15);
   a26=casadi_fmax(a26,a40);
-  a08=((a08!=0.)?a26:0);
-  a21=(a21+a08);
-  res[0][34]=a21;
+  a44=((a44!=0.)?a26:0);
+  a18=(a18+a44);
+  res[0][34]=a18;
   a07=casadi_fabs(a07);
   a07=(a07/a10);
   a07=casadi_fmax(a07,a40);
   a07=casadi_fmin(a07,a15);
   a10=(a25/a11);
   a10=atan(a10);
-  a21=(a07*a10);
-  a08=(a15-a07);
+  a18=(a07*a10);
+  a44=(a15-a07);
   a11=(a48/a11);
   a11=atan(a11);
-  a26=(a08*a11);
-  a21=(a21+a26);
-  res[1][0]=a21;
+  a26=(a44*a11);
+  a18=(a18+a26);
+  res[1][0]=a18;
   a25=(a07*a25);
-  a08=(a08*a48);
-  a25=(a25+a08);
+  a44=(a44*a48);
+  a25=(a25+a44);
   res[1][1]=a25;
   res[1][2]=a20;
   res[1][3]=a07;
@@ -1049,7 +1045,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=6.;
   a27=(a27<=a24);
   a34=(a34*a27);
-  a01=(a01-a04);
+  a01=(a01-a22);
   a01=(a01*a09);
   a01=(a01*a09);
   a01=casadi_fabs(a01);
@@ -1065,8 +1061,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a46=(a46-a34);
   a23=(a23*a46);
   a46=8192.;
-  a22=casadi_fabs(a22);
-  a38=(a38<a22);
+  a04=casadi_fabs(a04);
+  a38=(a38<a04);
   a46=(a46*a38);
   a23=(a23+a46);
   a46=16384.;
@@ -1085,17 +1081,17 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a23=(a23*a46);
   a17=(a17+a23);
   a40=(a40<a00);
-  a44=((a44!=0.)||(a40!=0.));
-  a15=((a15!=0.)&&(a44!=0.));
-  a44=128.;
-  a15=((a15!=0.)?a44:0);
+  a21=((a21!=0.)||(a40!=0.));
+  a15=((a15!=0.)&&(a21!=0.));
+  a21=128.;
+  a15=((a15!=0.)?a21:0);
   a17=(a17+a15);
   res[1][4]=a17;
   return 0;
 }
 
 /*
- * vse_fusion_kernel_active: 780 operations (CasADi SX instructions)
+ * vse_fusion_kernel_active: 776 operations (CasADi SX instructions)
  * arg[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,

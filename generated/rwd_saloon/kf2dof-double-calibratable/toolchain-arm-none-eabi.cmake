@@ -5,7 +5,7 @@
 # Options: real=double, params=calibratable.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 0eead3e7ae47ea5ca4216d1aa9acf5f7bcb9bb70610caa677935f8e63bb05e76
-# Operations: step 761, init 62 (CasADi SX instructions).
+# Operations: step 760, init 62 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
 

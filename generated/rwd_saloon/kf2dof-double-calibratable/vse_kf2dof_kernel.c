@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0eead3e7ae47ea5ca4216d1aa9acf5f7bcb9bb70610caa677935f8e63bb05e76
- * Operations: step 761, init 62 (CasADi SX instructions).
+ * Operations: step 760, init 62 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -863,23 +863,22 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a17=(a17*a20);
   a17=(a17*a20);
   a28=(a28<a17);
-  a17=((a28!=0.)?a33:0);
-  a01=(a28==0.);
-  a01=((a01!=0.)?a09:0);
-  a17=(a17+a01);
-  res[0][13]=a17;
+  a17=(a28*a33);
   a28=(a00-a28);
+  a09=(a28*a09);
+  a17=(a17+a09);
+  res[0][13]=a17;
   a17=state_14;
-  a01=(a17+a00);
-  a09=arg[2][29];
-  a09=(a09/a19);
-  a09=(a09+a15);
-  a09=floor(a09);
-  a01=casadi_fmin(a01,a09);
-  a28=(a28*a01);
+  a09=(a17+a00);
+  a01=arg[2][29];
+  a01=(a01/a19);
+  a01=(a01+a15);
+  a01=floor(a01);
+  a09=casadi_fmin(a09,a01);
+  a28=(a28*a09);
   res[0][14]=a28;
-  a01=state_15;
-  a28=(a09<=a28);
+  a09=state_15;
+  a28=(a01<=a28);
   a15=casadi_fabs(a05);
   a19=arg[2][33];
   a19=(a15<=a19);
@@ -891,10 +890,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a19*a18);
   a18=(a12*a20);
   a05=(a05-a18);
-  a05=(a05-a01);
+  a05=(a05-a09);
   a19=(a19*a05);
-  a01=(a01+a19);
-  res[0][15]=a01;
+  a09=(a09+a19);
+  res[0][15]=a09;
   a19=state_16;
   a05=arg[2][36];
   a05=(a15<=a05);
@@ -925,14 +924,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(a24*a12);
   a05=(a05+a24);
   res[0][17]=a05;
-  a17=(a17<a09);
+  a17=(a17<a01);
   a17=(a28*a17);
-  a09=((a17!=0.)?a05:0);
-  a17=(a17==0.);
+  a01=(a17*a05);
+  a17=(a00-a17);
   a24=state_18;
-  a17=((a17!=0.)?a24:0);
-  a09=(a09+a17);
-  res[0][18]=a09;
+  a17=(a17*a24);
+  a01=(a01+a17);
+  res[0][18]=a01;
   res[0][19]=a32;
   a11=(a27/a11);
   a11=atan(a11);
@@ -951,7 +950,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a15<=a11);
   a28=(a28*a15);
   a15=arg[2][38];
-  a05=(a05-a09);
+  a05=(a05-a01);
   a05=(a05*a20);
   a05=(a05*a20);
   a05=casadi_fabs(a05);
@@ -968,8 +967,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=(a21*a07);
   a07=8192.;
   a28=arg[2][31];
-  a01=casadi_fabs(a01);
-  a28=(a28<a01);
+  a09=casadi_fabs(a09);
+  a28=(a28<a09);
   a07=(a07*a28);
   a21=(a21+a07);
   a07=16384.;
@@ -990,7 +989,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_kf2dof_kernel_active: 721 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_active: 720 operations (CasADi SX instructions)
  * arg[0] state[20]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,

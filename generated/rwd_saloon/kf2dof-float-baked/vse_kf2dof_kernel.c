@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 0eead3e7ae47ea5ca4216d1aa9acf5f7bcb9bb70610caa677935f8e63bb05e76
- * Operations: step 677, init 59 (CasADi SX instructions).
+ * Operations: step 676, init 59 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
@@ -773,21 +773,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a26=(a26*a01);
   a26=(a26*a01);
   a22=(a22<a26);
-  a26=((a22!=0.f)?a03:0);
-  a07=(a22==0.f);
-  a07=((a07!=0.f)?a02:0);
-  a26=(a26+a07);
-  res[0][13]=a26;
+  a26=(a22*a03);
   a22=(a00-a22);
+  a02=(a22*a02);
+  a26=(a26+a02);
+  res[0][13]=a26;
   a26=state_14;
-  a07=(a26+a00);
-  a02=30.f;
-  a07=casadi_fmin(a07,a02);
-  a22=(a22*a07);
+  a02=(a26+a00);
+  a07=30.f;
+  a02=casadi_fmin(a02,a07);
+  a22=(a22*a02);
   res[0][14]=a22;
-  a07=state_15;
+  a02=state_15;
   a25=1.9801326693244747e-02f;
-  a22=(a02<=a22);
+  a22=(a07<=a22);
   a20=casadi_fabs(a31);
   a06=1.5000000000000000e+00f;
   a24=(a20<=a06);
@@ -795,10 +794,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25*a24);
   a24=(a05*a01);
   a31=(a31-a24);
-  a31=(a31-a07);
+  a31=(a31-a02);
   a25=(a25*a31);
-  a07=(a07+a25);
-  res[0][15]=a07;
+  a02=(a02+a25);
+  res[0][15]=a02;
   a25=state_16;
   a31=1.9980013326669210e-03f;
   a08=(a20<=a08);
@@ -823,14 +822,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a03*a05);
   a31=(a31+a03);
   res[0][17]=a31;
-  a26=(a26<a02);
+  a26=(a26<a07);
   a26=(a22*a26);
-  a02=((a26!=0.f)?a31:0);
-  a26=(a26==0.f);
+  a07=(a26*a31);
+  a26=(a00-a26);
   a03=state_18;
-  a26=((a26!=0.f)?a03:0);
-  a02=(a02+a26);
-  res[0][18]=a02;
+  a26=(a26*a03);
+  a07=(a07+a26);
+  res[0][18]=a07;
   res[0][19]=a16;
   a04=(a10/a04);
   a04=atanf(a04);
@@ -846,7 +845,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a10=6.f;
   a20=(a20<=a10);
   a22=(a22*a20);
-  a31=(a31-a02);
+  a31=(a31-a07);
   a31=(a31*a01);
   a31=(a31*a01);
   a31=casadi_fabs(a31);
@@ -863,8 +862,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a29=(a29*a23);
   a23=8192.f;
   a22=4.0000000000000002e-01f;
-  a07=casadi_fabs(a07);
-  a22=(a22<a07);
+  a02=casadi_fabs(a02);
+  a22=(a22<a02);
   a23=(a23*a22);
   a29=(a29+a23);
   a23=16384.f;
@@ -885,7 +884,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_kf2dof_kernel_active: 639 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_active: 638 operations (CasADi SX instructions)
  * arg[0] state[20]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 5ad5f75a513d65dc829ea0c0f24da87988e885c938ddbee520e90c4aa9754ec4
- * Operations: step 7617, init 105 (CasADi SX instructions).
+ * Operations: step 7624, init 105 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
