@@ -82,9 +82,10 @@ def test_without_qemu_the_command_is_one_line(tmp_path, vsegen):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("board", ["m4f", "m7"])
-@pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
+@pytest.mark.parametrize("car, board", [("c_class", "m4f"), ("rwd_saloon", "m7")])
 def test_every_estimator_runs_under_pil(board, car):
+    """Every estimator of each car on one board, each board once (float on the M4F, double on the
+    M7); `python -m bench.pil --vehicle FILE` runs a car on both (docs/benchmarks.md)."""
     vehicle = load_vehicle(REPO / "vehicles" / f"{car}.toml")
     results = pil.pil(vehicle, tuple(vehicle.estimators), board, "baked")
     failures = [(r.reference.estimator, r.reference.case) for r in results if not r.ok]

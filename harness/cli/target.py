@@ -177,14 +177,16 @@ def misra(update_baseline: bool, out: Path | None) -> None:
     configs = [load_vehicle(path) for path in project().required_vehicle_files()]
     out = out or project().reports / "misra.md"
     estimators = checks.distinct_code([(config, name) for config in configs for name in chosen_estimators(config, ())])
-    for (config, name), forms in zip(estimators, checks.all_findings(estimators)):
-        for form, counts in forms:
+    results = checks.all_findings(estimators, fresh=update_baseline)
+    for (config, name), forms in zip(estimators, results):
+        for form, counts, _ in forms:
             sections.append((f"{config.name}/{name} ({form})", counts))
             total.update(counts)
     per_rule = checks.by_rule(total)
     write_text_atomic(out, checks.report(sections, checks.provenance(project().root)))
     if update_baseline:
         checks.write_baseline(per_rule)
+        checks.write_record(results)
     rules = ", ".join(f"{rule.removeprefix('misra-c2012-')}: {count}" for rule, count in per_rule.items())
     console.print(f"wrote {out}: {sum(per_rule.values())} findings in {len(per_rule)} rules ({rules})")
     problems = checks.regressions(per_rule, checks.load_baseline())

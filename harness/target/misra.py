@@ -6,15 +6,22 @@ remains comes from CasADi's code generator or from public-API declarations, and 
 a justification below. ``vsegen misra`` writes the deviation report (docs/misra.md) and, with
 ``--update-baseline``, the baseline; the tests fail when a count grows or a rule has no
 justification. The kernel source is checked in its double, baked form (:func:`estimator_findings`).
+
+cppcheck needs minutes for the big kernels, so the findings of every folder scanned by ``vsegen
+misra --update-baseline`` are recorded with the SHA-256 of what was scanned (the cppcheck version,
+the file names and their text; ``misra_findings.json``): a folder whose code has not changed since
+is not scanned again, and any change is (:func:`findings`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import re
 import subprocess
 import tempfile
 from collections import Counter
+from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 
@@ -23,6 +30,8 @@ import casadi
 from vsegen.codegen.generate import EXAMPLE
 
 BASELINE = Path(__file__).resolve().with_name("misra_baseline.json")
+RECORD = Path(__file__).resolve().with_name("misra_findings.json")
+"""The findings of the folders scanned at the last baseline update, by the SHA-256 of their code."""
 
 JUSTIFICATIONS = {
     "misra-c2012-2.4": "The anonymous enum of state indices in the public header is for the "
@@ -40,8 +49,35 @@ JUSTIFICATIONS = {
 _FINDING = re.compile(r"^(?P<file>[^:]+):\d+:\d+: (?P<rule>[\w.-]+)$")
 
 
+@lru_cache(maxsize=1)
+def _cppcheck_version() -> str:
+    return subprocess.run(["cppcheck", "--version"], capture_output=True, text=True).stdout.strip()
+
+
+@lru_cache(maxsize=1)
+def _recorded() -> dict:
+    return json.loads(RECORD.read_text()) if RECORD.is_file() else {}
+
+
+def code_key(files: dict[str, str]) -> str:
+    """SHA-256 of what :func:`findings` scans of ``files``, with the cppcheck version."""
+    digest = hashlib.sha256(_cppcheck_version().encode())
+    for name in sorted(n for n in files if n.endswith((".c", ".h")) and n != EXAMPLE):
+        digest.update(b"\0" + name.encode() + b"\0" + files[name].encode())
+    return digest.hexdigest()
+
+
 def findings(files: dict[str, str]) -> Counter:
-    """Counter of (file, rule) for the library files of one generated folder."""
+    """Counter of (file, rule) for the library files of one generated folder: as recorded for
+    this code (:data:`RECORD`), or from cppcheck."""
+    recorded = _recorded().get(code_key(files))
+    if recorded is not None:
+        return Counter({(file, rule): count for file, rule, count in recorded})
+    return scan(files)
+
+
+def scan(files: dict[str, str]) -> Counter:
+    """Counter of (file, rule) for the library files of one generated folder, from cppcheck."""
     names = sorted(n for n in files if n.endswith((".c", ".h")) and n != EXAMPLE)
     with tempfile.TemporaryDirectory(prefix="vsegen-misra-") as tmp:
         for name in names:
@@ -63,11 +99,11 @@ VARIANTS = (("double", "baked"), ("double", "calibratable"), ("float", "baked"),
 """Every generated form of an estimator; the first is the one whose kernel source is checked."""
 
 
-def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
-    """(form, findings) for every form of estimator ``name``: all library files of the first
-    form, and the template files (with the kernel's header) of the others. The kernel sources of
-    the other forms differ only in literal types and the parameter vector, and cppcheck needs
-    about a minute for each of the unscented filters' kernels."""
+def estimator_findings(config, name: str, fresh: bool = False) -> list[tuple[str, Counter, str]]:
+    """(form, findings, code key) for every form of estimator ``name``: all library files of the
+    first form, and the template files (with the kernel's header) of the others. The kernel
+    sources of the other forms differ only in literal types and the parameter vector, and cppcheck
+    needs minutes for each of the unscented filters' kernels. ``fresh``: scan even recorded code."""
     from vsegen.codegen.generate import render
 
     results = []
@@ -75,7 +111,7 @@ def estimator_findings(config, name: str) -> list[tuple[str, Counter]]:
         files = render(config, name, real, params)
         if index:
             files = {n: t for n, t in files.items() if n != f"vse_{name}_kernel.c"}
-        results.append((f"{real}, {params}", findings(files)))
+        results.append((f"{real}, {params}", scan(files) if fresh else findings(files), code_key(files)))
     return results
 
 
@@ -93,13 +129,20 @@ def distinct_code(estimators: list[tuple]) -> list[tuple]:
     return kept
 
 
-def all_findings(estimators: list[tuple]) -> list[list[tuple[str, Counter]]]:
+def all_findings(estimators: list[tuple], fresh: bool = False) -> list[list[tuple[str, Counter, str]]]:
     """:func:`estimator_findings` of every (config, name) pair, spread over worker processes
     (cppcheck runs one process per folder)."""
     from vsegen.harness.jobs.pool import ProcessPool
 
     with ProcessPool() as workers:
-        return workers.map(estimator_findings, estimators)
+        return workers.map(estimator_findings, [(*pair, fresh) for pair in estimators])
+
+
+def write_record(results: list[list[tuple[str, Counter, str]]]) -> None:
+    """Record the findings of every scanned folder by its code key (:data:`RECORD`)."""
+    record = {key: sorted([file, rule, count] for (file, rule), count in counts.items())
+              for forms in results for _, counts, key in forms}
+    RECORD.write_text(json.dumps(dict(sorted(record.items())), indent=1) + "\n")
 
 
 def by_rule(counts: Counter) -> dict[str, int]:
