@@ -44,8 +44,9 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "| discretisation | generated instr/step | hand-written instr/step | ratio | target "
              "| generated ns | hand-written ns | generated M4F float .text / step stack (B) |",
              "|---|---|---|---|---|---|---|---|"]
+    monitors_off = {key: off for key, off in input_monitors.OFF.items() if config.settings("kf2dof")[key] != off}
     text = with_settings(vehicle.read_text(), "estimator.kf2dof", residual_window=0.0,
-                         linear_range=0.0, **input_monitors.OFF)
+                         linear_range=0.0, **monitors_off)
     for method in ("zoh", "euler"):
         variant = parse_vehicle(text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
                                 str(vehicle), config.name)
