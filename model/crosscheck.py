@@ -48,6 +48,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
+from vsegen.model.filters import low_pass
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -125,10 +126,6 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
             for entry in states(numeric_settings, inputs)}
 
 
-def _gain(sample_time: float, time_constant):
-    return 1 - ca.exp(-sample_time / time_constant)
-
-
 def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float,
             wheelbase) -> tuple[dict, dict]:
     """(new state entries, {status bit: 1 while raised}) from the state entries ``s``, the inputs
@@ -143,21 +140,20 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = steady * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
-        residual = s["lateral_residual"] + sampled * _gain(sample_time, settings["lateral_check_time"]) * (
-            u["ay"] - u["r"] * u["vx"] - s["lateral_residual"])
+        residual = low_pass(s["lateral_residual"], u["ay"] - u["r"] * u["vx"], settings["lateral_check_time"],
+                            sample_time, sampled)
         updates["lateral_residual"] = residual
         raised[status.LATERAL_INCONSISTENT] = ca.fabs(residual) > settings["lateral_check_limit"]
     if _on(numeric_settings, "steering_offset_limit"):
         sampled = steady * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
-        offset = s["steering_offset"] + sampled * _gain(sample_time, settings["steering_offset_time"]) * (
-            u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
-            - s["steering_offset"])
+        kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
+        offset = low_pass(s["steering_offset"], kinematic_zero, settings["steering_offset_time"], sample_time,
+                          sampled)
         updates["steering_offset"] = offset
         raised[status.STEERING_OFFSET] = ca.fabs(offset) > settings["steering_offset_limit"]
     if _on(numeric_settings, "steer_check_limit"):
-        curvature = s["curvature"] + _gain(sample_time, settings["steer_check_time"]) * (
-            u["r"] / u["vx"] - s["curvature"])
+        curvature = low_pass(s["curvature"], u["r"] / u["vx"], settings["steer_check_time"], sample_time)
         turned_steady = steady * (s["steady_samples"] < limit)
         reference = turned_steady * curvature + (1 - turned_steady) * s["steady_curvature"]
         checked = steady * (ca.fabs(u["ay"]) <= settings["steer_check_range"])

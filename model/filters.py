@@ -62,6 +62,15 @@ def biquad_step(f: Biquad, x: ca.SX, x1: ca.SX, x2: ca.SX, y1: ca.SX, y2: ca.SX)
     return f.n0 * x + f.n1 * x1 + f.n2 * x2 - f.d1 * y1 - f.d2 * y2
 
 
+def low_pass(previous, value, time_constant, T: float, sampled=None):
+    """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / time_constant)) (x_k -
+    y_k-1); with a 0/1 flag ``sampled``, the step is taken only where it is 1 (held elsewhere;
+    arithmetic, so a guarded kernel stays branch-free). ``time_constant`` may be a calibration
+    symbol; a number folds the gain at generation time."""
+    gain = 1 - ca.exp(-T / time_constant)
+    return previous + (gain if sampled is None else sampled * gain) * (value - previous)
+
+
 def tustin_derivative(time_constant: float, T: float) -> tuple[float, float]:
     """(n, d) of the Tustin-discretised filtered derivative s / (time_constant s + 1):
     y[k] = n (x[k] - x[k-1]) - d y[k-1]."""

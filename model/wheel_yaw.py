@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from vsegen.model.filters import low_pass
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -65,7 +66,6 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
     wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
     rolling = ca.fabs(u["ax"]) <= settings["wheel_check_ax"]
-    gain = 1 - ca.exp(-sample_time / settings["wheel_check_time"])
-    residual = s[STATE.name] + rolling * gain * (u["r"] - wheel_yaw_rate - s[STATE.name])
+    residual = low_pass(s[STATE.name], u["r"] - wheel_yaw_rate, settings["wheel_check_time"], sample_time, rolling)
     return ({STATE.name: ca.if_else(active, residual, s[STATE.name])},
             active * (ca.fabs(residual) > settings["wheel_check_limit"]))

@@ -82,6 +82,11 @@ def tustin(num: tuple[float, ...], den: tuple[float, ...], T: float) -> tuple[np
     return bz, az
 
 
+def low_pass(previous: float, value: float, T: float, time_constant: float) -> float:
+    """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / tau)) (x_k - y_k-1)."""
+    return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
+
+
 def kf_predict(x, P, Phi, Gamma, u, Qd):
     return Phi @ x + Gamma @ u, Phi @ P @ Phi.T + Qd
 

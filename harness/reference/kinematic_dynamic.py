@@ -135,7 +135,7 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
     band = s["offset_band"]
     if not (allowed and abs(ay_f - offset) < band and abs(r * vx) < band):
         return offset
-    return offset + (1 - math.exp(-T / s["offset_memory"])) * (ay - r * vx - offset)
+    return blocks.low_pass(offset, ay - r * vx, T, s["offset_memory"])
 
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):

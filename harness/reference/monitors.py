@@ -53,10 +53,6 @@ def initial(settings, inputs, first: Mapping[str, float]) -> dict:
     return entries
 
 
-def _low_pass(previous: float, value: float, T: float, time_constant: float) -> float:
-    return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
-
-
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
          inputs, vehicle: Mapping[str, float]) -> tuple[dict, int]:
     """(new entries, status bits) of the monitors that are on; call only on an active sample (a
@@ -74,7 +70,7 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
         wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
         residual = x["wheel_yaw_residual"]
         if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
-            residual = _low_pass(residual, u["r"] - wheel_yaw_rate, T, settings["wheel_check_time"])
+            residual = blocks.low_pass(residual, u["r"] - wheel_yaw_rate, T, settings["wheel_check_time"])
         new["wheel_yaw_residual"] = residual
         code |= blocks.YAW_RATE_MISMATCH if abs(residual) > settings["wheel_check_limit"] else 0
     return new, code
@@ -93,19 +89,19 @@ def _crosschecks(x, u, settings, T: float, wheelbase: float) -> tuple[dict, int]
     if _on(settings, "lateral_check_limit"):
         residual = x["lateral_residual"]
         if steady and abs(u["ay"]) <= settings["lateral_check_range"]:
-            residual = _low_pass(residual, u["ay"] - u["r"] * u["vx"], T, settings["lateral_check_time"])
+            residual = blocks.low_pass(residual, u["ay"] - u["r"] * u["vx"], T, settings["lateral_check_time"])
         new["lateral_residual"] = residual
         code |= blocks.LATERAL_INCONSISTENT if abs(residual) > settings["lateral_check_limit"] else 0
     if _on(settings, "steering_offset_limit"):
         offset = x["steering_offset"]
         if (steady and abs(u["ay"]) <= settings["steering_offset_range"]
                 and u["vx"] >= settings["steering_offset_speed"]):
-            offset = _low_pass(offset, u["delta"] - wheelbase * u["r"] / u["vx"], T,
+            offset = blocks.low_pass(offset, u["delta"] - wheelbase * u["r"] / u["vx"], T,
                                settings["steering_offset_time"])
         new["steering_offset"] = offset
         code |= blocks.STEERING_OFFSET if abs(offset) > settings["steering_offset_limit"] else 0
     if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady
-        curvature = _low_pass(x["curvature"], u["r"] / u["vx"], T, settings["steer_check_time"])
+        curvature = blocks.low_pass(x["curvature"], u["r"] / u["vx"], T, settings["steer_check_time"])
         turned_steady = steady and x["steady_samples"] < steady_samples
         new["curvature"] = curvature
         new["steady_curvature"] = curvature if turned_steady else x["steady_curvature"]

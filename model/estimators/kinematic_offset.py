@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from vsegen.model.filters import low_pass
 from vsegen.model.schema import nonnegative, positive, share
 from vsegen.model.signals import Signal
 
@@ -63,8 +64,7 @@ def near_straight(settings, ay_filtered, r_checked, vx, offset):
 
 def learned(settings, sample_time: float, previous, ay, r, vx, learning):
     """c_k from c_k-1 = ``previous`` and the checked a_y, r and the speed, while ``learning``."""
-    gain = 1 - ca.exp(-sample_time / settings["offset_memory"])
-    return previous + learning * gain * (ay - r * vx - previous)     # arithmetic: no branch
+    return low_pass(previous, ay - r * vx, settings["offset_memory"], sample_time, learning)
 
 
 def update(settings, sample_time: float, previous, pre, vx, allowed):
