@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 from rich.console import Console
 
-from vsegen.harness.logs.table import LogError, read_log
+from vsegen.harness.logs.table import LogError
 from vsegen.harness.project.paths import ProjectError, project
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import ScenarioError
@@ -79,31 +79,60 @@ def chosen_estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str
 
 
 def read_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
-              window: tuple[float | None, float | None] = (None, None),
-              unit_check: VehicleConfig | None = None):
+                  window: tuple[float | None, float | None] = (None, None),
+                  unit_check: VehicleConfig | None = None):
     """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, cut to the
-    time ``window`` (s), saying on stderr (a line each) when it was put on a uniform grid (MDF4
-    channels: at ``sample_time``, a number or a function giving it, called only for MDF4) and where
-    it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the signals' physics is
-    checked for wrong units (``harness.logs.units``)."""
+    time ``window`` (s), in memory, saying on stderr (a line each) when it was put on a uniform
+    grid (MDF4 channels: at ``sample_time``, a number or a function giving it, called only for
+    MDF4) and where it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the
+    signals' physics is checked for wrong units (``harness.logs.units``)."""
+    log = open_user_log(path, channels, sample_time, window).read()
+    say_notes(path, log.notes)
+    if unit_check is not None:
+        _check_units(path, log, unit_check)
+    return log
+
+
+UNIT_CHECK_SPAN = 600.0
+"""s: a streamed log's units are judged on its first ten minutes (a wrong unit is wrong on every
+sample; the physics check is the slow part of reading)."""
+
+
+def open_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
+                  window: tuple[float | None, float | None] = (None, None),
+                  unit_check: VehicleConfig | None = None):
+    """A log as :func:`read_user_log` reads it, as a source of chunks (``harness.logs.stream``):
+    memory does not grow with its length. Notes known before reading (resampling) are said at
+    once; the gaps of an MDF4 log are in the source's notes once it has been read
+    (:func:`say_notes`). With ``unit_check``, the units are judged on the first UNIT_CHECK_SPAN s."""
     from vsegen.harness.logs.channels import read_channel_map
-    from vsegen.harness.logs.mdf import SUFFIXES, read_mdf
-    from vsegen.harness.logs.units import check_units
+    from vsegen.harness.logs.mdf import SUFFIXES, open_mdf_log
+    from vsegen.harness.logs.stream import open_csv_log
 
     mapping = read_channel_map(channels)
     if path.suffix.lower() in SUFFIXES:
-        log = read_mdf(path, mapping, sample_time() if callable(sample_time) else sample_time)
+        source = open_mdf_log(path, mapping, sample_time() if callable(sample_time) else sample_time, window)
     else:
-        log = read_log(path, channels={c.channel: (c.name, c.scale) for c in mapping.columns.values()})
-    for key in ("resampled", "gaps"):
-        if key in log.notes:
-            click.echo(f"vsegen: {path}: {log.notes[key]}", err=True)
-    log = log.window(*window)
+        source = open_csv_log(path, {c.channel: (c.name, c.scale) for c in mapping.columns.values()}, window=window)
     if unit_check is not None:
-        unchecked = check_units(log, unit_check.vehicle)
-        if unchecked:
-            click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
-    return log
+        head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
+        _check_units(path, head, unit_check)
+    return source
+
+
+def say_notes(path: Path, notes: dict[str, str]) -> None:
+    """Say on stderr, a line each, how a log was put on a uniform grid and where it has gaps."""
+    for key in ("resampled", "gaps"):
+        if key in notes:
+            click.echo(f"vsegen: {path}: {notes[key]}", err=True)
+
+
+def _check_units(path: Path, log, config: VehicleConfig) -> None:
+    from vsegen.harness.logs.units import check_units
+
+    unchecked = check_units(log, config.vehicle)
+    if unchecked:
+        click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
 
 
 def warn_underived(config: VehicleConfig, name: str) -> None:

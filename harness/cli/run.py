@@ -1,4 +1,5 @@
-"""`vsegen run`: an estimator over a log, its estimates written as CSV or MDF4."""
+"""`vsegen run`: an estimator over a log, read, run and written chunk by chunk (memory does not grow
+with the log), its estimates written as CSV, MDF4 or Parquet."""
 
 from __future__ import annotations
 
@@ -16,14 +17,14 @@ from vsegen.harness.cli.common import (
     UserError,
     chosen_estimators,
     console,
-    read_user_log,
+    open_user_log,
+    say_notes,
     user_errors,
     vehicle_config,
     warn_underived,
     window_options,
 )
-from vsegen.harness.logs.estimates import write_estimates
-from vsegen.model.estimators import build
+from vsegen.harness.logs.estimates import EstimatesWriter
 
 
 @click.command()
@@ -34,7 +35,7 @@ from vsegen.model.estimators import build
 @click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
               help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
 @click.option("--out", type=click.Path(path_type=Path), required=True,
-              help="Estimates to write: CSV, or MDF4 when the name ends in .mf4.")
+              help="Estimates to write: CSV, MDF4 when the name ends in .mf4, Parquet in .parquet.")
 @REAL_OPTION
 @PARAMS_OPTION
 @CHANNELS_OPTION
@@ -47,12 +48,12 @@ def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...). With the C
     backend, --real and --params choose the form that will be flashed (default: the vehicle file's
     [codegen])."""
-    from vsegen.harness.host.run_log import run_estimator
+    from vsegen.harness.host.run_log import EstimatorStream, inputs_of
 
     config = vehicle_config(vehicle)
     chosen_estimators(config, (estimator,))
     warn_underived(config, estimator)
-    log = read_user_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
+    log = open_user_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
     if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
         click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
                    f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "
@@ -60,10 +61,16 @@ def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out:
     if backend == "reference" and (real or params):
         raise UserError("--real/--params choose a form of the generated C: expected --backend c")
     form = f"{real or config.codegen['real']}, {params or config.codegen['params']}" if backend == "c" else backend
-    with console.status(f"running {estimator} ({form}) on {len(log)} samples"):
-        estimates = run_estimator(config, estimator, log, backend, real, params)
-    units = {s.name: s.unit for s in build(estimator, config).outputs.signals}
-    write_estimates(estimates, out, units)
-    flagged = int(np.count_nonzero(estimates["status"]))
-    console.print(f"wrote {out} ({len(estimates)} samples, T = {log.sample_time:.6g} s, {form}, "
+    flagged = 0
+    with console.status(f"running {estimator} ({form}) on {log.samples} samples"):
+        chunks = log.prefetched(names=inputs_of(config, estimator))   # parsing starts while the estimator is built
+        stream = EstimatorStream(config, estimator, log.sample_time, backend, real, params)
+        units = {s.name: s.unit for s in stream.estimator.outputs.signals}
+        with EstimatesWriter(out, units) as writer:
+            for chunk in chunks:
+                estimates = stream(chunk)
+                writer.write(estimates)
+                flagged += int(np.count_nonzero(estimates["status"]))
+    say_notes(log_path, log.notes)
+    console.print(f"wrote {out} ({log.samples} samples, T = {log.sample_time:.6g} s, {form}, "
                   f"{flagged} with status != 0)")

@@ -5,18 +5,19 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
-import numpy as np
 from rich.table import Table
 
 from vsegen.harness.cli.common import (
     CHANNELS_OPTION,
     UserError,
     console,
+    open_user_log,
     read_user_log,
+    say_notes,
     user_errors,
     window_options,
 )
-from vsegen.harness.logs.estimates import read_estimates
+from vsegen.harness.logs.estimates import open_estimates, read_estimates
 
 
 @click.command()
@@ -29,10 +30,14 @@ from vsegen.harness.logs.estimates import read_estimates
 @user_errors
 def score(log_path: Path, est_path: Path, channels: Path | None, start: float | None, stop: float | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
-    from vsegen.harness.score.metrics import score as compute
+    from vsegen.harness.score.metrics import score_sources
 
-    log = read_user_log(log_path, channels, lambda: read_estimates(est_path).sample_time, (start, stop))
-    scores = compute(log, read_estimates(est_path))
+    log = open_user_log(log_path, channels, lambda: open_estimates(est_path).sample_time, (start, stop))
+    estimates = open_estimates(est_path)
+    with console.status(f"scoring {est_path} ({estimates.samples} samples)"):
+        sums = score_sources(log, estimates)
+        scores = sums.result()
+    say_notes(log_path, log.notes)
     table = Table(title=f"{est_path} against {log_path}")
     for column in ("signal", "samples", "max |e|", "mean |e|", "RMSE"):
         table.add_column(column, justify="left" if column == "signal" else "right")
@@ -40,9 +45,8 @@ def score(log_path: Path, est_path: Path, channels: Path | None, start: float | 
         table.add_row(f"{s.signal} ({s.unit})", str(s.samples), f"{s.max:.3f}", f"{s.mean:.3f}",
                       f"{s.rmse:.3f}")
     console.print(table)
-    if "off_course" in log and np.any(log["off_course"] > 0):
-        first = log["t"][np.argmax(log["off_course"] > 0)]
-        console.print(f"warning: the run left the course or spun from t = {first:.2f} s "
+    if sums.first_off_course is not None:
+        console.print(f"warning: the run left the course or spun from t = {sums.first_off_course:.2f} s "
                       f"(column off_course); these scores include those samples")
 
 

@@ -98,6 +98,17 @@ class CEstimator:
         self.library.vse_harness_run(ctypes.c_int(n), _ptr(inputs), _ptr(outputs), _ptr(states))
         return outputs, states
 
+    def run_chunk(self, inputs: np.ndarray, state: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(outputs n x ny, state after the last row) for the input rows ``inputs`` (n x nu), from
+        ``state`` (None: initialised from the first row): a long log runs chunk by chunk with the
+        state carried, its outputs bit-identical to :meth:`run`'s."""
+        inputs = np.ascontiguousarray(inputs, dtype=np.float64)
+        outputs = np.zeros((inputs.shape[0], len(self.estimator.outputs)))
+        carried = np.zeros(len(self.estimator.states)) if state is None else np.array(state, dtype=np.float64)
+        self.library.vse_harness_run_chunk(ctypes.c_int(inputs.shape[0]), _ptr(inputs), _ptr(outputs),
+                                           _ptr(carried), ctypes.c_int(state is None))
+        return outputs, carried
+
     def set_calibration(self, values) -> None:
         """Write the calibration (one value per ``estimator.parameters.names``; tuning builds only)."""
         values = np.ascontiguousarray(values, dtype=np.float64)
@@ -136,6 +147,7 @@ def load_estimator(estimator: Estimator, files: dict[str, str]) -> CEstimator:
     library_path = build_library(files, {"vse_harness_runner.c": runner_source(estimator)})
     library = ctypes.CDLL(str(library_path))
     library.vse_harness_run.restype = None
+    library.vse_harness_run_chunk.restype = None
     library.vse_harness_step.restype = None
     return CEstimator(estimator, library)
 

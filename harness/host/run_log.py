@@ -6,8 +6,6 @@ from __future__ import annotations
 from vsegen.codegen.generate import render
 from vsegen.harness.host.build import load_estimator
 from vsegen.harness.logs.table import Log, LogError
-from vsegen.harness.reference import REFERENCES
-from vsegen.harness.reference.loop import run_reference
 from vsegen.model.estimators import build
 from vsegen.model.params import VehicleConfig
 
@@ -27,6 +25,11 @@ def config_at(config: VehicleConfig, sample_time: float) -> VehicleConfig:
     return config if sample_time == config.sample_time else config.with_sample_time(sample_time)
 
 
+def inputs_of(config: VehicleConfig, name: str) -> tuple[str, ...]:
+    """The log columns estimator ``name`` reads."""
+    return build(name, config).inputs.names
+
+
 def estimator_inputs(estimator, log: Log):
     """The log's columns the estimator reads, as a matrix; one line when one is missing."""
     missing = log.missing(estimator.inputs.names)
@@ -40,15 +43,41 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
                   real: str | None = None, params: str | None = None) -> Log:
     """Estimates of ``name`` over ``log``: columns ``t`` and the estimator's outputs; ``real`` and
     ``params`` (C only: the form that will be flashed) default to the vehicle file's [codegen]."""
-    config = config_for_log(config, log)
-    params = params or config.codegen["params"]
-    estimator = build(name, config)
-    inputs = estimator_inputs(estimator, log)
-    if backend == "c":
-        form = build(name, config, params)
-        outputs, _ = load_estimator(form, render(config, name, real, params)).run(inputs)
-    else:
-        outputs, _ = run_reference(REFERENCES[name], config, inputs)
-    columns = {"t": log["t"].copy()}
-    columns.update({s.name: outputs[:, i] for i, s in enumerate(estimator.outputs.signals)})
-    return Log(columns, source=f"<{name} on {log.source}>")
+    return EstimatorStream(config, name, log.sample_time, backend, real, params)(log)
+
+
+class EstimatorStream:
+    """An estimator fed a log chunk by chunk (:meth:`__call__` per chunk, in order), its state
+    carried across the chunk boundaries: the estimates are bit-identical to one pass over the
+    whole log, and memory does not grow with the log. ``real`` and ``params`` (C only: the form
+    that will be flashed) default to the vehicle file's [codegen]."""
+
+    def __init__(self, config: VehicleConfig, name: str, sample_time: float, backend: str = "c",
+                 real: str | None = None, params: str | None = None):
+        self.config = config_at(config, sample_time)
+        self.name = name
+        self.estimator = build(name, self.config)
+        self.backend = backend
+        if backend == "c":
+            params = params or self.config.codegen["params"]
+            form = build(name, self.config, params)
+            self.compiled = load_estimator(form, render(self.config, name, real, params))
+        self.state = None
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.estimator.outputs.signals)
+
+    def __call__(self, chunk: Log) -> Log:
+        """The estimates (``t`` and the outputs) of the next chunk of the log."""
+        inputs = estimator_inputs(self.estimator, chunk)
+        if self.backend == "c":
+            outputs, self.state = self.compiled.run_chunk(inputs, self.state)
+        else:
+            from vsegen.harness.reference import REFERENCES  # here: the references import scipy.signal
+            from vsegen.harness.reference.loop import step_reference
+
+            outputs, self.state = step_reference(REFERENCES[self.name], self.config, inputs, self.state)
+        columns = {"t": chunk["t"].copy()}
+        columns.update({name: outputs[:, i] for i, name in enumerate(self.output_names)})
+        return Log(columns, source=f"<{self.name} on {chunk.source}>")

@@ -1,18 +1,23 @@
-"""Estimates files, as ``vsegen run`` writes them and ``score`` and ``plot`` read them: CSV, or
-ASAM MDF4 when the name ends in .mf4/.mdf, with ``t`` and the estimator's outputs in SI units. An
-MDF4 file carries each channel's unit; on reading, a unit of the vocabulary of channel maps is
+"""Estimates files, as ``vsegen run`` writes them and ``score`` and ``plot`` read them: CSV, ASAM
+MDF4 when the name ends in .mf4/.mdf (or Parquet, .parquet), with ``t`` and the estimator's
+outputs in SI units. An MDF4 file carries each channel's unit; on reading, a unit of the vocabulary of channel maps is
 converted to SI, and a unit of the wrong kind or an unknown one is refused in one line."""
 
 from __future__ import annotations
 
+import queue
+import threading
 from collections.abc import Mapping
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
 
 from vsegen.harness.logs.channels import SI_KIND, UNITS
 from vsegen.harness.logs.mdf import SUFFIXES, open_mdf, write_mdf
-from vsegen.harness.logs.table import ESTIMATED, Log, LogError, read_log, write_log
+from vsegen.harness.logs.stream import LogSource, arrow_floats, in_memory, open_csv_log
+from vsegen.harness.logs.table import ESTIMATED, Log, LogError, write_log
+from vsegen.harness.project.files import atomic_path
 
 KNOWN_UNITS = {"beta": "rad", "beta_ekf": "rad", "beta_int": "rad", "vx": "m/s", "vy": "m/s", "r": "rad/s",
                "ax": "m/s^2", "ay": "m/s^2", "yaw_moment": "N*m", "status": "-", "mode": "-"}
@@ -28,15 +33,112 @@ def write_estimates(log: Log, path: Path, units: Mapping[str, str]) -> None:
         write_log(log, path)
 
 
+class EstimatesWriter:
+    """Estimates written chunk by chunk (``with EstimatesWriter(path, units) as out: out.write(chunk)``):
+    CSV (shortest round-trip decimals, as pyarrow writes them), MDF4 (.mf4/.mdf, each channel with
+    its unit from ``units``) or Parquet (.parquet), by suffix. A background thread writes while
+    the caller computes the next chunk (pyarrow releases the GIL). The file appears, whole, only
+    when the ``with`` block ends without an error."""
+
+    def __init__(self, path: Path, units: Mapping[str, str]):
+        self.path = Path(path)
+        self.units = units
+        self.kind = "mdf" if self.path.suffix.lower() in SUFFIXES else \
+            "parquet" if self.path.suffix.lower() == ".parquet" else "csv"
+        self.samples = 0
+
+    def __enter__(self) -> EstimatesWriter:
+        self._stack = ExitStack()
+        self._tmp = self._stack.enter_context(atomic_path(self.path))
+        self._writer = None
+        self._queue: queue.Queue = queue.Queue(maxsize=2)
+        self._failure: BaseException | None = None
+        self._thread = threading.Thread(target=self._drain, name=f"write {self.path}", daemon=True)
+        self._thread.start()
+        return self
+
+    def write(self, chunk: Log) -> None:
+        """Append the next chunk (the same columns every time)."""
+        if self._failure is not None:
+            raise self._failure
+        self._queue.put(chunk)
+        self.samples += len(chunk)
+
+    def _drain(self) -> None:
+        while (chunk := self._queue.get()) is not None:
+            if self._failure is None:
+                try:
+                    self._write(chunk)
+                except BaseException as exc:  # raised in the caller's thread
+                    self._failure = exc
+
+    def _write(self, chunk: Log) -> None:
+        import pyarrow as pa
+
+        if self.kind == "mdf":
+            self._write_mdf(chunk)
+            return
+        batch = pa.RecordBatch.from_arrays([arrow_floats(values) for values in chunk.columns.values()],
+                                           names=list(chunk.columns))
+        if self._writer is None:
+            self._writer = self._open_arrow(batch.schema)
+        self._writer.write_batch(batch)
+
+    def _open_arrow(self, schema):
+        import pyarrow.csv as pacsv
+        import pyarrow.parquet as pq
+
+        if self.kind == "parquet":
+            return pq.ParquetWriter(self._tmp, schema)
+        handle = self._stack.enter_context(open(self._tmp, "wb"))
+        handle.write((",".join(schema.names) + "\n").encode())
+        return pacsv.CSVWriter(handle, schema, write_options=pacsv.WriteOptions(include_header=False,
+                                                                                quoting_style="none"))
+
+    def _write_mdf(self, chunk: Log) -> None:
+        from asammdf import MDF, Signal
+
+        names = [name for name in chunk.columns if name != "t"]
+        if self._writer is None:
+            self._writer = MDF(version="4.10")
+            self._writer.append([Signal(np.asarray(chunk[name], dtype=float), chunk["t"], name=name,
+                                        unit=self.units.get(name, "")) for name in names], common_timebase=True)
+        else:
+            self._writer.extend(0, [(np.asarray(chunk["t"], dtype=float), None),
+                                    *((np.asarray(chunk[name], dtype=float), None) for name in names)])
+
+    def __exit__(self, kind, value, traceback) -> None:
+        self._queue.put(None)
+        self._thread.join()
+        try:
+            if kind is None and self._failure is not None:
+                raise self._failure
+            if kind is None and self._writer is None:
+                raise LogError(f"{self.path}: no estimates to write")
+            if self._writer is not None:
+                if self.kind == "mdf" and kind is None:
+                    self._writer.save(self._tmp, overwrite=True)
+                self._writer.close()
+        finally:
+            self._stack.__exit__(kind, value, traceback)
+
+
 def read_estimates(path: Path) -> Log:
     """An estimates file: ``t``, at least one of ``beta``, ``vy``, ``r``, and other numeric columns,
     in SI units; LogError (one line) otherwise."""
-    log = _read_mdf_estimates(path) if Path(path).suffix.lower() in SUFFIXES else \
-        read_log(path, required=("t",), all_numeric=True)
-    if not any(name in log for name in ESTIMATED):
+    return open_estimates(path).read()
+
+
+def open_estimates(path: Path) -> LogSource:
+    """An estimates file (CSV or MDF4, as :func:`read_estimates` takes) as a source of chunks."""
+    if Path(path).suffix.lower() in SUFFIXES:
+        source = in_memory(_read_mdf_estimates(path))
+    else:
+        source = open_csv_log(path, required=("t",), all_numeric=True)
+    if not any(name in source.names for name in ESTIMATED):
         raise LogError(f"{path}:1: no estimated signal: expected a column {', '.join(ESTIMATED[:-1])} "
-                       f"or {ESTIMATED[-1]} (found {', '.join(log.columns)})")
-    return log
+                       f"or {ESTIMATED[-1]} (found {', '.join(source.names)})")
+    return source
 
 
 def _read_mdf_estimates(path: Path) -> Log:

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import gc
 import sys
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
 
 from vsegen.harness.logs.channels import ChannelMap, file_unit_conflict
+from vsegen.harness.logs.stream import LogSource
 from vsegen.harness.logs.table import (
     OPTIONAL_INPUTS,
     REQUIRED,
@@ -47,48 +48,133 @@ def open_mdf(path: Path):
 
 
 def read_mdf(path: Path, channels: ChannelMap, sample_time: float) -> Log:
-    """The log columns of an MDF4 file on a uniform grid of ``sample_time`` s over the span every
-    required channel covers: each tick takes each channel's latest sample at or before it (no
-    look-ahead); a channel older than MAX_GAP at a tick gives NaN there (the estimators hold), and
-    the notes say where. Every missing required channel is named at once; a channel name found in
-    several groups must be chosen by the map's ``group`` or ``message``."""
+    """The log columns of an MDF4 file on a uniform grid of ``sample_time`` s, in memory (see
+    :func:`open_mdf_log`); the notes say where the grid has gaps."""
+    return open_mdf_log(path, channels, sample_time).read()
+
+
+READ_RECORDS = 1 << 16
+"""Records of a channel read at a time."""
+
+
+def open_mdf_log(path: Path, channels: ChannelMap, sample_time: float,
+                 window: tuple[float | None, float | None] = (None, None)) -> LogSource:
+    """The log columns of an MDF4 file as a source of chunks on a uniform grid of ``sample_time``
+    s over the span every required channel covers (cut to ``window``, s): each tick takes each
+    channel's latest sample at or before it (no look-ahead); a channel older than MAX_GAP at a tick
+    gives NaN there (the estimators hold), and the source's notes say where once it has been read.
+    Channels are read in ranges of records, so memory does not grow with the log. Every missing
+    required channel is named at once; a channel name found in several groups must be chosen by
+    the map's ``group`` or ``message``."""
     mdf = open_mdf(path)
-    series, missing = {}, []
+    found, missing = {}, []
     for name in (*REQUIRED[1:], *OPTIONAL_INPUTS, *TRUTH):
         column = channels.column(name)
         if column.channel not in mdf.channels_db:
             if name in REQUIRED:
                 missing.append(f"'{column.channel}' for column '{name}'")
             continue
-        signal = mdf.get(column.channel, *_occurrence(mdf, path, column, channels.source))
-        written = file_unit_conflict(column, str(signal.unit or ""))
+        group, index = _occurrence(mdf, path, column, channels.source)
+        first = mdf.get(group=group, index=index, record_offset=0, record_count=2)
+        written = file_unit_conflict(column, str(first.unit or ""))
         if written:
             raise LogError(f"{path}: channel '{column.channel}' is in {written} (the file's unit), the channel map "
                            f"reads it as {column.unit}: expected unit = \"{written}\" in [columns.{name}] of "
                            f"{channels.source}")
-        series[name] = (np.asarray(signal.timestamps, dtype=float),
-                        np.asarray(signal.samples, dtype=float) * column.scale)
+        records = int(mdf.groups[group].channel_group.cycles_nr)
+        if records:
+            last = mdf.get(group=group, index=index, record_offset=records - 1, record_count=1)
+            found[name] = _Channel(mdf, group, index, column.scale, records, np.asarray(first.timestamps, dtype=float),
+                                   float(last.timestamps[-1]))
     if missing:
         raise LogError(f"{path}: missing channel{'s' if len(missing) > 1 else ''} {', '.join(missing)}: expected "
                        f"{'them' if len(missing) > 1 else 'it'} in the file or other channels named in the channel "
                        f"map ({channels.source})")
-    start = max(t[0] for name, (t, _) in series.items() if name in REQUIRED)
-    stop = min(t[-1] for name, (t, _) in series.items() if name in REQUIRED)
-    ticks = start + sample_time * np.arange(int(np.floor((stop - start) / sample_time + 1e-9)) + 1)
-    if len(ticks) < 2:
+    start = max(c.start for name, c in found.items() if name in REQUIRED)
+    stop = min(c.stop for name, c in found.items() if name in REQUIRED)
+    ticks = int(np.floor((stop - start) / sample_time + 1e-9)) + 1
+    first_tick, ticks = _window_ticks(start, sample_time, ticks, window)
+    if ticks < 2:
         raise LogError(f"{path}: the required channels overlap for {stop - start:.3g} s: expected at least "
                        f"two samples of {sample_time:g} s")
-    columns, gaps = {"t": ticks}, np.zeros(len(ticks), dtype=bool)
-    for name, (t, values) in series.items():
-        latest, stale = latest_samples(t, ticks)
-        columns[name] = np.where(stale, np.nan, values[latest])
-        gaps |= stale if name in REQUIRED else False
-    rates = ", ".join(f"{name} {1.0 / np.median(np.diff(t)):.4g} Hz" for name, (t, _) in series.items() if len(t) > 1)
+    rates = ", ".join(f"{name} {c.rate:.4g} Hz" for name, c in found.items() if c.rate)
     notes = {"resampled": f"MDF4 channels ({rates}) taken causally onto a uniform {sample_time * 1e3:g} ms grid"}
-    spans = [(float(ticks[run.start]), float(ticks[run.stop - 1])) for run in runs(gaps)]
-    if spans:
-        notes["gaps"] = gap_note(spans)
-    return Log(columns, str(path), notes)
+    source = LogSource(str(path), sample_time, ticks, ("t", *found), lambda rows, names: iter(()), notes)
+
+    def chunks(rows: int, names: tuple[str, ...]) -> Iterator[Log]:
+        for channel in found.values():
+            channel.rewind()
+        gaps = []
+        for begin in range(0, ticks, rows):
+            t = start + sample_time * (first_tick + np.arange(begin, min(begin + rows, ticks)))
+            columns, stale_any = {"t": t}, np.zeros(len(t), dtype=bool)
+            for name, channel in found.items():
+                if name in names or name in REQUIRED:
+                    values, stale = channel.at(t)
+                    stale_any |= stale if name in REQUIRED else False
+                    if name in names:
+                        columns[name] = values
+            gaps += [(float(t[run.start]), float(t[run.stop - 1])) for run in runs(stale_any)]
+            yield Log(columns, str(path))
+        if gaps:
+            source.notes["gaps"] = gap_note(_joined(gaps, sample_time))
+
+    source.read_chunks = chunks
+    return source
+
+
+def _window_ticks(start: float, step: float, ticks: int, window: tuple[float | None, float | None]) -> tuple[int, int]:
+    """(first tick, number of ticks) of a grid ``start + step * k``, k < ``ticks``, inside ``window``."""
+    k = np.arange(ticks)
+    inside = np.ones(ticks, dtype=bool)
+    if window[0] is not None:
+        inside &= start + step * k >= window[0]
+    if window[1] is not None:
+        inside &= start + step * k <= window[1]
+    if not inside.any():
+        return 0, 0
+    chosen = np.flatnonzero(inside)
+    return int(chosen[0]), int(chosen[-1] - chosen[0] + 1)
+
+
+def _joined(gaps: list[tuple[float, float]], step: float) -> list[tuple[float, float]]:
+    """Gaps split at chunk boundaries joined again."""
+    joined = [gaps[0]]
+    for a, b in gaps[1:]:
+        if a - joined[-1][1] <= 1.5 * step:
+            joined[-1] = (joined[-1][0], b)
+        else:
+            joined.append((a, b))
+    return joined
+
+
+class _Channel:
+    """One channel read forward in ranges of records, brought onto grid ticks causally."""
+
+    def __init__(self, mdf, group: int, index: int, scale: float, records: int, head: np.ndarray, stop: float):
+        self.mdf, self.group, self.index, self.scale, self.records = mdf, group, index, scale, records
+        self.start, self.stop = float(head[0]), stop
+        self.rate = 1.0 / float(head[1] - head[0]) if len(head) > 1 and head[1] > head[0] else 0.0
+        self.rewind()
+
+    def rewind(self) -> None:
+        self.offset = 0
+        self.t = np.empty(0)
+        self.values = np.empty(0)
+
+    def at(self, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(values at ``ticks``, NaN where stale; whether stale); ticks come in increasing order."""
+        while (not self.t.size or self.t[-1] < ticks[-1]) and self.offset < self.records:
+            signal = self.mdf.get(group=self.group, index=self.index, record_offset=self.offset,
+                                  record_count=READ_RECORDS)
+            self.offset += len(signal.timestamps)
+            self.t = np.concatenate((self.t, np.asarray(signal.timestamps, dtype=float)))
+            self.values = np.concatenate((self.values, np.asarray(signal.samples, dtype=float) * self.scale))
+        latest, stale = latest_samples(self.t, ticks)
+        values = np.where(stale, np.nan, self.values[latest])
+        keep = int(latest[-1])
+        self.t, self.values = self.t[keep:], self.values[keep:]
+        return values, stale
 
 
 def _occurrence(mdf, path: Path, column, source: str) -> tuple[int | None, int | None]:

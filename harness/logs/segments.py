@@ -8,8 +8,6 @@ whether a sample counts as steady. Units SI, signs as in docs/conventions.md.
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
-from scipy.signal import savgol_filter
 
 from vsegen.harness.logs.table import Log, runs
 
@@ -38,12 +36,16 @@ MIN_RUN = 1.0
 
 def smoothed(x: np.ndarray, samples: int) -> np.ndarray:
     """Centred moving average over ``samples`` (odd window; edges use the nearest value)."""
-    return uniform_filter1d(x, size=max(1, samples | 1), mode="nearest")
+    window = max(1, samples | 1)
+    padded = np.pad(np.asarray(x, dtype=float), window // 2, mode="edge")
+    return np.convolve(padded, np.full(window, 1.0 / window), mode="valid")
 
 
 def derivative(x: np.ndarray, dt: float, samples: int) -> np.ndarray:
     """d/dt of ``x``: slope of a local quadratic over ``samples`` (Savitzky-Golay)."""
     window = max(5, samples | 1)
+    from scipy.signal import savgol_filter  # here: scipy.signal is slow to import
+
     return savgol_filter(x, min(window, (len(x) - 1) | 1 if len(x) % 2 == 0 else len(x)), 2, deriv=1,
                          delta=dt, mode="interp")
 

@@ -185,9 +185,15 @@ def _check_unit(column: np.ndarray, name: str, unit: str, check: signals.UnitChe
     beyond = finite & (np.abs(column) > check.limit)
     if beyond.sum() > UNIT_FRACTION * max(finite.sum(), 1):
         i = int(np.flatnonzero(beyond)[0])
-        raise LogError(f"{source}:{i + 2}: column '{name}' = {float(column[i])!r}: expected |{name}| <= "
-                       f"{check.limit:g} {unit} (a larger value {check.hint}); {beyond.sum()} of {finite.sum()} "
-                       "samples are beyond it")
+        raise unit_range_error(source, name, i, float(column[i]), int(beyond.sum()), int(finite.sum()))
+
+
+def unit_range_error(source: str, name: str, index: int, value: float, beyond: int, finite: int) -> LogError:
+    """The one line of a column whose values are beyond its unit check (UNIT_CHECKS) in ``beyond``
+    of its ``finite`` samples, the first at row ``index`` with ``value``."""
+    unit, check = UNIT_CHECKS[name]
+    return LogError(f"{source}:{index + 2}: column '{name}' = {value!r}: expected |{name}| <= {check.limit:g} {unit} "
+                    f"(a larger value {check.hint}); {beyond} of {finite} samples are beyond it")
 
 
 def _parse(cell: str, source: str, line: int, column: str) -> float:

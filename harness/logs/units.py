@@ -138,30 +138,40 @@ def _smoothed(x: np.ndarray, window: int) -> np.ndarray:
 
 def bicycle_yaw_rate(delta: np.ndarray, speed: np.ndarray, vehicle: Mapping[str, float], dt: float) -> np.ndarray:
     """The yaw rate of the linear 2-DOF bicycle model driven by ``delta`` (rad) at ``speed`` (m/s),
-    stepped by its exact solution over each sample (stable at any speed); NaN inputs hold it."""
+    stepped by its exact solution over each sample (stable at any speed); NaN inputs (and speeds
+    below 1 m/s) hold it. The steady states and transition matrices of all samples are computed
+    at once; only the two-number recursion runs sample by sample."""
     m, iz = vehicle["mass"], vehicle["yaw_inertia"]
     a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
     cf, cr = vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]
-    x = np.zeros(2)
+    delta, speed = np.asarray(delta, dtype=float), np.asarray(speed, dtype=float)
+    used = np.isfinite(delta) & np.isfinite(speed) & (speed >= 1.0)
+    v = np.where(used, speed, 1.0)
+    A = np.empty((len(v), 2, 2))
+    A[:, 0, 0] = -(cf + cr) / (m * v)
+    A[:, 0, 1] = (b * cr - a * cf) / (m * v) - v
+    A[:, 1, 0] = (b * cr - a * cf) / (iz * v)
+    A[:, 1, 1] = -(a * a * cf + b * b * cr) / (iz * v)
+    B = np.stack([np.full(len(v), cf / m), np.full(len(v), a * cf / iz)], axis=1) * np.where(used, delta, 0.0)[:, None]
+    steady = -np.linalg.solve(A, B[:, :, None])[:, :, 0]
+    decay = _expm2(A * dt)
     out = np.full(len(delta), np.nan)
-    for k, (d, v) in enumerate(zip(delta, speed)):
-        if not (np.isfinite(d) and np.isfinite(v)) or v < 1.0:
-            continue
-        A = np.array([[-(cf + cr) / (m * v), (b * cr - a * cf) / (m * v) - v],
-                      [(b * cr - a * cf) / (iz * v), -(a * a * cf + b * b * cr) / (iz * v)]])
-        B = np.array([cf / m, a * cf / iz])
-        steady = -np.linalg.solve(A, B * d)
-        decay = _expm2(A * dt)
-        x = steady + decay @ (x - steady)
-        out[k] = x[1]
+    x0 = x1 = 0.0
+    for k in np.flatnonzero(used).tolist():
+        (d00, d01), (d10, d11) = decay[k].tolist()
+        s0, s1 = steady[k].tolist()
+        x0, x1 = s0 + d00 * (x0 - s0) + d01 * (x1 - s1), s1 + d10 * (x0 - s0) + d11 * (x1 - s1)
+        out[k] = x1
     return out
 
 
 def _expm2(M: np.ndarray) -> np.ndarray:
-    """e^M of a 2 x 2 matrix (scaling and squaring of a short series)."""
-    squarings = max(0, math.ceil(math.log2(max(np.abs(M).sum(axis=1).max(), 1e-12) / 0.25)))
+    """e^M of each 2 x 2 matrix of ``M`` (n x 2 x 2), by scaling and squaring of a short series."""
+    norm = np.abs(M).sum(axis=2).max()
+    squarings = max(0, math.ceil(math.log2(max(norm, 1e-12) / 0.25)))
     S = M / 2**squarings
-    E = np.eye(2) + S + S @ S / 2 + S @ S @ S / 6 + S @ S @ S @ S / 24
+    S2 = S @ S
+    E = np.eye(2) + S + S2 / 2 + S2 @ S / 6 + S2 @ S2 / 24
     for _ in range(squarings):
         E = E @ E
     return E

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.logs.stream import LogSource
 from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, LogError
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
@@ -39,19 +40,62 @@ def errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 def score(log: Log, estimates: Log) -> list[Score]:
     """Scores of every estimated signal that has ground truth in ``log``."""
-    if len(log) != len(estimates) or not np.allclose(log["t"], estimates["t"], rtol=0, atol=1e-9):
-        raise LogError(f"{estimates.source}:2: column 't': expected the same time stamps as "
-                       f"{log.source} ({len(log)} samples)")
-    if "beta_ref" not in log:
-        raise LogError(f"{log.source}:1: missing column 'beta_ref': expected ground truth to score")
-    scores = []
-    for name, truth, unit, factor in SIGNALS:
-        if name in estimates and truth in log:
-            e = errors(estimates[name], log[truth]) * factor
-            if e.size:
-                scores.append(Score(name, unit, e.size, float(np.abs(e).max()),
-                                    float(np.abs(e).mean()), float(np.sqrt(np.mean(e * e)))))
-    return scores
+    scores = ScoreSums(log.source, estimates.source, len(log))
+    scores.add(log, estimates)
+    return scores.result()
+
+
+def score_sources(log: LogSource, estimates: LogSource) -> ScoreSums:
+    """:func:`score` of a log and its estimates read chunk by chunk (``harness.logs.stream``)."""
+    sums = ScoreSums(log.source, estimates.source, log.samples)
+    if estimates.samples != log.samples:
+        raise LogError(f"{estimates.source}:2: column 't': expected the same time stamps as {log.source} "
+                       f"({log.samples} samples; found {estimates.samples})")
+    for log_chunk, estimates_chunk in zip(log.chunks(), estimates.chunks()):
+        sums.add(log_chunk, estimates_chunk)
+    return sums
+
+
+class ScoreSums:
+    """:func:`score` over a log and its estimates read in chunks (:meth:`add` per pair of chunks of
+    equal length, in order; :meth:`result` at the end): sums of |e| and e^2 and the largest |e|
+    per signal, so memory does not grow with the log. ``samples`` is the log's length, which the
+    estimates must share."""
+
+    def __init__(self, log_source: str, estimates_source: str, samples: int):
+        self.log_source, self.estimates_source, self.samples = log_source, estimates_source, samples
+        self.sums: dict[str, list[float]] = {}
+        self.seen = 0
+        self.first_off_course: float | None = None
+
+    def add(self, log: Log, estimates: Log) -> None:
+        """The next chunk of the log and of its estimates."""
+        if len(log) != len(estimates) or not np.allclose(log["t"], estimates["t"], rtol=0, atol=1e-9):
+            raise LogError(f"{self.estimates_source}:{self.seen + 2}: column 't': expected the same time stamps as "
+                           f"{self.log_source} ({self.samples} samples)")
+        if "beta_ref" not in log:
+            raise LogError(f"{self.log_source}:1: missing column 'beta_ref': expected ground truth to score")
+        self.seen += len(log)
+        for name, truth, _, factor in SIGNALS:
+            if name in estimates and truth in log:
+                e = errors(estimates[name], log[truth]) * factor
+                sums = self.sums.setdefault(name, [0, 0.0, 0.0, 0.0])
+                if e.size:
+                    sums[0] += e.size
+                    sums[1] = max(sums[1], float(np.abs(e).max()))
+                    sums[2] += float(np.abs(e).sum())
+                    sums[3] += float(np.dot(e, e))
+        if self.first_off_course is None and "off_course" in log and np.any(log["off_course"] > 0):
+            self.first_off_course = float(log["t"][np.argmax(log["off_course"] > 0)])
+
+    def result(self) -> list[Score]:
+        """The scores; LogError when the estimates were shorter or longer than the log."""
+        if self.seen != self.samples:
+            raise LogError(f"{self.estimates_source}: {self.seen} samples: expected the {self.samples} time stamps "
+                           f"of {self.log_source}")
+        units = {name: unit for name, _, unit, _ in SIGNALS}
+        return [Score(name, units[name], n, peak, total / n, float(np.sqrt(square / n)))
+                for name, (n, peak, total, square) in self.sums.items() if n]
 
 
 SILENT_LIMIT = np.deg2rad(2.0)

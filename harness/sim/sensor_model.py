@@ -22,7 +22,6 @@ All random draws come from one seeded generator: the same seed gives the same lo
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from vsegen.harness.sim.simulate import Run
 from vsegen.model.params import ParameterError, VehicleConfig
@@ -78,6 +77,8 @@ def misaligned(vectors: np.ndarray, mounting: tuple[float, float, float]) -> np.
     """Body-axis ``vectors`` (3 x n) as a sensor rotated on the body by (roll, pitch, yaw)
     ``mounting`` (rad, z-y-x like the body's attitude) reads them: R_m^T v."""
     roll, pitch, yaw = mounting
+    from scipy.spatial.transform import Rotation  # here: scipy.spatial is slow to import
+
     rotation = Rotation.from_euler("ZYX", [yaw, pitch, roll])
     return rotation.inv().apply(vectors.T).T
 
