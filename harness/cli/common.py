@@ -59,6 +59,8 @@ CHANNELS_OPTION = click.option("--channels", type=click.Path(path_type=Path), de
 UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=True,
                                  help="Skip the physics check of the log's units (a_y against r v_x, "
                                       "delta against l r / v_x).")
+DBC_OPTION = click.option("--dbc", type=click.Path(path_type=Path), default=None,
+                           help="The car's DBC: decode a raw CAN log (BLF, ASC, or bus-logging MDF4) with it.")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=None,
                               help="Vehicle TOML. Default: the project's only vehicle file, else its "
                                    "vehicles/c_class.toml.")
@@ -80,13 +82,13 @@ def chosen_estimators(config: VehicleConfig, names: tuple[str, ...]) -> list[str
 
 def read_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
                   window: tuple[float | None, float | None] = (None, None),
-                  unit_check: VehicleConfig | None = None):
+                  unit_check: VehicleConfig | None = None, dbc: Path | None = None):
     """A CSV (plain or compressed) or MDF4 log through the channel map ``channels``, cut to the
     time ``window`` (s), in memory, saying on stderr (a line each) when it was put on a uniform
     grid (MDF4 channels: at ``sample_time``, a number or a function giving it, called only for
     MDF4) and where it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the
     signals' physics is checked for wrong units (``harness.logs.units``)."""
-    log = open_user_log(path, channels, sample_time, window).read()
+    log = open_user_log(path, channels, sample_time, window, dbc=dbc).read()
     say_notes(path, log.notes)
     if unit_check is not None:
         _check_units(path, log, unit_check)
@@ -100,17 +102,22 @@ sample; the physics check is the slow part of reading)."""
 
 def open_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
                   window: tuple[float | None, float | None] = (None, None),
-                  unit_check: VehicleConfig | None = None):
+                  unit_check: VehicleConfig | None = None, dbc: Path | None = None):
     """A log as :func:`read_user_log` reads it, as a source of chunks (``harness.logs.stream``):
-    memory does not grow with its length. Notes known before reading (resampling) are said at
-    once; the gaps of an MDF4 log are in the source's notes once it has been read
+    memory does not grow with its length (a raw CAN log, decoded with ``dbc``, is held decoded).
+    The gaps of an MDF4 or CAN log are in the source's notes once it has been read
     (:func:`say_notes`). With ``unit_check``, the units are judged on the first UNIT_CHECK_SPAN s."""
+    from vsegen.harness.logs.can import FRAME_SUFFIXES, open_can_log
     from vsegen.harness.logs.channels import read_channel_map
     from vsegen.harness.logs.mdf import SUFFIXES, open_mdf_log
     from vsegen.harness.logs.stream import open_csv_log
 
     mapping = read_channel_map(channels)
-    if path.suffix.lower() in SUFFIXES:
+    if path.suffix.lower() in FRAME_SUFFIXES and dbc is None:
+        raise LogError(f"{path}: a raw CAN log ({path.suffix}): expected --dbc CAR.dbc to decode its frames")
+    if dbc is not None:
+        source = open_can_log(path, dbc, mapping, sample_time() if callable(sample_time) else sample_time, window)
+    elif path.suffix.lower() in SUFFIXES:
         source = open_mdf_log(path, mapping, sample_time() if callable(sample_time) else sample_time, window)
     else:
         source = open_csv_log(path, {c.channel: (c.name, c.scale) for c in mapping.columns.values()}, window=window)

@@ -10,6 +10,7 @@ import numpy as np
 
 from vsegen.harness.cli.common import (
     CHANNELS_OPTION,
+    DBC_OPTION,
     PARAMS_OPTION,
     REAL_OPTION,
     UNIT_CHECK_OPTION,
@@ -29,7 +30,8 @@ from vsegen.harness.logs.estimates import EstimatesWriter
 
 @click.command()
 @click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
-              help="Input log: CSV (plain, .gz, .bz2, .xz) or MDF4 (.mf4, .mdf).")
+              help="Input log: CSV (plain, .gz, .bz2, .xz), MDF4 (.mf4, .mdf), or raw CAN (.blf, .asc, "
+                   "bus-logging .mf4) with --dbc.")
 @click.option("--estimator", required=True, help="Estimator name.")
 @VEHICLE_OPTION
 @click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
@@ -39,11 +41,12 @@ from vsegen.harness.logs.estimates import EstimatesWriter
 @REAL_OPTION
 @PARAMS_OPTION
 @CHANNELS_OPTION
+@DBC_OPTION
 @UNIT_CHECK_OPTION
 @window_options
 @user_errors
 def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out: Path, real: str | None,
-        params: str | None, channels: Path | None, no_unit_check: bool, start: float | None,
+        params: str | None, channels: Path | None, dbc: Path | None, no_unit_check: bool, start: float | None,
         stop: float | None) -> None:
     """Run an estimator over a log and write its estimates (t, beta, vy, r, status, ...). With the C
     backend, --real and --params choose the form that will be flashed (default: the vehicle file's
@@ -53,7 +56,7 @@ def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out:
     config = vehicle_config(vehicle)
     chosen_estimators(config, (estimator,))
     warn_underived(config, estimator)
-    log = open_user_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config)
+    log = open_user_log(log_path, channels, config.sample_time, (start, stop), None if no_unit_check else config, dbc)
     if abs(log.sample_time - config.sample_time) > 1e-9 * config.sample_time:
         click.echo(f"vsegen: {log_path}: sample time {log.sample_time:.6g} s differs from [estimator] sample_time = "
                    f"{config.sample_time:g} s in {vehicle}: the estimator runs at the log's rate (rate-dependent "

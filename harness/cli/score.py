@@ -9,6 +9,7 @@ from rich.table import Table
 
 from vsegen.harness.cli.common import (
     CHANNELS_OPTION,
+    DBC_OPTION,
     UserError,
     console,
     open_user_log,
@@ -26,13 +27,15 @@ from vsegen.harness.logs.estimates import open_estimates, read_estimates
 @click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
               help="Estimates CSV from `vsegen run`.")
 @CHANNELS_OPTION
+@DBC_OPTION
 @window_options
 @user_errors
-def score(log_path: Path, est_path: Path, channels: Path | None, start: float | None, stop: float | None) -> None:
+def score(log_path: Path, est_path: Path, channels: Path | None, dbc: Path | None, start: float | None,
+          stop: float | None) -> None:
     """Errors of the estimates against ground truth: max, mean and RMSE (seed 000 Table 3)."""
     from vsegen.harness.score.metrics import score_sources
 
-    log = open_user_log(log_path, channels, lambda: open_estimates(est_path).sample_time, (start, stop))
+    log = open_user_log(log_path, channels, lambda: open_estimates(est_path).sample_time, (start, stop), dbc=dbc)
     estimates = open_estimates(est_path)
     with console.status(f"scoring {est_path} ({estimates.samples} samples)"):
         sums = score_sources(log, estimates)

@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import gc
 import sys
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from vsegen.harness.logs.channels import ChannelMap, file_unit_conflict
+from vsegen.harness.logs.grid import GridChannel, grid_source
 from vsegen.harness.logs.stream import LogSource
 from vsegen.harness.logs.table import (
     OPTIONAL_INPUTS,
@@ -18,9 +19,6 @@ from vsegen.harness.logs.table import (
     TRUTH,
     Log,
     LogError,
-    gap_note,
-    latest_samples,
-    runs,
 )
 from vsegen.harness.project.files import write_atomic
 
@@ -90,91 +88,27 @@ def open_mdf_log(path: Path, channels: ChannelMap, sample_time: float,
         raise LogError(f"{path}: missing channel{'s' if len(missing) > 1 else ''} {', '.join(missing)}: expected "
                        f"{'them' if len(missing) > 1 else 'it'} in the file or other channels named in the channel "
                        f"map ({channels.source})")
-    start = max(c.start for name, c in found.items() if name in REQUIRED)
-    stop = min(c.stop for name, c in found.items() if name in REQUIRED)
-    ticks = int(np.floor((stop - start) / sample_time + 1e-9)) + 1
-    first_tick, ticks = _window_ticks(start, sample_time, ticks, window)
-    if ticks < 2:
-        raise LogError(f"{path}: the required channels overlap for {stop - start:.3g} s: expected at least "
-                       f"two samples of {sample_time:g} s")
-    rates = ", ".join(f"{name} {c.rate:.4g} Hz" for name, c in found.items() if c.rate)
-    notes = {"resampled": f"MDF4 channels ({rates}) taken causally onto a uniform {sample_time * 1e3:g} ms grid"}
-    source = LogSource(str(path), sample_time, ticks, ("t", *found), lambda rows, names: iter(()), notes)
-
-    def chunks(rows: int, names: tuple[str, ...]) -> Iterator[Log]:
-        for channel in found.values():
-            channel.rewind()
-        gaps = []
-        for begin in range(0, ticks, rows):
-            t = start + sample_time * (first_tick + np.arange(begin, min(begin + rows, ticks)))
-            columns, stale_any = {"t": t}, np.zeros(len(t), dtype=bool)
-            for name, channel in found.items():
-                if name in names or name in REQUIRED:
-                    values, stale = channel.at(t)
-                    stale_any |= stale if name in REQUIRED else False
-                    if name in names:
-                        columns[name] = values
-            gaps += [(float(t[run.start]), float(t[run.stop - 1])) for run in runs(stale_any)]
-            yield Log(columns, str(path))
-        if gaps:
-            source.notes["gaps"] = gap_note(_joined(gaps, sample_time))
-
-    source.read_chunks = chunks
-    return source
+    return grid_source(str(path), found, sample_time, window, "MDF4 channels")
 
 
-def _window_ticks(start: float, step: float, ticks: int, window: tuple[float | None, float | None]) -> tuple[int, int]:
-    """(first tick, number of ticks) of a grid ``start + step * k``, k < ``ticks``, inside ``window``."""
-    k = np.arange(ticks)
-    inside = np.ones(ticks, dtype=bool)
-    if window[0] is not None:
-        inside &= start + step * k >= window[0]
-    if window[1] is not None:
-        inside &= start + step * k <= window[1]
-    if not inside.any():
-        return 0, 0
-    chosen = np.flatnonzero(inside)
-    return int(chosen[0]), int(chosen[-1] - chosen[0] + 1)
-
-
-def _joined(gaps: list[tuple[float, float]], step: float) -> list[tuple[float, float]]:
-    """Gaps split at chunk boundaries joined again."""
-    joined = [gaps[0]]
-    for a, b in gaps[1:]:
-        if a - joined[-1][1] <= 1.5 * step:
-            joined[-1] = (joined[-1][0], b)
-        else:
-            joined.append((a, b))
-    return joined
-
-
-class _Channel:
-    """One channel read forward in ranges of records, brought onto grid ticks causally."""
+class _Channel(GridChannel):
+    """One MDF4 channel read forward in ranges of READ_RECORDS records."""
 
     def __init__(self, mdf, group: int, index: int, scale: float, records: int, head: np.ndarray, stop: float):
-        self.mdf, self.group, self.index, self.scale, self.records = mdf, group, index, scale, records
-        self.start, self.stop = float(head[0]), stop
-        self.rate = 1.0 / float(head[1] - head[0]) if len(head) > 1 and head[1] > head[0] else 0.0
-        self.rewind()
+        self.mdf, self.group, self.index, self.records = mdf, group, index, records
+        rate = 1.0 / float(head[1] - head[0]) if len(head) > 1 and head[1] > head[0] else 0.0
+        super().__init__(float(head[0]), stop, rate, scale)
 
-    def rewind(self) -> None:
+    def restart(self) -> None:
         self.offset = 0
-        self.t = np.empty(0)
-        self.values = np.empty(0)
 
-    def at(self, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(values at ``ticks``, NaN where stale; whether stale); ticks come in increasing order."""
-        while (not self.t.size or self.t[-1] < ticks[-1]) and self.offset < self.records:
-            signal = self.mdf.get(group=self.group, index=self.index, record_offset=self.offset,
-                                  record_count=READ_RECORDS)
-            self.offset += len(signal.timestamps)
-            self.t = np.concatenate((self.t, np.asarray(signal.timestamps, dtype=float)))
-            self.values = np.concatenate((self.values, np.asarray(signal.samples, dtype=float) * self.scale))
-        latest, stale = latest_samples(self.t, ticks)
-        values = np.where(stale, np.nan, self.values[latest])
-        keep = int(latest[-1])
-        self.t, self.values = self.t[keep:], self.values[keep:]
-        return values, stale
+    def more(self) -> tuple[np.ndarray, np.ndarray] | None:
+        if self.offset >= self.records:
+            return None
+        signal = self.mdf.get(group=self.group, index=self.index, record_offset=self.offset,
+                              record_count=READ_RECORDS)
+        self.offset += len(signal.timestamps)
+        return signal.timestamps, signal.samples
 
 
 def _occurrence(mdf, path: Path, column, source: str) -> tuple[int | None, int | None]:
