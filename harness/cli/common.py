@@ -107,20 +107,9 @@ def open_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     memory does not grow with its length (a raw CAN log, decoded with ``dbc``, is held decoded).
     The gaps of an MDF4 or CAN log are in the source's notes once it has been read
     (:func:`say_notes`). With ``unit_check``, the units are judged on the first UNIT_CHECK_SPAN s."""
-    from vsegen.harness.logs.can import FRAME_SUFFIXES, open_can_log
-    from vsegen.harness.logs.channels import read_channel_map
-    from vsegen.harness.logs.mdf import SUFFIXES, open_mdf_log
-    from vsegen.harness.logs.stream import open_csv_log
+    from vsegen.harness.logs.sources import open_log
 
-    mapping = read_channel_map(channels)
-    if path.suffix.lower() in FRAME_SUFFIXES and dbc is None:
-        raise LogError(f"{path}: a raw CAN log ({path.suffix}): expected --dbc CAR.dbc to decode its frames")
-    if dbc is not None:
-        source = open_can_log(path, dbc, mapping, sample_time() if callable(sample_time) else sample_time, window)
-    elif path.suffix.lower() in SUFFIXES:
-        source = open_mdf_log(path, mapping, sample_time() if callable(sample_time) else sample_time, window)
-    else:
-        source = open_csv_log(path, {c.channel: (c.name, c.scale) for c in mapping.columns.values()}, window=window)
+    source = open_log(path, channels, sample_time, window, dbc)
     if unit_check is not None:
         head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
         _check_units(path, head, unit_check)

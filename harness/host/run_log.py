@@ -5,11 +5,15 @@ from __future__ import annotations
 
 from vsegen.codegen.generate import render
 from vsegen.harness.host.build import load_estimator
+from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.logs.table import Log, LogError
 from vsegen.model.estimators import build
 from vsegen.model.params import VehicleConfig
 
 BACKENDS = ("c", "reference")
+COMPILED = Memo(size=16)
+"""The compiled C of the estimators this process ran lately, by (parameter hash, real, params): a
+campaign's worker builds each estimator once, not once per log."""
 SAMPLE_TIME_DIGITS = 9
 """A log's mean sample time is rounded to this many decimals (s) before generating for it."""
 
@@ -60,8 +64,10 @@ class EstimatorStream:
         self.backend = backend
         if backend == "c":
             params = params or self.config.codegen["params"]
-            form = build(name, self.config, params)
-            self.compiled = load_estimator(form, render(self.config, name, real, params))
+            real = real or self.config.codegen["real"]
+            self.compiled = COMPILED.get((self.config.parameter_hash(name), real, params),
+                                         lambda: load_estimator(build(name, self.config, params),
+                                                                render(self.config, name, real, params)))
         self.state = None
 
     @property

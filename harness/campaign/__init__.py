@@ -1,0 +1,1 @@
+"""Campaigns: every log of a validation database through estimators and settings files, on a cluster."""

@@ -1,0 +1,43 @@
+"""The job a campaign's worker runs: one log, read once in chunks, through every (estimator,
+settings) it still needs; one row each (:mod:`~vsegen.harness.campaign.row`). A log that cannot
+be read, or lacks what an estimator needs, comes back as its one-line reason instead."""
+
+from __future__ import annotations
+
+import os
+import socket
+from pathlib import Path
+
+from vsegen.harness.campaign.row import RowSums
+from vsegen.harness.host.run_log import EstimatorStream
+from vsegen.harness.logs.sources import open_log
+from vsegen.harness.logs.table import LogError
+from vsegen.harness.logs.units import check_units
+from vsegen.model.params import ParameterError, VehicleConfig
+
+UNIT_CHECK_SPAN = 600.0
+"""s: the log's units are judged on its first ten minutes, as ``vsegen run`` does."""
+
+
+def log_job(log: str, channels: str | None, dbc: str | None,
+            runs: list[tuple[str, str, VehicleConfig]]) -> dict:
+    """``{"rows": [row per run], "worker": host:pid}`` for the log at ``log`` (through the channel
+    map ``channels`` and, for raw CAN, the DBC ``dbc``) and each run (estimator, settings label,
+    vehicle configuration); ``{"error": one line, ...}`` when the log cannot be used."""
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        first = runs[0][2]
+        source = open_log(Path(log), Path(channels) if channels else None, first.sample_time,
+                          dbc=Path(dbc) if dbc else None)
+        head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
+        check_units(head, first.vehicle)
+        streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
+        sums = [RowSums(source.sample_time) for _ in runs]
+        for chunk in source.chunks():
+            for stream, row in zip(streams, sums):
+                row.add(chunk, stream(chunk))
+    except (LogError, ParameterError) as exc:
+        return {"error": str(exc), "worker": worker}
+    rows = [{"estimator": name, "settings": label, "sample_time_s": source.sample_time, **row.row()}
+            for (name, label, _), row in zip(runs, sums)]
+    return {"rows": rows, "worker": worker}
