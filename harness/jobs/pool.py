@@ -159,6 +159,12 @@ class DaskPool(Pool):
     def in_process(self, jobs: int) -> bool:
         return self._client is None
 
+    def on_workers(self, function: Callable[[], Any]) -> list[Any]:
+        """``function()`` on every worker (in this process for "serial"), e.g. to read their peak memory."""
+        if self._client is None:
+            return [function()]
+        return list(self._client.run(function).values())
+
     def completed(self, function, jobs):
         from distributed import as_completed as dask_completed
 

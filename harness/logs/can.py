@@ -120,6 +120,11 @@ def _frame_signals(path: Path, database, located) -> dict[str, tuple[np.ndarray,
     return {name: (np.array(times[name]), np.array(values[name])) for name in located if times[name]}
 
 
+def holds_can_frames(path: Path) -> bool:
+    """Whether the MDF4 file ``path`` is a bus logging of CAN frames (LogError if unreadable)."""
+    return "CAN_DataFrame" in open_mdf(path).channels_db
+
+
 def _mdf_signals(path: Path, dbc: Path, located) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """column -> (time stamps in s, physical values) of a bus-logging MDF4 file, decoded by
     asammdf's bus-logging extraction."""
