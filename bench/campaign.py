@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -84,12 +83,23 @@ def pieces(config) -> list[Log]:
             for seed, case in enumerate(PIECES, start=1)]
 
 
+TRANSITION = 3.0
+"""s: between two manoeuvres every signal goes linearly from one's last sample to the next's first."""
+
+
 def synthetic_log(parts: list[Log], samples: int, seed: int) -> Log:
-    """``samples`` samples at RATE tiled from ``parts`` in a random order (``seed``), time continuous."""
+    """``samples`` samples at RATE tiled from ``parts`` in a random order (``seed``), joined by
+    linear transitions of TRANSITION s (no jumps), time continuous."""
     rng = np.random.default_rng(seed)
     chosen, total = [], 0
+    ramp = np.linspace(0.0, 1.0, int(TRANSITION * RATE) + 2)[1:-1]
     while total < samples:
         part = parts[int(rng.integers(len(parts)))]
+        if chosen:
+            before = chosen[-1]
+            chosen.append(Log({name: before[name][-1] + ramp * (part[name][0] - before[name][-1])
+                               for name in COLUMNS}))
+            total += len(ramp)
         chosen.append(part)
         total += len(part)
     columns = {name: np.concatenate([p[name] for p in chosen])[:samples] for name in COLUMNS}
@@ -158,14 +168,16 @@ def database(config, count: int, minutes: float, folder: Path) -> list[Path]:
 
 
 def timed(command: list[str]) -> tuple[float, float]:
-    """(wall time in s, peak resident memory in MB) of ``command``, a vsegen process."""
-    start = time.perf_counter()
-    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(process.pid, 0)
-    wall = time.perf_counter() - start
-    if os.waitstatus_to_exitcode(status) != 0:
-        raise RuntimeError(f"{' '.join(command)} failed: {process.stderr.read().decode()[-500:]}")
-    return wall, usage.ru_maxrss / 1024
+    """(wall time in s, peak resident memory in MB) of ``command``, measured by GNU time: a child's
+    maximum resident set counts from the process it was forked from, so this big one must not be
+    the command's parent."""
+    with tempfile.NamedTemporaryFile("r", suffix=".txt") as report:
+        done = subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", report.name, *command],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if done.returncode != 0:
+            raise RuntimeError(f"{' '.join(command)} failed: {done.stderr[-500:]}")
+        wall, peak = report.read().split()[-2:]
+    return float(wall), float(peak) / 1024
 
 
 def streaming_section(config, hours: tuple[float, ...]) -> list[str]:
@@ -173,7 +185,7 @@ def streaming_section(config, hours: tuple[float, ...]) -> list[str]:
     lines = ["## Streaming runs", "",
              f"{provenance('python -m bench.campaign')}: `vsegen run` and `vsegen score` on a CSV log at 100 Hz "
              "tiled from simulated manoeuvres (c_class), each a fresh process on this 2-core machine; wall time "
-             "and peak resident memory (`os.wait4`). The log is read, run and written in chunks of 65,536 "
+             "and peak resident memory (GNU time). The log is read, run and written in chunks of 65,536 "
              "samples, so memory does not grow with the log. Before streaming (issue #34, one hour): kf2dof "
              "6.9 s / 885 MB, switching 5.9 s / 883 MB, ukf 8.0 s / 884 MB, pf_improved 18.4 s / 3.6 GB; "
              "score 6.1 s / 883 MB.", "",
@@ -208,16 +220,30 @@ def measure(mode: str, folder: Path, count: int) -> dict:
     logs = find_logs([str(folder)])[:count]
     scheduler = {"serial": "serial", "local": "local"}.get(mode, mode)
     with DaskPool(scheduler) as pool:
+        cpu = sum(pool.on_workers(_cpu_seconds))
         start = time.perf_counter()
         result = run_campaign(logs, CAMPAIGN_ESTIMATORS, settings, None, DATA / "car.dbc", pool)
         wall = time.perf_counter() - start
+        cpu = sum(pool.on_workers(_cpu_seconds)) - cpu
         peaks = pool.on_workers(_peak_memory)
     return {"wall": wall, "computed": result.computed, "cached": result.cached, "failed": len(result.failed),
-            "samples": sum(row["samples"] for row in result.rows), "workers": len(peaks), "peaks": peaks}
+            "samples": sum(row["samples"] for row in result.rows), "workers": len(peaks), "peaks": peaks,
+            "cpu": cpu}
+
+
+def _cpu_seconds() -> float:
+    """CPU time (user + system, s) of this process so far, all its threads."""
+    times = os.times()
+    return times.user + times.system
 
 
 def _peak_memory() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    """MB: this process's peak resident set (VmHWM: the high-water mark of its own memory, not the
+    maximum resident set, which a child inherits from the process it was forked from)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return float(line.split()[1]) / 1024
+    raise RuntimeError("no VmHWM in /proc/self/status")
 
 
 def _measured(mode: str, folder: Path, count: int, cache: Path) -> dict:
@@ -239,10 +265,12 @@ def campaign_section(config, count: int, minutes: float) -> list[str]:
              "manoeuvres tiled in random orders; a third CSV, a third MDF4, a third raw-CAN MDF4 decoded with a "
              f"DBC) x {len(CAMPAIGN_ESTIMATORS)} estimators ({', '.join(CAMPAIGN_ESTIMATORS)}), each log read once "
              f"for all three, on this {cores}-core machine, a fresh cache each time. Throughput counts estimator-"
-             "samples (a sample run through one estimator) per second per worker core; memory is each worker "
-             "process's peak resident set.", "",
-             "| where | workers | wall (s) | runs computed | throughput (samples/s/core) | peak per worker (MB) |",
-             "|---|---|---|---|---|---|"]
+             "samples (a sample run through one estimator) per second per worker; the workers' CPU time shows "
+             "how much of the second core a single process already uses (pyarrow parses with threads); memory "
+             "is each worker process's peak resident set (VmHWM).", "",
+             "| where | workers | wall (s) | workers' CPU (s) | runs computed | throughput (samples/s per worker) | "
+             "peak per worker (MB) |",
+             "|---|---|---|---|---|---|---|"]
     scheduler = _start_scheduler()
     try:
         modes = (("serial (one process)", "serial"), ("LocalCluster", "local"),
@@ -253,8 +281,8 @@ def campaign_section(config, count: int, minutes: float) -> list[str]:
             if m["failed"]:
                 raise RuntimeError(f"campaign {mode}: {m['failed']} log(s) failed")
             rate = m["samples"] / m["wall"] / max(m["workers"], 1)
-            lines.append(f"| {label} | {m['workers']} | {m['wall']:.1f} | {m['computed']} | {rate:,.0f} | "
-                         f"{', '.join(f'{p:.0f}' for p in m['peaks'])} |")
+            lines.append(f"| {label} | {m['workers']} | {m['wall']:.1f} | {m['cpu']:.1f} | {m['computed']} | "
+                         f"{rate:,.0f} | {', '.join(f'{p:.0f}' for p in m['peaks'])} |")
         with tempfile.TemporaryDirectory() as cache:
             _measured("local", folder, count, Path(cache))
             again = _measured("local", folder, count + 10, Path(cache))
@@ -289,6 +317,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--logs", type=int, default=100, help="logs in the campaign (default 100)")
     parser.add_argument("--minutes", type=float, default=10.0, help="minutes per log (default 10)")
     parser.add_argument("--hours", type=float, nargs="*", default=[1.0, 10.0], help="streaming logs' lengths")
+    parser.add_argument("--sections", nargs="+", choices=("streaming", "campaigns"), default=["streaming", "campaigns"],
+                        help="which sections to measure (default both)")
     parser.add_argument("--measure", help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -297,8 +327,10 @@ def main(argv: list[str] | None = None) -> None:
         return
     DATA.mkdir(parents=True, exist_ok=True)
     config = load_vehicle(DEFAULT_VEHICLE)
-    write_section(args.out, streaming_section(config, tuple(args.hours)))
-    write_section(args.out, campaign_section(config, args.logs, args.minutes))
+    if "streaming" in args.sections:
+        write_section(args.out, streaming_section(config, tuple(args.hours)))
+    if "campaigns" in args.sections:
+        write_section(args.out, campaign_section(config, args.logs, args.minutes))
 
 
 if __name__ == "__main__":

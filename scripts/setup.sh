@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(gcc g++ clang binutils make cmake gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm cppcheck valgrind)
+packages=(gcc g++ clang binutils make cmake gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm cppcheck valgrind time)
 missing=()
 for package in "${packages[@]}"; do
   dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")

@@ -34,6 +34,7 @@ def test_the_wheel_installs_everything_under_one_vsegen_namespace(wheel):
     for needed in ("vsegen/harness/cli/__init__.py", "vsegen/model/estimators/kf2dof.py",
                    "vsegen/codegen/templates/step.c.j2", "vsegen/harness/target/misra_baseline.json",
                    "vsegen/harness/host/runner.c.j2", "vsegen/harness/verify/fuzz.c.j2",
+                   "vsegen/harness/campaign/report.html.j2",
                    "vsegen/harness/target/pil_main.c.j2", "vsegen/harness/target/boards/mps2.ld",
                    "vsegen/harness/project/conventions.md",
                    "vsegen/vehicles/c_class.toml"):

@@ -27,15 +27,15 @@ def log_job(log: str, channels: str | None, dbc: str | None,
     worker = f"{socket.gethostname()}:{os.getpid()}"
     try:
         first = runs[0][2]
-        source = open_log(Path(log), Path(channels) if channels else None, first.sample_time,
-                          dbc=Path(dbc) if dbc else None)
-        head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
-        check_units(head, first.vehicle)
-        streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
-        sums = [RowSums(source.sample_time) for _ in runs]
-        for chunk in source.chunks():
-            for stream, row in zip(streams, sums):
-                row.add(chunk, stream(chunk))
+        with open_log(Path(log), Path(channels) if channels else None, first.sample_time,
+                      dbc=Path(dbc) if dbc else None) as source:
+            head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
+            check_units(head, first.vehicle)
+            streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
+            sums = [RowSums(source.sample_time) for _ in runs]
+            for chunk in source.chunks():
+                for stream, row in zip(streams, sums):
+                    row.add(chunk, stream(chunk))
     except (LogError, ParameterError) as exc:
         return {"error": str(exc), "worker": worker}
     rows = [{"estimator": name, "settings": label, "sample_time_s": source.sample_time, **row.row()}

@@ -66,6 +66,8 @@ def campaign(logs: tuple[str, ...], estimators: tuple[str, ...], vehicles: tuple
                                   on_log=lambda log, ok: progress.done("logs", ok))
     except ClusterError as exc:
         raise UserError(str(exc)) from None
+    here = f"{Path.cwd()}/"
+    result.failed = [(log, reason.replace(here, "")) for log, reason in result.failed]   # as the user named them
     new = [row for row in result.rows if not row["settings"].startswith("baseline:")]
     worse = None
     if baseline is not None:

@@ -122,21 +122,31 @@ def _frame_signals(path: Path, database, located) -> dict[str, tuple[np.ndarray,
 
 def holds_can_frames(path: Path) -> bool:
     """Whether the MDF4 file ``path`` is a bus logging of CAN frames (LogError if unreadable)."""
-    return "CAN_DataFrame" in open_mdf(path).channels_db
+    mdf = open_mdf(path)
+    try:
+        return "CAN_DataFrame" in mdf.channels_db
+    finally:
+        mdf.close()
 
 
 def _mdf_signals(path: Path, dbc: Path, located) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """column -> (time stamps in s, physical values) of a bus-logging MDF4 file, decoded by
     asammdf's bus-logging extraction."""
     mdf = open_mdf(path)
-    if "CAN_DataFrame" not in mdf.channels_db:
-        raise LogError(f"{path}: no CAN frames (channel CAN_DataFrame): expected a bus-logging MDF4 file to decode "
-                       f"with --dbc {dbc}")
-    decoded = mdf.extract_bus_logging(database_files={"CAN": [(str(dbc), 0)]})
+    try:
+        if "CAN_DataFrame" not in mdf.channels_db:
+            raise LogError(f"{path}: no CAN frames (channel CAN_DataFrame): expected a bus-logging MDF4 file to "
+                           f"decode with --dbc {dbc}")
+        decoded = mdf.extract_bus_logging(database_files={"CAN": [(str(dbc), 0)]})
+    finally:
+        mdf.close()
     series = {}
-    for name, (message, signal, _) in located.items():
-        channel = f"{message.name}.{signal.name}"
-        if channel in decoded.channels_db:
-            data = decoded.get(channel, *decoded.channels_db[channel][0])
-            series[name] = (np.asarray(data.timestamps, dtype=float), np.asarray(data.samples, dtype=float))
+    try:
+        for name, (message, signal, _) in located.items():
+            channel = f"{message.name}.{signal.name}"
+            if channel in decoded.channels_db:
+                data = decoded.get(channel, *decoded.channels_db[channel][0])
+                series[name] = (np.array(data.timestamps, dtype=float), np.array(data.samples, dtype=float))
+    finally:
+        decoded.close()
     return series

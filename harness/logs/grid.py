@@ -91,7 +91,6 @@ def grid_source(source: str, found: Mapping[str, GridChannel], sample_time: floa
                        f"least two samples of {sample_time:g} s")
     rates = ", ".join(f"{name} {c.rate:.4g} Hz" for name, c in found.items() if c.rate)
     notes = {"resampled": f"{what} ({rates}) taken causally onto a uniform {sample_time * 1e3:g} ms grid"}
-    log = LogSource(source, sample_time, ticks, ("t", *found), lambda rows, names: iter(()), notes)
 
     def chunks(rows: int, names: tuple[str, ...]) -> Iterator[Log]:
         for channel in found.values():
@@ -109,10 +108,9 @@ def grid_source(source: str, found: Mapping[str, GridChannel], sample_time: floa
             gaps += [(float(t[run.start]), float(t[run.stop - 1])) for run in runs(stale_any)]
             yield Log(columns, source)
         if gaps:
-            log.notes["gaps"] = gap_note(_joined(gaps, sample_time))
+            notes["gaps"] = gap_note(_joined(gaps, sample_time))
 
-    log.read_chunks = chunks
-    return log
+    return LogSource(source, sample_time, ticks, ("t", *found), chunks, notes)
 
 
 def _window_ticks(start: float, step: float, ticks: int, window: tuple[float | None, float | None]) -> tuple[int, int]:

@@ -85,10 +85,13 @@ def open_mdf_log(path: Path, channels: ChannelMap, sample_time: float,
             found[name] = _Channel(mdf, group, index, column.scale, records, np.asarray(first.timestamps, dtype=float),
                                    float(last.timestamps[-1]))
     if missing:
+        mdf.close()
         raise LogError(f"{path}: missing channel{'s' if len(missing) > 1 else ''} {', '.join(missing)}: expected "
                        f"{'them' if len(missing) > 1 else 'it'} in the file or other channels named in the channel "
                        f"map ({channels.source})")
-    return grid_source(str(path), found, sample_time, window, "MDF4 channels")
+    source = grid_source(str(path), found, sample_time, window, "MDF4 channels")
+    source.closers.append(mdf.close)
+    return source
 
 
 class _Channel(GridChannel):

@@ -58,6 +58,20 @@ class LogSource:
     names: tuple[str, ...]
     read_chunks: Callable[[int, tuple[str, ...]], Iterator[Log]]
     notes: dict[str, str] = field(default_factory=dict)
+    closers: list[Callable[[], None]] = field(default_factory=list)
+    """What :meth:`close` releases (e.g. an open MDF4 file)."""
+
+    def close(self) -> None:
+        """Release the files the source holds open (a campaign's worker reads many logs)."""
+        for closer in self.closers:
+            closer()
+        self.closers.clear()
+
+    def __enter__(self) -> LogSource:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
     def chunks(self, rows: int = CHUNK_ROWS, names: tuple[str, ...] | None = None) -> Iterator[Log]:
         """The log in order, ``rows`` samples per chunk (the last one shorter), with ``t`` and the
@@ -151,7 +165,7 @@ def _fast_csv(path: Path, channels: dict, required: tuple[str, ...], all_numeric
     known = set(header) if all_numeric else set(REQUIRED) | set(OPTIONAL_INPUTS) | set(TRUTH)
     numeric = tuple(name for name in header if name in known)
     scale = {mapped: factor for cell, (mapped, factor) in channels.items() if cell in logged}
-    samples, sample_time = _time_pass(path, header, window, scale)
+    samples, sample_time = _time_pass(path, header, window, scale, ranges=not all_numeric)
 
     def strict() -> None:
         read_log(path, required, all_numeric, channels)
@@ -202,16 +216,16 @@ def arrow_floats(values: np.ndarray):
 
 
 def _time_pass(path: Path, header: list[str], window: tuple[float | None, float | None],
-               scale: Mapping[str, float]) -> tuple[int, float]:
-    """(samples in ``window``, mean time step in s) from a pass over ``t`` and the columns with a
-    unit range check (UNIT_CHECKS, the strict reader's message); _NotFast unless the time is
+               scale: Mapping[str, float], ranges: bool) -> tuple[int, float]:
+    """(samples in ``window``, mean time step in s) from a pass over ``t`` and, with ``ranges``, the
+    columns with a unit range check (UNIT_CHECKS, the strict reader's message); _NotFast unless the time is
     finite, strictly increasing and uniform within SAMPLE_TIME_JITTER (else the strict reader
     names the line, or resamples)."""
     count, first, last, low, high = 0, None, None, np.inf, -np.inf
-    ranges = _RangeCount(str(path))
-    checked = ("t", *(name for name in UNIT_CHECKS if name in header))
+    counts = _RangeCount(str(path))
+    checked = ("t", *(name for name in UNIT_CHECKS if name in header and ranges))
     for batch in _batches(path, header, checked):
-        ranges.add({name: _floats(batch.column(i)) * scale.get(name, 1.0) for i, name in enumerate(checked)})
+        counts.add({name: _floats(batch.column(i)) * scale.get(name, 1.0) for i, name in enumerate(checked)})
         t = _windowed(_floats(batch.column(0)), window)
         if not np.all(np.isfinite(t)):
             raise _NotFast
@@ -227,7 +241,7 @@ def _time_pass(path: Path, header: list[str], window: tuple[float | None, float 
     mean = float((last - first) / (count - 1))
     if low < mean * (1 - SAMPLE_TIME_JITTER) or high > mean * (1 + SAMPLE_TIME_JITTER):
         raise _NotFast
-    ranges.check()
+    counts.check()
     return count, mean
 
 

@@ -129,8 +129,9 @@ ESTIMATED = ("beta", "vy", "r")
 def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool = False,
              channels: Mapping[str, tuple[str, float]] | None = None) -> Log:
     """Read and validate a CSV log; raises :class:`LogError` (one line) on any problem. Columns
-    not named by docs/conventions.md are kept as text unless ``all_numeric``. ``channels`` maps a
-    logger's column name to (log column, factor to SI) (``harness.logs.channels``)."""
+    not named by docs/conventions.md are kept as text unless ``all_numeric`` (an estimates file:
+    every column numeric, and the inputs' unit range checks left out: an estimate is not an input).
+    ``channels`` maps a logger's column name to (log column, factor to SI) (``harness.logs.channels``)."""
     source = str(path)
     text = read_user_text(path, LogError, "CSV log")
     rows = list(csv.reader(io.StringIO(text)))
@@ -175,7 +176,7 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
     _check_increasing(log["t"], source)
     log = on_uniform_grid(log)
     for name, (unit, check) in UNIT_CHECKS.items():
-        if name in log:
+        if name in log and not all_numeric:
             _check_unit(log[name], name, unit, check, source)
     return log
 
