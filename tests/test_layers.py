@@ -13,11 +13,11 @@ import pytest
 from locations import REPO
 
 LAYERS = ("model", "codegen", "harness", "bench")
-STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "identify", "tune", "verify",
+STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "campaign", "identify", "tune", "verify",
           "target", "cli")
 """harness's stages in flow order: the NumPy reference first (it imports nothing of harness), then
-the project's files, job pools, logs, the truth simulation, the host build, scoring, identification,
-tuning, verification, the target stage and the command line on top."""
+the project's files, job pools, logs, the truth simulation, the host build, scoring, campaigns of
+logs, identification, tuning, verification, the target stage and the command line on top."""
 REFERENCE = Path("harness") / "reference"
 NOT_IN_REFERENCE = ("casadi", "model", "codegen")
 

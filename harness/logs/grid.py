@@ -51,7 +51,7 @@ class GridChannel:
                 break
             self.t = np.concatenate((self.t, np.asarray(piece[0], dtype=float)))
             self.values = np.concatenate((self.values, np.asarray(piece[1], dtype=float) * self.scale))
-        latest, stale = latest_samples(self.t, ticks + tolerance)
+        latest, stale = latest_samples(self.t, ticks, tolerance)
         values = np.where(stale, np.nan, self.values[latest])
         keep = int(latest[-1])
         self.t, self.values = self.t[keep:], self.values[keep:]

@@ -273,11 +273,12 @@ def gap_note(gaps: list[tuple[float, float]]) -> str:
             + ", ".join(f"{a:.3f}..{b:.3f} s" for a, b in gaps[:5]) + (" ..." if len(gaps) > 5 else ""))
 
 
-def latest_samples(t: np.ndarray, ticks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def latest_samples(t: np.ndarray, ticks: np.ndarray, tolerance: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(index of the latest sample at or before each tick, whether that sample is missing or older
-    than MAX_GAP): the causal rule every resampling uses (no look-ahead). Indices of ticks before
+    than MAX_GAP): the causal rule every resampling uses (no look-ahead); a sample stamped within
+    ``tolerance`` (s) after a tick counts as at it (a clock's rounding). Indices of ticks before
     the first sample are 0 and stale."""
-    latest = np.searchsorted(t, ticks, side="right") - 1
+    latest = np.searchsorted(t, ticks + tolerance, side="right") - 1
     stale = (latest < 0) | (ticks - t[np.maximum(latest, 0)] > MAX_GAP)
     return np.maximum(latest, 0), stale
 
