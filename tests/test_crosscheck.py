@@ -53,6 +53,7 @@ def test_a_bank_or_an_accelerometer_offset_is_lateral_inconsistency(car, case):
     assert _raised(_car(car), "switching", case, LATERAL_INCONSISTENT).size
 
 
+@pytest.mark.slow   # 60 s drives: about a minute of the default suite
 @pytest.mark.parametrize("car", CARS)
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_a_steering_zero_error_of_0_2_degrees_is_flagged_within_60_s_of_ordinary_driving(car, sign):
