@@ -136,6 +136,16 @@ def test_estimates_written_in_chunks_read_back_exactly(tmp_path, config, dlc, su
         np.testing.assert_array_equal(back[name], np.concatenate([p[name] for p in parts]))
 
 
+def test_mdf4_estimates_are_read_in_record_ranges(tmp_path, config, dlc):
+    estimates = EstimatorStream(config, "kf2dof", dlc.sample_time)(dlc)
+    with EstimatesWriter(tmp_path / "est.mf4", {"beta": "rad", "vy": "m/s", "r": "rad/s"}) as writer:
+        writer.write(estimates)
+    chunks = list(open_estimates(tmp_path / "est.mf4").chunks(ODD_CHUNK))
+    assert [len(c) for c in chunks[:-1]] == [ODD_CHUNK] * (len(chunks) - 1)
+    for name in estimates.columns:
+        np.testing.assert_array_equal(np.concatenate([c[name] for c in chunks]), estimates[name])
+
+
 def test_a_failed_run_leaves_no_estimates_file(tmp_path, dlc):
     path = tmp_path / "est.csv"
     with pytest.raises(RuntimeError), EstimatesWriter(path, {}) as writer:

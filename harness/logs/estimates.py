@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import queue
 import threading
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from contextlib import ExitStack
 from pathlib import Path
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from vsegen.harness.logs.channels import SI_KIND, UNITS
 from vsegen.harness.logs.mdf import SUFFIXES, open_mdf, write_mdf
-from vsegen.harness.logs.stream import LogSource, arrow_floats, in_memory, open_csv_log
+from vsegen.harness.logs.stream import LogSource, arrow_floats, open_csv_log
 from vsegen.harness.logs.table import ESTIMATED, Log, LogError, write_log
 from vsegen.harness.project.files import atomic_path
 
@@ -132,7 +132,7 @@ def read_estimates(path: Path) -> Log:
 def open_estimates(path: Path) -> LogSource:
     """An estimates file (CSV or MDF4, as :func:`read_estimates` takes) as a source of chunks."""
     if Path(path).suffix.lower() in SUFFIXES:
-        source = in_memory(_read_mdf_estimates(path))
+        source = _open_mdf_estimates(path)
     else:
         source = open_csv_log(path, required=("t",), all_numeric=True)
     if not any(name in source.names for name in ESTIMATED):
@@ -141,18 +141,45 @@ def open_estimates(path: Path) -> LogSource:
     return source
 
 
-def _read_mdf_estimates(path: Path) -> Log:
+def _open_mdf_estimates(path: Path) -> LogSource:
+    """The estimates of an MDF4 file (each channel's first occurrence, converted to SI), read in
+    ranges of records: the channels of `vsegen run --out EST.mf4` share one time base."""
     mdf = open_mdf(path)
-    columns: dict[str, np.ndarray] = {}
+    channels: dict[str, tuple[int, int, float]] = {}
     for name in mdf.channels_db:
-        if name in ("t", "time") or name.startswith("$") or name in columns:
+        if name in ("t", "time") or name.startswith("$") or name in channels:
             continue
-        signal = mdf.get(name, *mdf.channels_db[name][0])
-        columns.setdefault("t", np.asarray(signal.timestamps, dtype=float))
-        columns[name] = np.asarray(signal.samples, dtype=float) * _to_si(path, name, str(signal.unit or ""))
-    if "t" not in columns:
-        raise LogError(f"{path}: no channel: expected the estimates of `vsegen run --out EST.mf4`")
-    return Log(columns, str(path))
+        group, index = mdf.channels_db[name][0]
+        unit = str(mdf.get(name, group, index, record_offset=0, record_count=1).unit or "")
+        channels[name] = (group, index, _to_si(path, name, unit))
+    groups = {group for group, _, _ in channels.values()}
+    if len(groups) != 1:
+        mdf.close()
+        raise LogError(f"{path}: {len(groups)} channel groups: expected the estimates of `vsegen run --out EST.mf4` "
+                       "(one group of channels on one time base)")
+    group = groups.pop()
+    records = int(mdf.groups[group].channel_group.cycles_nr)
+    if records < 2:
+        mdf.close()
+        raise LogError(f"{path}: {records} record(s): expected at least 2")
+    head = mdf.get(next(iter(channels)), group, channels[next(iter(channels))][1], record_offset=0, record_count=2)
+    last = mdf.get(next(iter(channels)), group, channels[next(iter(channels))][1], record_offset=records - 1,
+                   record_count=1)
+    sample_time = float((last.timestamps[-1] - head.timestamps[0]) / (records - 1))
+
+    def chunks(rows: int, names: tuple[str, ...]) -> Iterator[Log]:
+        for offset in range(0, records, rows):
+            columns: dict[str, np.ndarray] = {}
+            wanted = names[1:]
+            for name in wanted or (next(iter(channels)),):
+                _, index, factor = channels[name]
+                signal = mdf.get(name, group, index, record_offset=offset, record_count=rows)
+                columns.setdefault("t", np.asarray(signal.timestamps, dtype=float))
+                if name in wanted:
+                    columns[name] = np.asarray(signal.samples, dtype=float) * factor
+            yield Log({"t": columns.pop("t"), **columns}, str(path))
+
+    return LogSource(str(path), sample_time, records, ("t", *channels), chunks, closers=[mdf.close])
 
 
 def _to_si(path: Path, name: str, unit: str) -> float:
