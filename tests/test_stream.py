@@ -146,6 +146,22 @@ def test_mdf4_estimates_are_read_in_record_ranges(tmp_path, config, dlc):
         np.testing.assert_array_equal(np.concatenate([c[name] for c in chunks]), estimates[name])
 
 
+def test_an_outside_reader_reads_mdf4_estimates_written_in_chunks(tmp_path, config, dlc):
+    """mdfreader (not asammdf, which wrote the file) as an outside judge of the MDF4 that
+    ``EstimatesWriter`` extends chunk by chunk."""
+    import mdfreader
+
+    estimates = EstimatorStream(config, "kf2dof", dlc.sample_time)(dlc)
+    with EstimatesWriter(tmp_path / "est.mf4", {"beta": "rad", "vy": "m/s", "r": "rad/s"}) as writer:
+        for chunk in in_memory(estimates).chunks(ODD_CHUNK):
+            writer.write(chunk)
+    judge = mdfreader.Mdf(str(tmp_path / "est.mf4"))
+    for name in ("beta", "vy", "r", "status"):
+        np.testing.assert_array_equal(judge.get_channel_data(name), estimates[name])
+        np.testing.assert_array_equal(judge.get_channel_data(judge.get_channel_master(name)), estimates["t"])
+    assert judge.get_channel_unit("beta") == "rad"
+
+
 def test_a_failed_run_leaves_no_estimates_file(tmp_path, dlc):
     path = tmp_path / "est.csv"
     with pytest.raises(RuntimeError), EstimatesWriter(path, {}) as writer:
