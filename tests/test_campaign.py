@@ -120,9 +120,15 @@ def test_the_baseline_comparison_lists_the_logs_where_new_settings_are_worse(dat
     assert "No log is worse." in (tmp_path / "release" / "summary.md").read_text()
 
 
-def test_a_pattern_that_names_no_log_is_one_line(vsegen, tmp_path):
+def test_campaign_mistakes_are_one_line(vsegen, database, cache, tmp_path):
     result = vsegen("campaign", str(tmp_path / "nothing*.csv"), "--scheduler", "serial")
     assert result.exit_code == 2 and "no log: expected a log file" in result.stderr
+    (tmp_path / "old.parquet").write_text("not parquet")
+    for baseline, fragment in (("old.parquet", "not a readable Parquet table"), ("gone.parquet", "no such file")):
+        result = vsegen("campaign", str(database / "dlc_60.csv"), "--baseline", str(tmp_path / baseline),
+                        "--scheduler", "serial", "--out", str(tmp_path / "out"))
+        assert result.exit_code == 2 and fragment in result.stderr, result.output
+        assert len(result.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
     with pytest.raises(LogError):
         find_logs([str(tmp_path)])
 

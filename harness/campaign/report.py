@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from vsegen.harness.campaign.row import LATERAL_COLUMNS, SPEED_COLUMNS
+from vsegen.harness.logs.table import LogError
 from vsegen.harness.project.files import write_atomic, write_text_atomic
 
 WORSE_RMSE_RATIO = 1.05
@@ -45,11 +46,27 @@ def write_table(rows: Sequence[dict], path: Path) -> None:
     write_atomic(path, lambda tmp: pq.write_table(table, tmp))
 
 
+COMPARED = ("log", "estimator", "duration_s", "time_flagged_s", "beta_rmse_deg", "silent_longest_s")
+"""The columns a baseline table must have."""
+
+
 def read_table(path: Path) -> list[dict]:
-    """The rows of an earlier campaign's Parquet table."""
+    """The rows of an earlier campaign's Parquet table; LogError (one line) when it is not one."""
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
-    return pq.read_table(path).to_pylist()
+    if not Path(path).is_file():
+        raise LogError(f"{path}: cannot read the baseline table: no such file")
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowException) as exc:
+        raise LogError(f"{path}: not a readable Parquet table ({str(exc).splitlines()[0][:100]}): expected the "
+                       f"results.parquet of an earlier `vsegen campaign`") from None
+    missing = [name for name in COMPARED if name not in table.column_names]
+    if missing:
+        raise LogError(f"{path}: no column {', '.join(missing)}: expected the results.parquet of an earlier "
+                       f"`vsegen campaign`")
+    return table.to_pylist()
 
 
 def compare(rows: Sequence[dict], baseline: Sequence[dict]) -> list[Worse]:

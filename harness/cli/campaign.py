@@ -53,6 +53,7 @@ def campaign(logs: tuple[str, ...], estimators: tuple[str, ...], vehicles: tuple
     found = find_logs(logs)
     settings = [_settings(path) for path in (vehicles or (None,))]
     compare_table = baseline is not None and baseline.suffix.lower() == ".parquet"
+    old_table = report.read_table(baseline) if compare_table else None   # its mistakes before any run
     if baseline is not None and not compare_table:
         settings.append(_settings(baseline, f"baseline:{baseline.stem}"))
     if len({s.label for s in settings}) != len(settings):
@@ -71,8 +72,7 @@ def campaign(logs: tuple[str, ...], estimators: tuple[str, ...], vehicles: tuple
     new = [row for row in result.rows if not row["settings"].startswith("baseline:")]
     worse = None
     if baseline is not None:
-        old = report.read_table(baseline) if compare_table else \
-            [row for row in result.rows if row["settings"] == settings[-1].label]
+        old = old_table if compare_table else [row for row in result.rows if row["settings"] == settings[-1].label]
         worse = report.compare(new, old)
     labels = [s.label for s in settings]
     summary = report.summarise(result, names, labels, worse, str(baseline) if baseline else None)
