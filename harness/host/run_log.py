@@ -18,11 +18,6 @@ SAMPLE_TIME_DIGITS = 9
 """A log's mean sample time is rounded to this many decimals (s) before generating for it."""
 
 
-def config_for_log(config: VehicleConfig, log: Log) -> VehicleConfig:
-    """``config`` at the log's sample time."""
-    return config_at(config, log.sample_time)
-
-
 def config_at(config: VehicleConfig, sample_time: float) -> VehicleConfig:
     """``config`` at ``sample_time`` (s, rounded to SAMPLE_TIME_DIGITS decimals)."""
     sample_time = round(sample_time, SAMPLE_TIME_DIGITS)

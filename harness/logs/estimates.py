@@ -14,23 +14,14 @@ from pathlib import Path
 import numpy as np
 
 from vsegen.harness.logs.channels import SI_KIND, UNITS
-from vsegen.harness.logs.mdf import SUFFIXES, open_mdf, write_mdf
+from vsegen.harness.logs.mdf import SUFFIXES, open_mdf
 from vsegen.harness.logs.stream import LogSource, arrow_floats, open_csv_log
-from vsegen.harness.logs.table import ESTIMATED, Log, LogError, write_log
+from vsegen.harness.logs.table import ESTIMATED, Log, LogError
 from vsegen.harness.project.files import atomic_path
 
 KNOWN_UNITS = {"beta": "rad", "beta_ekf": "rad", "beta_int": "rad", "vx": "m/s", "vy": "m/s", "r": "rad/s",
                "ax": "m/s^2", "ay": "m/s^2", "yaw_moment": "N*m", "status": "-", "mode": "-"}
 """The SI unit of the outputs ``score`` and ``plot`` read (others are kept as they are)."""
-
-
-def write_estimates(log: Log, path: Path, units: Mapping[str, str]) -> None:
-    """Write ``log`` (``t`` and outputs) as MDF4 (by suffix, each channel with its unit from
-    ``units``) or CSV, atomically."""
-    if Path(path).suffix.lower() in SUFFIXES:
-        write_mdf(log, path, units)
-    else:
-        write_log(log, path)
 
 
 class EstimatesWriter:

@@ -1,11 +1,11 @@
-"""ASAM MDF4 logs (.mf4, .mdf) via asammdf: the mapped channels, each at its own rate, brought
-causally onto the estimator's sample grid; estimates written as MDF4."""
+"""ASAM MDF4 logs (.mf4, .mdf) via asammdf: the mapped channels, each at its own rate, read in
+ranges of records and brought causally onto the estimator's sample grid (``harness.logs.grid``).
+Estimates are written as MDF4 by ``harness.logs.estimates.EstimatesWriter``."""
 
 from __future__ import annotations
 
 import gc
 import sys
-from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +20,6 @@ from vsegen.harness.logs.table import (
     Log,
     LogError,
 )
-from vsegen.harness.project.files import write_atomic
 
 SUFFIXES = (".mf4", ".mdf")
 
@@ -142,15 +141,3 @@ def _group_name(mdf, group: int) -> str:
 def _groups(mdf, found) -> str:
     return ", ".join(f"group {g}" + (f" (message {_group_name(mdf, g)!r})" if _group_name(mdf, g) else "")
                      for g, _ in found)
-
-
-def write_mdf(log: Log, path: Path, units: Mapping[str, str]) -> None:
-    """Write the numeric columns of ``log`` (estimates) as one MDF4 channel group, each channel with
-    its unit from ``units`` ("-" for a ratio or a code), atomically (a temporary file next to
-    ``path`` renamed into place)."""
-    from asammdf import MDF, Signal
-
-    mdf = MDF(version="4.10")
-    mdf.append([Signal(np.asarray(values, dtype=float), log["t"], name=name, unit=units.get(name, ""))
-                for name, values in log.columns.items() if name != "t"], common_timebase=True)
-    write_atomic(path, lambda tmp: mdf.save(tmp, overwrite=True))
