@@ -23,17 +23,14 @@ import numpy as np
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, options_cost, pil, seed003, versus_hand
 from bench.document import provenance, section_of, with_section
-from bench.measure import CC, FLAGS, generated_driver, write_inputs
+from bench.measure import CC, FLAGS, LOG_CASE, generated_driver, write_inputs
 from vsegen.codegen.generate import REVIEWED_FORMS, render
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import REFERENCES
-from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.target.toolchains import available, build_for_target, target_for
 from vsegen.harness.verify.fuzz import fuzz_estimator
 from vsegen.model.estimator import Particles
 from vsegen.model.estimators import build
-
-LOG_CASE = Case.of("continuous_dlc")
 
 
 def _machine() -> str:

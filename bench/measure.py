@@ -6,9 +6,11 @@ the hand-written baseline; each runs init once and then step over a log's inputs
 
 from __future__ import annotations
 
+import argparse
 import re
 import subprocess
 import tempfile
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,12 +18,17 @@ import numpy as np
 
 from vsegen.codegen.generate import template_environment
 from vsegen.harness.host.build import library_files
+from vsegen.harness.logs.table import Log
+from vsegen.harness.project.vehicles import load_vehicle, with_settings
+from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.target.toolchains import link_to_api
 from vsegen.model.bicycle import state_matrix_norm_bound
 from vsegen.model.discretize import plan_zoh
 from vsegen.model.estimator import Estimator
-from vsegen.model.params import VehicleConfig
+from vsegen.model.params import VehicleConfig, parse_vehicle
 
+LOG_CASE = Case.of("continuous_dlc")
+"""The log every instruction count runs on."""
 HERE = Path(__file__).parent
 CC = "gcc"
 FLAGS = ("-std=c99", "-O2")
@@ -51,6 +58,32 @@ class Driver:
         result = subprocess.run([str(self.exe), str(inputs_file), "time", str(passes)], check=True,
                                 capture_output=True, text=True)
         return float(result.stdout.split()[0])
+
+
+def switched_off(vehicle: Path, name: str, off: Mapping[str, float], **also: float) -> tuple[VehicleConfig, dict]:
+    """(the vehicle file ``vehicle`` with estimator ``name``'s settings of ``off`` that are on set
+    to their off value, and ``also`` set; which of ``off`` were on)."""
+    config = load_vehicle(vehicle)
+    settings = config.settings(name)
+    on = {key: value for key, value in off.items() if key in settings and settings[key] != value}
+    text = with_settings(vehicle.read_text(), f"estimator.{name}", **on, **also)
+    return parse_vehicle(text, str(vehicle), config.name), on
+
+
+def section_command(description: str, section: Callable[[Path, Log, Path], list[str]], prefix: str,
+                    argv: list[str] | None = None) -> None:
+    """The command line of a benchmarks.md section measured on LOG_CASE: parse ``--vehicle`` and
+    ``--out``, then write ``section(vehicle, log, scratch folder)``."""
+    from bench import BENCHMARKS, DEFAULT_VEHICLE
+    from bench.document import write_section
+
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
+    parser.add_argument("--out", type=Path, default=BENCHMARKS)
+    args = parser.parse_args(argv)
+    config = load_vehicle(args.vehicle)
+    log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
+    write_section(args.out, section(args.vehicle, log, Path(tempfile.mkdtemp(prefix=prefix))))
 
 
 def write_inputs(inputs: np.ndarray, folder: Path) -> Path:

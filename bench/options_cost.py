@@ -10,23 +10,17 @@ dwell and fusion's disagreement check; each is one setting away from the papers'
 
 from __future__ import annotations
 
-import argparse
-import tempfile
 from pathlib import Path
 
-from bench import BENCHMARKS, DEFAULT_VEHICLE
-from bench.document import provenance, write_section
-from bench.measure import generated_driver, write_inputs
+from bench.document import provenance
+from bench.measure import LOG_CASE, generated_driver, section_command, switched_off, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.logs.table import Log
-from vsegen.harness.project.vehicles import load_vehicle, with_settings
-from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.model import input_monitors
 from vsegen.model.estimators import build
-from vsegen.model.params import parse_vehicle
 
 SECTION = "## What the real-road options cost"
-LOG_CASE = Case.of("continuous_dlc")
 OPTIONS_OFF = {**input_monitors.OFF, "offset_memory": 0.0, "kinematic_max_dwell": 0.0, "disagreement_limit": 0.0}
 """Every real-road option at its off value (an estimator has some of them)."""
 
@@ -42,12 +36,9 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "| estimator | options on in the shipped file | shipped | options off | cost |",
              "|---|---|---|---|---|"]
     for name in config.estimators:
-        settings = config.settings(name)
-        on = {key: off for key, off in OPTIONS_OFF.items() if settings.get(key, 0.0) != off}
+        variant, on = switched_off(vehicle, name, OPTIONS_OFF)
         if not on:
             continue
-        variant = parse_vehicle(with_settings(vehicle.read_text(), f"estimator.{name}", **on), str(vehicle),
-                                config.name)
         counts = []
         for which in (config, variant):
             estimator = build(name, which)
@@ -61,14 +52,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
-    parser.add_argument("--out", type=Path, default=BENCHMARKS)
-    args = parser.parse_args(argv)
-    config = load_vehicle(args.vehicle)
-    log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
-    lines = section(args.vehicle, log, Path(tempfile.mkdtemp(prefix="vsegen-bench-")))
-    write_section(args.out, lines)
+    section_command(__doc__.splitlines()[0], section, "vsegen-bench-", argv)
 
 
 if __name__ == "__main__":

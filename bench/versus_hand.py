@@ -7,30 +7,21 @@ this section of docs/benchmarks.md; ``python -m bench`` all of it.
 
 from __future__ import annotations
 
-import argparse
-import tempfile
 from pathlib import Path
 
-from bench import BENCHMARKS, DEFAULT_VEHICLE
-from bench.document import write_section
-from bench.measure import generated_driver, hand_driver, write_inputs
+from bench.measure import LOG_CASE, generated_driver, hand_driver, section_command, switched_off, write_inputs
 from vsegen.codegen.generate import render
 from vsegen.harness.logs.table import Log
-from vsegen.harness.project.vehicles import load_vehicle, with_settings
-from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.target.toolchains import available, build_for_target, target_for
 from vsegen.model import input_monitors
 from vsegen.model.estimators import build
-from vsegen.model.params import parse_vehicle
 
 SECTION = "## Generated against hand-written (2-DOF KF step, double, -O2)"
 TARGET_RATIO = 1.10
-LOG_CASE = Case.of("continuous_dlc")
 
 
 def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
     """Markdown lines of the section, measured on ``log``."""
-    config = load_vehicle(vehicle)
     lines = [SECTION, "",
              "`bench/handwritten/kf2dof_hand.c`: the same estimator written by hand (constants "
              "derived once, 1/vx once, P as three entries, closed-form 2x2 inverse with one "
@@ -44,12 +35,9 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "| discretisation | generated instr/step | hand-written instr/step | ratio | target "
              "| generated ns | hand-written ns | generated M4F float .text / step stack (B) |",
              "|---|---|---|---|---|---|---|---|"]
-    monitors_off = {key: off for key, off in input_monitors.OFF.items() if config.settings("kf2dof")[key] != off}
-    text = with_settings(vehicle.read_text(), "estimator.kf2dof", residual_window=0.0,
-                         linear_range=0.0, **monitors_off)
     for method in ("zoh", "euler"):
-        variant = parse_vehicle(text.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
-                                str(vehicle), config.name)
+        variant, _ = switched_off(vehicle, "kf2dof", input_monitors.OFF, residual_window=0.0, linear_range=0.0,
+                                  discretisation=method)
         estimator = build("kf2dof", variant)
         inputs = log.matrix(estimator.inputs.names)
         inputs_file = write_inputs(inputs, folder)
@@ -76,14 +64,7 @@ def _m4f_size(config) -> str:
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--vehicle", type=Path, default=DEFAULT_VEHICLE)
-    parser.add_argument("--out", type=Path, default=BENCHMARKS)
-    args = parser.parse_args(argv)
-    config = load_vehicle(args.vehicle)
-    log = LOG_CASE.simulate(config, 1.0 / config.sample_time)
-    body = section(args.vehicle, log, Path(tempfile.mkdtemp(prefix="vsegen-bench-hand-")))
-    write_section(args.out, body)
+    section_command(__doc__.splitlines()[0], section, "vsegen-bench-hand-", argv)
 
 
 if __name__ == "__main__":
