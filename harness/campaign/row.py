@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, runs
-from vsegen.harness.score.metrics import SILENT_LIMIT
+from vsegen.harness.logs.table import Log
+from vsegen.harness.score.metrics import ScoreSums, SilentStretch
 from vsegen.model import status
 
 SPEED_BANDS_KMH = (0.0, 30.0, 60.0, 100.0, 130.0, math.inf)
@@ -49,11 +49,8 @@ class RowSums:
         self.bits = np.zeros(len(status.BITS))
         self.flagged = 0
         self.first_fault: dict[str, float] = {}
-        self.scored = 0
-        self.error_sum = self.square_sum = self.error_max = 0.0
-        self.spun = False
-        self.silent_run = self.silent_longest = 0.0
-        self.silent_start = self.silent_longest_start = math.nan
+        self.scores = ScoreSums("<log>", "<estimates>")
+        self.silent = SilentStretch(sample_time)
         self.referenced = False
 
     def add(self, log: Log, estimates: Log) -> None:
@@ -71,35 +68,13 @@ class RowSums:
             if bit.value in INPUT_FAULTS and bit.name not in self.first_fault and raised.any():
                 self.first_fault[bit.name] = float(log["t"][np.argmax(raised)])
         if "beta_ref" in log:
-            self._score(log["t"], estimates["beta"] - log["beta_ref"], code, log["beta_ref"])
-
-    def _score(self, t: np.ndarray, error: np.ndarray, code: np.ndarray, reference: np.ndarray) -> None:
-        self.referenced = True
-        spun = np.maximum.accumulate(np.abs(reference) > SPIN_SIDESLIP) | self.spun
-        self.spun = bool(spun[-1])
-        scored = np.isfinite(error) & np.isfinite(reference)
-        e = np.degrees(error[scored])
-        if e.size:
-            self.scored += e.size
-            self.error_sum += float(np.abs(e).sum())
-            self.square_sum += float(np.dot(e, e))
-            self.error_max = max(self.error_max, float(np.abs(e).max()))
-        silent = ~(np.abs(error) <= SILENT_LIMIT) & (code == 0) & ~spun
-        for run in runs(silent):
-            length = (run.stop - run.start) * self.T
-            if run.start == 0 and self.silent_run > 0:   # the stretch of the chunk before goes on
-                self.silent_run += length
-            else:
-                self.silent_run, self.silent_start = length, float(t[run.start])
-            if self.silent_run > self.silent_longest:
-                self.silent_longest, self.silent_longest_start = self.silent_run, self.silent_start
-        if not silent[-1]:
-            self.silent_run = 0.0
+            self.referenced = True
+            self.scores.add(log, Log({"t": estimates["t"], "beta": estimates["beta"]}))
+            self.silent.add(log["t"], estimates["beta"] - log["beta_ref"], code, log["beta_ref"])
 
     def row(self) -> dict:
         """The row's columns (see the module docstring)."""
-        n = max(self.scored, 1)
-        scored = self.referenced and self.scored > 0
+        beta = next((score for score in self.scores.result() if score.signal == "beta"), None)
         return {
             "samples": self.samples,
             "duration_s": self.samples * self.T,
@@ -108,11 +83,11 @@ class RowSums:
             **dict(zip(LATERAL_COLUMNS, self.lateral.tolist())),
             "time_flagged_s": self.flagged * self.T,
             **dict(zip(STATUS_COLUMNS, (self.bits * self.T).tolist())),
-            "beta_rmse_deg": math.sqrt(self.square_sum / n) if scored else math.nan,
-            "beta_mean_deg": self.error_sum / n if scored else math.nan,
-            "beta_max_deg": self.error_max if scored else math.nan,
-            "silent_longest_s": self.silent_longest if self.referenced else math.nan,
-            "silent_longest_at_s": self.silent_longest_start if self.silent_longest > 0 else math.nan,
+            "beta_rmse_deg": beta.rmse if beta else math.nan,
+            "beta_mean_deg": beta.mean if beta else math.nan,
+            "beta_max_deg": beta.max if beta else math.nan,
+            "silent_longest_s": self.silent.longest if self.referenced else math.nan,
+            "silent_longest_at_s": self.silent.start,
             "input_faults": "; ".join(f"{name} at {t:.2f} s" for name, t in sorted(self.first_fault.items(),
                                                                                   key=lambda item: item[1])),
         }

@@ -12,7 +12,7 @@ import numpy as np
 
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.logs.stream import LogSource
-from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, LogError
+from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, LogError, runs
 
 SIGNALS = (  # estimate column, truth column, report unit, factor from SI
     ("beta", "beta_ref", "deg", 180.0 / np.pi),
@@ -60,9 +60,9 @@ class ScoreSums:
     """:func:`score` over a log and its estimates read in chunks (:meth:`add` per pair of chunks of
     equal length, in order; :meth:`result` at the end): sums of |e| and e^2 and the largest |e|
     per signal, so memory does not grow with the log. ``samples`` is the log's length, which the
-    estimates must share."""
+    estimates must share (None: not known ahead, not checked)."""
 
-    def __init__(self, log_source: str, estimates_source: str, samples: int):
+    def __init__(self, log_source: str, estimates_source: str, samples: int | None = None):
         self.log_source, self.estimates_source, self.samples = log_source, estimates_source, samples
         self.sums: dict[str, list[float]] = {}
         self.seen = 0
@@ -90,7 +90,7 @@ class ScoreSums:
 
     def result(self) -> list[Score]:
         """The scores; LogError when the estimates were shorter or longer than the log."""
-        if self.seen != self.samples:
+        if self.samples is not None and self.seen != self.samples:
             raise LogError(f"{self.estimates_source}: {self.seen} samples: expected the {self.samples} time stamps "
                            f"of {self.log_source}")
         units = {name: unit for name, _, unit, _ in SIGNALS}
@@ -109,26 +109,49 @@ def silent_error_time(log: Log, estimates: Log, limit: float = SILENT_LIMIT) -> 
     (rad) and status 0, before the car spins (|beta_ref| > 15 deg from then on is not scored): the
     "never silently wrong" rule asks this to stay within :data:`SILENT_DURATION`. A sample with a
     non-finite estimate counts as wrong."""
-    spun = np.maximum.accumulate(np.abs(log["beta_ref"]) > SPIN_SIDESLIP)
-    return longest_silent_stretch(log["t"], estimates["beta"] - log["beta_ref"], estimates["status"], spun, limit)
+    stretch = SilentStretch(float(np.median(np.diff(log["t"]))) if len(log) > 1 else 0.0, limit)
+    stretch.add(log["t"], estimates["beta"] - log["beta_ref"], estimates["status"], log["beta_ref"])
+    return stretch.longest, stretch.start
 
 
 def longest_silent_stretch(t: np.ndarray, error: np.ndarray, status: np.ndarray, excluded: np.ndarray,
                            limit: float = SILENT_LIMIT) -> tuple[float, float]:
     """(longest stretch, its start) in s of consecutive samples at times ``t`` where |``error``|
     exceeds ``limit`` (or is not finite) with ``status`` 0, the ``excluded`` samples left out."""
-    silent = (~(np.abs(error) <= limit)) & (status == 0) & ~excluded
-    longest, start, run_start = 0.0, float("nan"), None
-    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    for k, bad in enumerate(np.append(silent, False)):
-        if bad and run_start is None:
-            run_start = k
-        elif not bad and run_start is not None:
-            length = t[k - 1] - t[run_start] + step
-            if length > longest:
-                longest, start = length, float(t[run_start])
-            run_start = None
-    return longest, start
+    stretch = SilentStretch(float(np.median(np.diff(t))) if len(t) > 1 else 0.0, limit)
+    stretch.add(t, error, status, excluded=excluded)
+    return stretch.longest, stretch.start
+
+
+class SilentStretch:
+    """The longest stretch of a log, fed in chunks (:meth:`add`, in order), with |error| above
+    ``limit`` (rad; or not finite) and status 0: its length ``longest`` (s: last stamp - first
+    stamp + ``step``) and ``start`` (s, NaN if none). A stretch may cross chunk boundaries."""
+
+    def __init__(self, step: float, limit: float = SILENT_LIMIT):
+        self.step, self.limit = step, limit
+        self.longest, self.start = 0.0, float("nan")
+        self.open_since: float | None = None
+        self.spun = False
+
+    def add(self, t: np.ndarray, error: np.ndarray, status: np.ndarray, reference: np.ndarray | None = None,
+            excluded: np.ndarray | None = None) -> None:
+        """The next chunk: time stamps (s), errors (rad), status; samples from the first with
+        |``reference``| > 15 deg on (a spin, carried across chunks) or ``excluded`` are left out."""
+        left_out = np.zeros(len(t), dtype=bool) if excluded is None else np.asarray(excluded, dtype=bool)
+        if reference is not None:
+            spun = np.maximum.accumulate(np.abs(reference) > SPIN_SIDESLIP) | self.spun
+            self.spun = bool(spun[-1]) if len(spun) else self.spun
+            left_out = left_out | spun
+        silent = (~(np.abs(error) <= self.limit)) & (status == 0) & ~left_out
+        for run in runs(silent):
+            if run.start > 0 or self.open_since is None:
+                self.open_since = float(t[run.start])
+            length = float(t[run.stop - 1]) - self.open_since + self.step
+            if length > self.longest:
+                self.longest, self.start = length, self.open_since
+        if not len(silent) or not silent[-1]:
+            self.open_since = None
 
 
 def score_case(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:
