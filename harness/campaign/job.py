@@ -12,11 +12,8 @@ from vsegen.harness.campaign.row import RowSums
 from vsegen.harness.host.run_log import EstimatorStream
 from vsegen.harness.logs.sources import open_log
 from vsegen.harness.logs.table import LogError
-from vsegen.harness.logs.units import check_units
+from vsegen.harness.logs.units import check_units_of_head
 from vsegen.model.params import ParameterError, VehicleConfig
-
-UNIT_CHECK_SPAN = 600.0
-"""s: the log's units are judged on its first ten minutes, as ``vsegen run`` does."""
 
 
 def log_job(log: str, channels: str | None, dbc: str | None,
@@ -29,8 +26,7 @@ def log_job(log: str, channels: str | None, dbc: str | None,
         first = runs[0][2]
         with open_log(Path(log), Path(channels) if channels else None, first.sample_time,
                       dbc=Path(dbc) if dbc else None) as source:
-            head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
-            check_units(head, first.vehicle)
+            check_units_of_head(source, first.vehicle)
             streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
             sums = [RowSums(source.sample_time) for _ in runs]
             for chunk in source.chunks():

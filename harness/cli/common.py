@@ -91,13 +91,10 @@ def read_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     log = open_user_log(path, channels, sample_time, window, dbc=dbc).read()
     say_notes(path, log.notes)
     if unit_check is not None:
-        _check_units(path, log, unit_check)
+        from vsegen.harness.logs.units import check_units
+
+        _say_unchecked(path, check_units(log, unit_check.vehicle))
     return log
-
-
-UNIT_CHECK_SPAN = 600.0
-"""s: a streamed log's units are judged on its first ten minutes (a wrong unit is wrong on every
-sample; the physics check is the slow part of reading)."""
 
 
 def open_user_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
@@ -106,13 +103,14 @@ def open_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     """A log as :func:`read_user_log` reads it, as a source of chunks (``harness.logs.stream``):
     memory does not grow with its length (a raw CAN log, decoded with ``dbc``, is held decoded).
     The gaps of an MDF4 or CAN log are in the source's notes once it has been read
-    (:func:`say_notes`). With ``unit_check``, the units are judged on the first UNIT_CHECK_SPAN s."""
+    (:func:`say_notes`). With ``unit_check``, the units are judged on the log's first ten minutes
+    (``harness.logs.units.check_units_of_head``)."""
     from vsegen.harness.logs.sources import open_log
+    from vsegen.harness.logs.units import check_units_of_head
 
     source = open_log(path, channels, sample_time, window, dbc)
     if unit_check is not None:
-        head = next(source.chunks(max(2, round(UNIT_CHECK_SPAN / source.sample_time))))
-        _check_units(path, head, unit_check)
+        _say_unchecked(path, check_units_of_head(source, unit_check.vehicle))
     return source
 
 
@@ -123,10 +121,7 @@ def say_notes(path: Path, notes: dict[str, str]) -> None:
             click.echo(f"vsegen: {path}: {notes[key]}", err=True)
 
 
-def _check_units(path: Path, log, config: VehicleConfig) -> None:
-    from vsegen.harness.logs.units import check_units
-
-    unchecked = check_units(log, config.vehicle)
+def _say_unchecked(path: Path, unchecked: list[str]) -> None:
     if unchecked:
         click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
 

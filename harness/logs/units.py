@@ -76,6 +76,16 @@ STEER_CAUSES = (("column 'delta' looks like degrees", 180 / math.pi),
 WHEELS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
 
 
+HEAD_SPAN = 600.0
+"""s: a log read in chunks is judged on its first ten minutes (a wrong unit is wrong on every
+sample; the physics check is the slow part of reading)."""
+
+
+def check_units_of_head(source, vehicle: Mapping[str, float]) -> list[str]:
+    """:func:`check_units` on the first HEAD_SPAN s of ``source`` (a ``harness.logs.stream.LogSource``)."""
+    return check_units(next(source.chunks(max(2, round(HEAD_SPAN / source.sample_time)))), vehicle)
+
+
 def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
     """Raise LogError (one line: file, relation, likely cause) when the log's physics says a unit
     is wrong; return "column (why)" for each input column no relation could judge."""
