@@ -33,11 +33,10 @@ from vsegen.harness.logs.table import (
     SAMPLE_TIME_JITTER,
     TRUTH,
     UNIT_CHECKS,
-    UNIT_FRACTION,
     Log,
     LogError,
+    UnitRanges,
     read_log,
-    unit_range_error,
 )
 
 CHUNK_ROWS = 1 << 16
@@ -222,7 +221,7 @@ def _time_pass(path: Path, header: list[str], window: tuple[float | None, float 
     finite, strictly increasing and uniform within SAMPLE_TIME_JITTER (else the strict reader
     names the line, or resamples)."""
     count, first, last, low, high = 0, None, None, np.inf, -np.inf
-    counts = _RangeCount(str(path))
+    counts = UnitRanges(str(path))
     checked = ("t", *(name for name in UNIT_CHECKS if name in header and ranges))
     for batch in _batches(path, header, checked):
         counts.add({name: _floats(batch.column(i)) * scale.get(name, 1.0) for i, name in enumerate(checked)})
@@ -289,32 +288,3 @@ def _take(pending: list[dict[str, np.ndarray]], rows: int) -> tuple[dict[str, np
               for name in names}
     rest = {name: values[rows:] for name, values in merged.items()}
     return {name: values[:rows] for name, values in merged.items()}, ([rest] if len(rest["t"]) else [])
-
-
-class _RangeCount:
-    """The unit range checks of :func:`read_log` counted over a log read in chunks."""
-
-    def __init__(self, source: str):
-        self.source = source
-        self.seen = 0
-        self.finite = dict.fromkeys(UNIT_CHECKS, 0)
-        self.beyond = dict.fromkeys(UNIT_CHECKS, 0)
-        self.first: dict[str, tuple[int, float]] = {}
-
-    def add(self, columns: Mapping[str, np.ndarray]) -> None:
-        for name, (_, check) in UNIT_CHECKS.items():
-            if name in columns:
-                finite = np.isfinite(columns[name])
-                beyond = finite & (np.abs(columns[name]) > check.limit)
-                self.finite[name] += int(finite.sum())
-                self.beyond[name] += int(beyond.sum())
-                if name not in self.first and beyond.any():
-                    i = int(np.flatnonzero(beyond)[0])
-                    self.first[name] = (self.seen + i, float(columns[name][i]))
-        self.seen += len(next(iter(columns.values())))
-
-    def check(self) -> None:
-        for name in UNIT_CHECKS:
-            if self.beyond[name] > UNIT_FRACTION * max(self.finite[name], 1):
-                index, value = self.first[name]
-                raise unit_range_error(self.source, name, index, value, self.beyond[name], self.finite[name])

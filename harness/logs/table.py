@@ -175,26 +175,46 @@ def read_log(path: Path, required: tuple[str, ...] = REQUIRED, all_numeric: bool
         log.columns[name] = log.columns[name] * scale
     _check_increasing(log["t"], source)
     log = on_uniform_grid(log)
-    for name, (unit, check) in UNIT_CHECKS.items():
-        if name in log and not all_numeric:
-            _check_unit(log[name], name, unit, check, source)
+    if not all_numeric:
+        ranges = UnitRanges(source)
+        ranges.add(log.columns)
+        ranges.check()
     return log
 
 
-def _check_unit(column: np.ndarray, name: str, unit: str, check: signals.UnitCheck, source: str) -> None:
-    finite = np.isfinite(column)
-    beyond = finite & (np.abs(column) > check.limit)
-    if beyond.sum() > UNIT_FRACTION * max(finite.sum(), 1):
-        i = int(np.flatnonzero(beyond)[0])
-        raise unit_range_error(source, name, i, float(column[i]), int(beyond.sum()), int(finite.sum()))
+class UnitRanges:
+    """The unit range checks (UNIT_CHECKS) of a log, counted over its columns whole or chunk by
+    chunk (:meth:`add` in order): a column with more than UNIT_FRACTION of its finite samples
+    beyond its limit is refused by :meth:`check` in one line naming the first such row."""
 
+    def __init__(self, source: str):
+        self.source = source
+        self.seen = 0
+        self.finite = dict.fromkeys(UNIT_CHECKS, 0)
+        self.beyond = dict.fromkeys(UNIT_CHECKS, 0)
+        self.first: dict[str, tuple[int, float]] = {}
 
-def unit_range_error(source: str, name: str, index: int, value: float, beyond: int, finite: int) -> LogError:
-    """The one line of a column whose values are beyond its unit check (UNIT_CHECKS) in ``beyond``
-    of its ``finite`` samples, the first at row ``index`` with ``value``."""
-    unit, check = UNIT_CHECKS[name]
-    return LogError(f"{source}:{index + 2}: column '{name}' = {value!r}: expected |{name}| <= {check.limit:g} {unit} "
-                    f"(a larger value {check.hint}); {beyond} of {finite} samples are beyond it")
+    def add(self, columns: Mapping[str, np.ndarray]) -> None:
+        """The next rows of the log's columns (any subset; the others are not checked)."""
+        for name, (_, check) in UNIT_CHECKS.items():
+            if name in columns:
+                finite = np.isfinite(columns[name])
+                beyond = finite & (np.abs(columns[name]) > check.limit)
+                self.finite[name] += int(finite.sum())
+                self.beyond[name] += int(beyond.sum())
+                if name not in self.first and beyond.any():
+                    i = int(np.flatnonzero(beyond)[0])
+                    self.first[name] = (self.seen + i, float(columns[name][i]))
+        self.seen += len(next(iter(columns.values())))
+
+    def check(self) -> None:
+        """LogError (one line) for the first column beyond its unit check."""
+        for name, (unit, check) in UNIT_CHECKS.items():
+            if self.beyond[name] > UNIT_FRACTION * max(self.finite[name], 1):
+                index, value = self.first[name]
+                raise LogError(f"{self.source}:{index + 2}: column '{name}' = {value!r}: expected |{name}| <= "
+                               f"{check.limit:g} {unit} (a larger value {check.hint}); {self.beyond[name]} of "
+                               f"{self.finite[name]} samples are beyond it")
 
 
 def _parse(cell: str, source: str, line: int, column: str) -> float:
