@@ -10,6 +10,7 @@ estimators hold), and the source's notes say where, once it has been read.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Mapping
 
 import numpy as np
@@ -114,17 +115,22 @@ def grid_source(source: str, found: Mapping[str, GridChannel], sample_time: floa
 
 
 def _window_ticks(start: float, step: float, ticks: int, window: tuple[float | None, float | None]) -> tuple[int, int]:
-    """(first tick, number of ticks) of a grid ``start + step * k``, k < ``ticks``, inside ``window``."""
-    k = np.arange(ticks)
-    inside = np.ones(ticks, dtype=bool)
+    """(first tick, number of ticks) of a grid ``start + step * k``, k < ``ticks``, inside ``window``
+    (found arithmetically, then nudged so the test is the grid's own ``start + step * k``)."""
+    first, last = 0, ticks - 1
     if window[0] is not None:
-        inside &= start + step * k >= window[0]
+        first = max(first, math.ceil((window[0] - start) / step))
+        while first > 0 and start + step * (first - 1) >= window[0]:
+            first -= 1
+        while first <= last and start + step * first < window[0]:
+            first += 1
     if window[1] is not None:
-        inside &= start + step * k <= window[1]
-    if not inside.any():
-        return 0, 0
-    chosen = np.flatnonzero(inside)
-    return int(chosen[0]), int(chosen[-1] - chosen[0] + 1)
+        last = min(last, math.floor((window[1] - start) / step))
+        while last < ticks - 1 and start + step * (last + 1) <= window[1]:
+            last += 1
+        while last >= first and start + step * last > window[1]:
+            last -= 1
+    return (first, last - first + 1) if last >= first else (0, 0)
 
 
 def _joined(gaps: list[tuple[float, float]], step: float) -> list[tuple[float, float]]:
