@@ -211,7 +211,6 @@ def measure(mode: str, folder: Path, count: int) -> dict:
     """One campaign over the first ``count`` logs of ``folder`` (this process, a fresh cache unless
     the caller set one): wall time, runs computed and from the cache, samples, peak memory per
     worker (MB)."""
-    from bench.campaign import DATA
     from vsegen.harness.campaign.run import Settings, find_logs, run_campaign
     from vsegen.harness.jobs.pool import DaskPool
 
