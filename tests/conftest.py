@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from locations import DEFAULT_VEHICLE, REPO
+from locations import DEFAULT_VEHICLE, REPO, REVS
 
 from vsegen.harness.cli import main
 from vsegen.harness.jobs.memo import clear_all
@@ -21,6 +21,20 @@ from vsegen.model.params import VehicleConfig, parse_vehicle
 @pytest.fixture(scope="session")
 def config():
     return load_vehicle(DEFAULT_VEHICLE)
+
+
+@pytest.fixture(scope="session")
+def revs_lap():
+    """The Revs lap as a log (55,001 samples at 100 Hz, with its INS reference columns)."""
+    from vsegen.harness.logs.table import read_log
+
+    return read_log(REVS / "lap.csv.gz")
+
+
+@pytest.fixture(scope="session")
+def revs_car() -> VehicleConfig:
+    """The Revs car's base vehicle file: mass, geometry and I_z typed in, everything else a guess."""
+    return load_vehicle(REVS / "car.toml")
 
 
 @pytest.fixture(scope="session")

@@ -131,7 +131,7 @@ def test_a_log_that_excites_nothing_is_refused_line_by_line_with_exit_2(tmp_path
                     str(VEHICLES / "c_class.toml"), "--out", str(out))
     assert result.exit_code == 2, result.output
     lines = [line for line in result.stderr.strip().splitlines() if "units not checked" not in line]
-    assert len(lines) == 10 and all(line.startswith("vsegen: not identified: ") for line in lines)
+    assert len(lines) == 11 and all(line.startswith("vsegen: not identified: ") for line in lines)
     assert "units not checked" in result.stderr      # a crawl judges no unit, and says so
     assert any("no straight driving above 5 m/s" in line for line in lines)
     assert any("roll_gradient: no quasi-steady cornering above 2 m/s^2" in line for line in lines)
@@ -169,4 +169,19 @@ def test_a_gnss_lateral_velocity_reference_enters_the_fit_and_narrows_it(config)
         narrow, wide = with_gnss.estimates[name], without.estimates[name]
         assert narrow.high - narrow.low < wide.high - wide.low
         assert narrow.low < (cf if name.endswith("front") else cr) < narrow.high
-        assert "(with the beta reference)" in narrow.support
+        assert "(filter error, the reference lateral velocity)" in narrow.support
+
+
+def test_a_race_lap_pins_the_stiffnesses_and_the_friction_down_with_and_without_its_reference(revs_lap, revs_car):
+    """The first half of the Revs lap (data/real/revs_250lm): hardly any quasi-steady linear cornering,
+    29 % of it beyond 8 m/s^2. The filter-error fit identifies both stiffnesses and the friction from
+    the sensors alone; the INS reference narrows every interval."""
+    first = revs_lap.window(None, revs_lap["t"][0] + 275.0)
+    plain = identify([without_truth(first)], revs_car)
+    referenced = identify([first], revs_car)
+    assert referenced.uses_reference and not plain.uses_reference
+    for name in ("cornering_stiffness_front", "cornering_stiffness_rear", "tyre_friction"):
+        wide, narrow = plain.estimates[name], referenced.estimates[name]
+        assert narrow.high - narrow.low < wide.high - wide.low, name
+    assert 0.9 < plain.value("tyre_friction") < 1.2          # a dry track, racing tyres
+    assert plain.value("cornering_stiffness_rear") > plain.value("cornering_stiffness_front")  # understeer

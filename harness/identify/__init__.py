@@ -1,9 +1,10 @@
 """``vsegen identify``: a car's parameters and the estimators' car-specific settings from
-ordinary driving logs (no ground truth needed; ``beta_ref`` is used where a log has it).
+ordinary driving logs (no ground truth needed; ``beta_ref``/``vy_ref`` are used where every log has one).
 
 Order: sensor offsets and noise from straight driving, then the roll gradient and the stability
-factor from quasi-steady cornering (with the gyro offset removed), then C_f and C_r from the steer
-transients (with offsets, noise weights and the roll gradient applied). An offset is removed
+factor from quasi-steady cornering (with the gyro offset removed), then C_f, C_r and the tyres'
+friction from every sample at speed (filter error, :mod:`.bicycle_fit`; offsets, noise weights and
+the roll gradient applied). An offset is removed
 only where it is significant (its 95 % interval excludes 0): removing a noise-sized offset would
 only add its uncertainty to everything downstream. Each parameter is
 identified only where the logs excite it; otherwise it is refused with the reason.
@@ -35,6 +36,7 @@ class Identification:
 
     results: tuple[Estimate | Refusal, ...]
     uses_reference: bool
+    """Every log had a reference lateral velocity or sideslip, and the stiffness fit used it."""
 
     @property
     def estimates(self) -> dict[str, Estimate]:
@@ -66,4 +68,5 @@ def identify(logs: Sequence[Log], config: VehicleConfig) -> Identification:
     known = {r.name: r.value for r in results if isinstance(r, Estimate)}
     quantities = {**FALLBACK_NOISE, "roll_gradient": base_roll_gradient(config), **known, **offsets}
     results.extend(cornering_stiffness(logs, config.vehicle, quantities))
-    return Identification(tuple(results), any("beta_ref" in log or "vy_ref" in log for log in logs))
+    referenced = all("beta_ref" in log or "vy_ref" in log for log in logs)
+    return Identification(tuple(results), referenced)

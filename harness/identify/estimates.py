@@ -122,11 +122,41 @@ def fit(residual: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
     """(parameters, their covariance) minimising ||residual||^2, the covariance inflated by the
     residuals' serial correlation (N / N_eff)."""
     result = least_squares(residual, start, x_scale=scale if scale is not None else 1.0, method="lm")
+    return result.x, _covariance(result.fun, result.jac, len(start))
+
+
+JACKKNIFE_BLOCKS = 20
+"""At most this many blocks of neighbouring groups are left out in turn by :func:`fit_with_jackknife`."""
+
+
+def fit_with_jackknife(residual: Callable[[np.ndarray], np.ndarray], start: np.ndarray,
+                       groups: np.ndarray, bounds=(-np.inf, np.inf)) -> tuple[np.ndarray, np.ndarray]:
+    """(parameters, covariance) as :func:`fit`, each variance raised to the delete-a-block jackknife's
+    where that is larger: the spread between parts of the data (``groups``: an integer per residual,
+    neighbouring groups merged into at most JACKKNIFE_BLOCKS blocks) also covers model error, which
+    the residual noise alone does not show. Each left-out fit is one Gauss-Newton step from the
+    whole fit, p + (J'J - J_b'J_b)^-1 J_b' r_b, not a new optimisation. ``bounds`` as scipy's
+    ``least_squares`` takes them."""
+    result = least_squares(residual, start, bounds=bounds, method="trf")
     res, jac = result.fun, result.jac
-    dof = max(len(res) - len(start), 1)
-    sigma2 = float(res @ res) / dof
-    covariance = sigma2 * np.linalg.pinv(jac.T @ jac) / effective_fraction(res)
-    return result.x, covariance
+    covariance = _covariance(res, jac, len(start))
+    labels = np.unique(groups)
+    count = min(JACKKNIFE_BLOCKS, len(labels))
+    if count < 3:
+        return result.x, covariance
+    block = np.searchsorted(labels, groups) * count // len(labels)
+    normal = jac.T @ jac
+    left_out = np.array([result.x + np.linalg.lstsq(normal - jac[block == b].T @ jac[block == b],
+                                                    jac[block == b].T @ res[block == b], rcond=None)[0]
+                         for b in range(count)])
+    jackknife = (count - 1) / count * ((left_out - left_out.mean(axis=0)) ** 2).sum(axis=0)
+    return result.x, np.diag(np.maximum(np.diag(covariance), jackknife))
+
+
+def _covariance(res: np.ndarray, jac: np.ndarray, parameters: int) -> np.ndarray:
+    """The least-squares covariance, inflated by the residuals' serial correlation (N / N_eff)."""
+    sigma2 = float(res @ res) / max(len(res) - parameters, 1)
+    return sigma2 * np.linalg.pinv(jac.T @ jac) / effective_fraction(res)
 
 
 def interval(name: str, value: float, sd: float, unit: str, support: str) -> Estimate:

@@ -96,7 +96,9 @@ def report(ident: Identification, config: VehicleConfig, log_names: list[str], o
     if missing:
         lines += ["", "Left for review (not derived; `derived_for` not set, so generate/run will warn):", ""]
         lines += [f"* {m}" for m in missing]
-    lines += ["", "Offsets are reported, not written: remove them in the ECU's signal conditioning.",
+    lines += ["", "Offsets are reported, not written: remove them in the ECU's signal conditioning. "
+              "tyre_friction (the axles' peak force over their static load) is reported, not written: "
+              "no shipped estimator models tyre saturation yet.",
               "Intervals: least squares with serially correlated residuals (effective sample count); "
               "the stiffnesses' also cover the spread between driving stretches (jackknife)."]
     return "\n".join(lines) + "\n"

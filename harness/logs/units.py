@@ -150,10 +150,15 @@ def bicycle_yaw_rate(delta: np.ndarray, speed: np.ndarray, vehicle: Mapping[str,
     """The yaw rate of the linear 2-DOF bicycle model driven by ``delta`` (rad) at ``speed`` (m/s),
     stepped by its exact solution over each sample (stable at any speed); NaN inputs (and speeds
     below 1 m/s) hold it. The steady states and transition matrices of all samples are computed
-    at once; only the two-number recursion runs sample by sample."""
+    at once; only the two-number recursion runs sample by sample.
+
+    A vehicle file's first guesses may make the model oversteer (b C_r < a C_f), and an oversteering
+    model diverges above its critical speed: the rear stiffness is raised to neutral steer at least
+    (a C_f / b), which keeps the prediction within the check's wide band of any real car."""
     m, iz = vehicle["mass"], vehicle["yaw_inertia"]
     a, b = vehicle["cg_to_front_axle"], vehicle["cg_to_rear_axle"]
-    cf, cr = vehicle["cornering_stiffness_front"], vehicle["cornering_stiffness_rear"]
+    cf = vehicle["cornering_stiffness_front"]
+    cr = max(vehicle["cornering_stiffness_rear"], a * cf / b)
     delta, speed = np.asarray(delta, dtype=float), np.asarray(speed, dtype=float)
     used = np.isfinite(delta) & np.isfinite(speed) & (speed >= 1.0)
     v = np.where(used, speed, 1.0)

@@ -1,0 +1,50 @@
+"""The real data in data/real/: the converter reproduces the shipped log from the source files, and
+the shipped log reads as a log with its reference."""
+
+from __future__ import annotations
+
+import gzip
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+from locations import REVS
+
+CONVERTER = REVS / "convert.py"
+
+
+def _run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(CONVERTER), *args], capture_output=True, text=True, check=False)
+
+
+def test_the_converter_reproduces_the_shipped_lap_from_the_source_files(tmp_path: Path):
+    out = tmp_path / "head.csv.gz"
+    result = _run(str(REVS / "source_head"), str(out))
+    assert result.returncode == 0, result.stderr
+    converted = gzip.open(out, "rt").read().splitlines()
+    shipped = gzip.open(REVS / "lap.csv.gz", "rt").read().splitlines()
+    assert len(converted) == 201
+    assert converted == shipped[:201]
+
+
+def test_a_source_folder_with_files_of_unequal_length_is_one_line(tmp_path: Path):
+    source = tmp_path / "source"
+    source.mkdir()
+    for path in (REVS / "source_head").iterdir():
+        lines = path.read_text().splitlines()
+        (source / path.name).write_text("\n".join(lines[:-1] if path.name == "vy.txt" else lines) + "\n")
+    result = _run(str(source), str(tmp_path / "out.csv.gz"))
+    assert result.returncode == 1
+    assert result.stderr.strip().count("\n") == 0
+    assert "differ in length" in result.stderr and "vy.txt 199" in result.stderr
+    assert not (tmp_path / "out.csv.gz").exists()
+
+
+def test_the_shipped_lap_is_a_log_with_its_reference(revs_lap):
+    assert len(revs_lap) == 55001
+    assert revs_lap.sample_time == np.float64(revs_lap.sample_time) and abs(revs_lap.sample_time - 0.01) < 1e-9
+    beta = np.arctan2(revs_lap["vy_ref"], revs_lap["vx_ref"])
+    assert np.max(np.abs(beta - revs_lap["beta_ref"])) < 1e-6
+    # the INS yaw rate turns with the path: positive left (ISO 8855), as a_y / v_x
+    assert np.corrcoef(revs_lap["r"], revs_lap["ay"] / revs_lap["vx"])[0, 1] > 0.95
