@@ -5,7 +5,7 @@ calibration value at an address (here an entry of the const calibration struct),
 MEASUREMENT one variable they may read while the ECU runs (here the estimator's state and
 outputs). The generated file links every object to its C symbol with ``SYMBOL_LINK "symbol"
 offset`` (ASAP2 1.7) and leaves the addresses 0 until ``vsegen a2l --elf`` fills them from the
-linked firmware (harness/a2l_link.py).
+linked firmware (harness/target/a2l_link.py).
 
 Layout rules the offsets rely on: the calibration struct and the state hold ``real`` members only
 (4 or 8 bytes, back to back); the outputs hold reals and ``int`` members (4 bytes: ``status``, a

@@ -89,7 +89,7 @@ def explain_differences(real: str, flips: bool, crossings: bool = False) -> None
                   f"signal's scale, {PEAK_FRACTION:g} x peak |signal|); tolerance "
                   f"{tolerance.relative:.0e} for {real}, wider where an estimator amplifies its "
                   "reference's rounding (the unscented filters, ekf_rls's stiffness rate, "
-                  "arx_dual_kf's random-walk parameters; column 'tolerance'; harness/compare.py)")
+                  "arx_dual_kf's random-walk parameters; column 'tolerance'; harness/verify/compare.py)")
     if flips:
         console.print("resampling flips: steps of a float particle filter whose resampling chose "
                       "another particle than the reference because a point lay within float "
