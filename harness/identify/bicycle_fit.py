@@ -1,7 +1,7 @@
 """Axle cornering stiffnesses C_f, C_r and the tyres' friction from the whole log (filter error).
 
 Model: the bicycle model (docs/conventions.md; mass, a, b, I_z are the user's) with saturating
-axles, :func:`axle_force`: F_y = F_peak tanh(C alpha / F_peak), F_peak = mu F_z (the axle's static
+axles, F_y = F_peak tanh(C alpha / F_peak), F_peak = mu F_z (the axle's static
 load). An extended Kalman filter of that model, driven by the logged steer angle and speed, predicts
 the (offset- and roll-corrected) yaw rate and lateral acceleration one sample ahead, and C_f, C_r and
 mu are chosen to minimise its innovations (the filter-error method of flight-test identification).
@@ -51,7 +51,7 @@ MAX_RELATIVE_HALF_WIDTH = 0.2
 STIFFNESS_RANGE = (0.2, 5.0)
 """The fitted stiffnesses stay within these factors of the base file's."""
 NEAR_LIMIT = 0.8
-"""mu is claimed only where the logs' lateral acceleration (0.3 s means) reaches this share of
+"""mu is claimed only where the logs' lateral acceleration (``segments.SMOOTHING`` means) reaches this share of
 mu g: below, the fitted saturation only bends the curve where the tyres are still far from their
 peak, and a smooth tanh bends earlier than a real tyre (a dry-road car driven to 0.6 g 'shows' mu 0.75)."""
 FRICTION_RANGE = (0.1, 3.0)
@@ -59,12 +59,6 @@ FRICTION_RANGE = (0.1, 3.0)
 LINEAR = 1e3
 """Friction coefficient that stands for 'never saturates' (the linear bicycle model)."""
 NAMES = ("cornering_stiffness_front", "cornering_stiffness_rear")
-
-
-def axle_force(alpha, stiffness, peak):
-    """Lateral force of an axle (N) at slip angle ``alpha`` (rad): ``stiffness`` (N/rad) at small
-    slip, saturating smoothly at +-``peak`` (N)."""
-    return peak * np.tanh(stiffness * alpha / peak)
 
 
 def axle_loads(vehicle: Mapping[str, float]) -> tuple[float, float]:
@@ -92,7 +86,8 @@ def cornering_stiffness(logs: Sequence[Log], vehicle: Mapping[str, float], quant
     p, cov = fit_with_jackknife(_residual(vehicle, nominal, pieces, quantities, None), np.zeros(3),
                                 pieces["groups"], bounds)
     mu, mu_sd = float(np.exp(p[2])), float(np.exp(p[2]) * np.sqrt(cov[2, 2]))
-    peak = max(float(np.abs(segments.smoothed(np.nan_to_num(log["ay"]), round(0.3 / log.sample_time))[mask]).max())
+    window = round(segments.SMOOTHING / driving.logs[0].sample_time)
+    peak = max(float(np.abs(segments.smoothed(np.nan_to_num(log["ay"]), window)[mask]).max())
                for log, mask in zip(driving.logs, driving.masks) if mask.any())
     if Z95 * mu_sd <= MAX_RELATIVE_HALF_WIDTH * mu and peak >= NEAR_LIMIT * mu * GRAVITY:
         friction: Estimate | Refusal = interval("tyre_friction", mu, mu_sd, "-", support)
