@@ -30,7 +30,7 @@ import numpy as np
 from bench import REPO, textbook_kf
 from bench.document import provenance
 from bench.figures import save_figure
-from vsegen.harness.logs.table import TRUTH, Log, read_log, write_log
+from vsegen.harness.logs.table import Log, read_log, write_log
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import silent_error_time
 
@@ -66,10 +66,6 @@ def split(lap: Log) -> tuple[Log, Log]:
             Log({k: v[cut:] for k, v in lap.columns.items()}, "scoring.csv"))
 
 
-def without_reference(log: Log) -> Log:
-    return Log({k: v for k, v in log.columns.items() if k not in TRUTH}, log.source)
-
-
 def vsegen(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run(["vsegen", *args], cwd=cwd, capture_output=True, text=True, check=False)
 
@@ -77,7 +73,7 @@ def vsegen(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 def identify(work: Path, calibration: Log) -> dict[str, tuple[Path, str]]:
     """Per calibration: (the identified vehicle file, identify's printed lines)."""
     out = {}
-    for name, log in (("no reference", without_reference(calibration)), ("with reference", calibration)):
+    for name, log in (("no reference", calibration.without_truth()), ("with reference", calibration)):
         stem = name.replace(" ", "_")
         write_log(log, work / f"calibration_{stem}.csv")
         done = vsegen("identify", "--log", f"calibration_{stem}.csv", "--vehicle", str(DATA / "car.toml"),

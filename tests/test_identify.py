@@ -13,7 +13,7 @@ from scipy.signal import lsim
 
 from vsegen.harness.identify import identify
 from vsegen.harness.identify.vehicle_file import identified_vehicle_file
-from vsegen.harness.logs.table import TRUTH, Log, write_log
+from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.project.vehicles import load_vehicle, with_settings
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.bicycle import GRAVITY
@@ -29,10 +29,6 @@ ORDINARY_DRIVING = (
 )
 """A handful of ordinary manoeuvres, as a test drive would have them."""
 OTHER = {"c_class": "rwd_saloon", "rwd_saloon": "c_class"}
-
-
-def without_truth(log: Log) -> Log:
-    return Log({k: v for k, v in log.columns.items() if k not in TRUTH}, log.source)
 
 
 def plant_axle_stiffness(config) -> tuple[float, float]:
@@ -65,7 +61,7 @@ def start_file(car: str) -> tuple[str, object]:
 def test_recovers_the_roll_gradient_and_the_axle_stiffnesses_without_ground_truth(car):
     truth = load_vehicle(VEHICLES / f"{car}.toml")
     text, start = start_file(car)
-    logs = [without_truth(case.simulate(truth, 100.0, 1)) for case in ORDINARY_DRIVING]
+    logs = [case.simulate(truth, 100.0, 1).without_truth() for case in ORDINARY_DRIVING]
     ident = identify(logs, start)
     assert not ident.uses_reference
     k = ident.estimates["roll_gradient"]
@@ -178,7 +174,7 @@ def test_a_race_lap_pins_the_stiffnesses_and_the_friction_down_with_and_without_
     the sensors alone; the INS reference narrows the stiffnesses' intervals (not the friction's: the
     limit is as visible in a_y and r as in the reference)."""
     first = revs_lap.window(None, revs_lap["t"][0] + 275.0)
-    plain = identify([without_truth(first)], revs_car)
+    plain = identify([first.without_truth()], revs_car)
     referenced = identify([first], revs_car)
     assert referenced.uses_reference and not plain.uses_reference
     assert "tyre_friction" in referenced.estimates

@@ -14,7 +14,7 @@ from vsegen.harness.cli.common import (
     user_errors,
     vehicle_config,
 )
-from vsegen.harness.logs.table import TRUTH, write_log
+from vsegen.harness.logs.table import write_log
 from vsegen.harness.sim.scenarios import SCENARIOS, Case, parse_option
 
 
@@ -42,7 +42,7 @@ def simulate(scenario: str, vehicle: Path | None, options: tuple[str, ...], seed
         log = case.simulate(config, rate, seed,
                             progress=lambda done: progress.update(task, completed=done))
     if no_truth:
-        log.columns = {k: v for k, v in log.columns.items() if k not in TRUTH}
+        log = log.without_truth()
     write_log(log, out)
     report = ", ".join(f"{k}: {v}" for k, v in log.notes.items())
     console.print(f"wrote {out} ({len(log)} samples, {log['t'][-1]:.2f} s): {report}")

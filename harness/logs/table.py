@@ -93,6 +93,11 @@ class Log:
                            f"expected at least 2 inside {float(t[0]):.6g} .. {float(t[-1]):.6g} s")
         return Log({name: column[keep] for name, column in self.columns.items()}, self.source, dict(self.notes))
 
+    def without_truth(self) -> Log:
+        """The log without its ground-truth columns (:data:`TRUTH`): what a car without a reference
+        sensor records."""
+        return Log({k: v for k, v in self.columns.items() if k not in TRUTH}, self.source, dict(self.notes))
+
     def missing(self, names: tuple[str, ...]) -> list[str]:
         """The ``names`` this log cannot provide (absent and without an ABSENT_MEANS value)."""
         return [n for n in names if n not in self.columns and n not in ABSENT_MEANS]
