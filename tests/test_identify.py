@@ -168,6 +168,7 @@ def test_a_gnss_lateral_velocity_reference_enters_the_fit_and_narrows_it(config)
         assert "(filter error, the reference lateral velocity)" in narrow.support
 
 
+@pytest.mark.slow   # two 275-s filter-error fits, 17 s: the default suite is at its 5-min budget
 def test_a_race_lap_pins_the_stiffnesses_and_the_friction_down_with_and_without_its_reference(revs_lap, revs_car):
     """The first half of the Revs lap (data/real/revs_250lm): hardly any quasi-steady linear cornering,
     29 % of it beyond 8 m/s^2. The filter-error fit identifies both stiffnesses and the friction from

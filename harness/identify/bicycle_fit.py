@@ -95,7 +95,7 @@ def cornering_stiffness(logs: Sequence[Log], vehicle: Mapping[str, float], quant
         friction = Refusal("tyre_friction", f"the logs do not reach the tyres' limit (|a_y| up to {peak:.1f} "
                                             f"m/s^2 for mu {mu:.2f} +-{100 * Z95 * mu_sd / mu:.0f} % (95 %)); "
                                             "the linear model is fitted")
-        p, cov = fit_with_jackknife(_residual(vehicle, nominal, pieces, quantities, LINEAR), np.zeros(2),
+        p, cov = fit_with_jackknife(_residual(vehicle, nominal, pieces, quantities, LINEAR), p[:2],
                                     pieces["groups"], (bounds[0][:2], bounds[1][:2]))
     return [*(_stiffness(name, nominal[i], p[i], cov[i, i], support) for i, name in enumerate(NAMES)), friction]
 
