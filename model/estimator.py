@@ -331,7 +331,7 @@ class Tunable:
 
 
 IDENTIFIED = {"roll_gradient": "rad/(m/s^2)", "gyro_noise": "rad/s", "ay_noise": "m/s^2",
-              "ax_noise": "m/s^2"}
+              "ax_noise": "m/s^2", "tyre_friction": "-"}
 """Car and sensor quantities ``vsegen identify`` estimates from logs, by name, with their units."""
 
 
@@ -343,12 +343,17 @@ class Derived:
 
     quantities: tuple[str, ...]
     value: Callable[..., Any]
+    optional: bool = False
+    """Only logs of some driving show it (the tyres' friction: driving at the limit): not derived,
+    the file keeps its value and the others' ``derived_for`` still holds."""
 
 
 ROLL_GRADIENT = {"roll_gradient": Derived(("roll_gradient",), lambda k: k)}
 """The roll correction's roll gradient is the car's."""
 KF_MEASUREMENT_NOISE = {"measurement_noise": Derived(("ay_noise", "gyro_noise"), lambda ay, r: [ay**2, r**2])}
 """R = diag(sigma_ay^2, sigma_r^2) of a Kalman filter measuring [a_y, r]."""
+TYRE_FRICTION = {"tyre_friction": Derived(("tyre_friction",), lambda mu: [mu, mu], optional=True)}
+"""A Kalman filter's saturating tyres carry the friction identify fits (both axles alike)."""
 GYRO_VARIANCE = {"measurement_noise": Derived(("gyro_noise",), lambda r: r**2)}
 """R = sigma_r^2 of a filter measuring the yaw rate."""
 INERTIAL_SIGMAS = {"measurement_noise": Derived(("ax_noise", "ay_noise", "gyro_noise"),

@@ -56,13 +56,20 @@ def ekf_predict(x_pred: ca.SX, P: ca.SX, F: ca.SX, Qd: ca.SX):
 def update_joseph(x: ca.SX, P: ca.SX, z: ca.SX, C: ca.SX, D: ca.SX, u: ca.SX, R: ca.SX):
     """Measurement update of z = C x + D u + v, v ~ N(0, R), with the Joseph-form covariance.
 
-    Returns (x+, P+, innovation):  nu = z - C x - D u,  S = C P C' + R,  K = P C' S^-1,
-    x+ = x + K nu,  P+ = (I - K C) P (I - K C)' + K R K'.
+    Returns (x+, P+, innovation) with the innovation nu = z - C x - D u (see :func:`correct`).
     """
     innovation = z - ca.mtimes(C, x) - ca.mtimes(D, u)
-    S = ca.mtimes([C, P, C.T]) + R
-    K = ca.mtimes([P, C.T, ca.inv(S)])
-    x_new = x + ca.mtimes(K, innovation)
-    I_KC = ca.SX.eye(P.shape[0]) - ca.mtimes(K, C)
-    P_new = ca.mtimes([I_KC, P, I_KC.T]) + ca.mtimes([K, R, K.T])
+    x_new, P_new = correct(x, P, innovation, C, R)
     return x_new, P_new, innovation
+
+
+def correct(x: ca.SX, P: ca.SX, innovation: ca.SX, H: ca.SX, R: ca.SX):
+    """Measurement update from the ``innovation`` z - h(x) of a measurement whose Jacobian in x is
+    ``H`` (the linear C, or an EKF's linearisation), noise covariance ``R``, Joseph form:
+    S = H P H' + R,  K = P H' S^-1,  x+ = x + K nu,  P+ = (I - K H) P (I - K H)' + K R K'."""
+    S = ca.mtimes([H, P, H.T]) + R
+    K = ca.mtimes([P, H.T, ca.inv(S)])
+    x_new = x + ca.mtimes(K, innovation)
+    I_KH = ca.SX.eye(P.shape[0]) - ca.mtimes(K, H)
+    P_new = ca.mtimes([I_KH, P, I_KH.T]) + ca.mtimes([K, R, K.T])
+    return x_new, P_new

@@ -180,14 +180,16 @@ def spd_matrix(key: str, size: int, unit: str, doc: str = "") -> Field:
 
 
 def diagonal(key: str, size: int, unit: str, doc: str = "", zero_allowed: bool = False,
-             default: tuple[float, ...] | None = None, minimum: float = 0.0) -> Field:
+             default: tuple[float, ...] | None = None, minimum: float = 0.0,
+             entries: str = "the diagonal") -> Field:
     """The ``size`` diagonal entries of a diagonal covariance, each > 0 (or >= 0 when
-    ``zero_allowed``; at least ``minimum`` when given, e.g. a noise sigma the code divides by).
+    ``zero_allowed``; at least ``minimum`` when given, e.g. a noise sigma the code divides by), or
+    other positive numbers (``entries`` says what they are, e.g. "front, rear").
     Normalised to a tuple of floats."""
     low = (">=", minimum) if minimum > 0.0 else (">=" if zero_allowed else ">", 0.0)
     bound = f"{low[0]} {low[1]:g}"
     high = physical_maximum(unit)
-    expected = f"a list of {size} numbers {bound} and <= {high:g} ({unit}), the diagonal"
+    expected = f"a list of {size} numbers {bound} and <= {high:g} ({unit}), {entries}"
 
     def check(value: Any) -> tuple[float, ...]:
         if not isinstance(value, list) or len(value) != size:
@@ -362,6 +364,12 @@ LOW_SPEED_FIELDS: tuple[Field, ...] = (
 )
 LOW_SPEED_RULES: tuple[Rule, ...] = (above("vx_resume", "vx_min", "a speed", "m/s (hysteresis)"),)
 
+TYRE_MODELS = ("linear", "saturating")
+"""The Kalman filter's axle-force models (model.tyres)."""
+MINIMUM_FRICTION = 0.05
+"""The lowest tyre_friction a file may give: below wet ice (about 0.1), and the saturating model's
+C alpha / (mu F_z) stays finite."""
+
 KF_FIELDS: tuple[Field, ...] = (
     choice("discretisation", DISCRETISATIONS, "method turning A, B into Phi, Gamma"),
     spd_matrix("process_noise", 2, "continuous PSD of [vy, r]: (m/s^2)^2*s, (rad/s^2)^2*s",
@@ -369,6 +377,12 @@ KF_FIELDS: tuple[Field, ...] = (
     spd_matrix("measurement_noise", 2, "[ay, r]: (m/s^2)^2, (rad/s)^2", "R"),
     spd_matrix("initial_covariance", 2, "[vy, r]: (m/s)^2, (rad/s)^2",
                "P_0, also the covariance after a hold and at a kinematic-to-dynamic hand-off"),
+    choice("tyre_model", TYRE_MODELS, "axle forces of the model: \"linear\" F = C alpha (the paper) | "
+           "\"saturating\" F = mu F_z tanh(C alpha / (mu F_z)), an extended KF right at the friction limit",
+           default="linear"),
+    diagonal("tyre_friction", 2, "-", "[front, rear] peak lateral axle force over the axle's static load "
+             "(the tyres' friction; tyre_model = \"saturating\" only)", default=(1.0, 1.0),
+             minimum=MINIMUM_FRICTION, entries="front, rear"),
     *LOW_SPEED_FIELDS,
 )
 """The 2-DOF Kalman filter's settings, shared by every estimator that runs it."""

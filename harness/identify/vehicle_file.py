@@ -39,7 +39,8 @@ def missing_settings(config: VehicleConfig, ident: Identification) -> list[str]:
     """The car-specific settings of ``config``'s estimators that the logs could not derive."""
     derived = derived_settings(config, ident)
     return [f"[estimator.{name}] {key}" for name in config.estimators
-            for key in DEFINITIONS[name].derived if key not in derived.get(name, {})]
+            for key, rule in DEFINITIONS[name].derived.items()
+            if key not in derived.get(name, {}) and not rule.optional]
 
 
 def identified_vehicle_file(text: str, config: VehicleConfig, ident: Identification) -> str:
@@ -97,8 +98,8 @@ def report(ident: Identification, config: VehicleConfig, log_names: list[str], o
         lines += ["", "Left for review (not derived; `derived_for` not set, so generate/run will warn):", ""]
         lines += [f"* {m}" for m in missing]
     lines += ["", "Offsets are reported, not written: remove them in the ECU's signal conditioning. "
-              "tyre_friction (the axles' peak force over their static load) is reported, not written: "
-              "no shipped estimator models tyre saturation yet.",
+              "tyre_friction (the axles' peak force over their static load) is written to every Kalman "
+              "filter's settings; it acts where tyre_model = \"saturating\".",
               "Intervals: least squares with serially correlated residuals (effective sample count); "
               "the stiffnesses' also cover the spread between driving stretches (jackknife)."]
     return "\n".join(lines) + "\n"

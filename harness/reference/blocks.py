@@ -92,12 +92,16 @@ def kf_predict(x, P, Phi, Gamma, u, Qd):
 
 
 def kf_update(x, P, z, C, D, u, R):
-    """Joseph-form measurement update."""
-    nu = z - C @ x - D @ u
-    S = C @ P @ C.T + R
-    K = P @ C.T @ np.linalg.inv(S)
-    I_KC = np.eye(len(x)) - K @ C
-    return x + K @ nu, I_KC @ P @ I_KC.T + K @ R @ K.T
+    """Joseph-form measurement update of z = C x + D u + v."""
+    return kf_correct(x, P, z - C @ x - D @ u, C, R)
+
+
+def kf_correct(x, P, innovation, H, R):
+    """Joseph-form update from an innovation whose measurement has the Jacobian H."""
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    I_KH = np.eye(len(x)) - K @ H
+    return x + K @ innovation, I_KH @ P @ I_KH.T + K @ R @ K.T
 
 
 def upper_names(prefix: str, names: tuple[str, ...]) -> tuple[str, ...]:

@@ -1,5 +1,6 @@
-"""Reference kf2dof: 2-DOF bicycle model + linear Kalman filter (docs/methods.md, seed 000 §2.5,
-§2.8-2.10, run alone), the project's hold rule, ZOH prediction with the previous sample's inputs.
+"""Reference kf2dof: 2-DOF bicycle model + Kalman filter (docs/methods.md, seed 000 §2.5,
+§2.8-2.10, run alone; harness.reference.bicycle_kf), the project's hold rule, prediction with the
+previous sample's inputs.
 """
 
 from __future__ import annotations
@@ -8,7 +9,7 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import blocks, monitors
+from vsegen.harness.reference import bicycle_kf, blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
 OUTPUTS = ("beta", "vy", "r", "status")
@@ -64,17 +65,10 @@ def step(config, state, u):
     def clamp(v):
         return min(max(v, s["vx_min"]), vx_max)
 
-    A, B, _, _ = blocks.bicycle(config.vehicle, clamp(vx_prev))
-    Phi, Gamma = blocks.discretise(s["discretisation"], A, B, T)
-    Qd = np.array(s["process_noise"]) * T
-    x = np.array([vy, r])
-    P = np.array([[p11, p12], [p12, p22]])
-    x, P = blocks.kf_predict(x, P, Phi, Gamma, np.array([delta_prev]), Qd)
     vx = clamp(inputs["vx"])
-    _, _, C, D = blocks.bicycle(config.vehicle, vx)
-    z = np.array([inputs["ay"], inputs["r"]])
-    innovation = z - C @ x - D @ np.array([inputs["delta"]])
-    x, P = blocks.kf_update(x, P, z, C, D, np.array([inputs["delta"]]), np.array(s["measurement_noise"]))
+    x, P, innovation = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
+                                       np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
+                                       inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
     status |= blocks.beyond_linear_range(inputs["ay"], s)
     updates, flags = monitors.step(entries, inputs, ok, s, T, INPUTS, config.vehicle)
     entries.update(updates)

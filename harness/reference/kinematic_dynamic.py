@@ -9,7 +9,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.signal
 
-from vsegen.harness.reference import blocks, monitors
+from vsegen.harness.reference import bicycle_kf, blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1
@@ -139,19 +139,11 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
 
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
-    """The 2-DOF KF: predict with the previous inputs, update with z = [a_y,m - ay_offset, r_k];
-    returns (x, P, the prior innovation z - C x- - D delta)."""
-    s = config.settings(table)
-    T = config.sample_time
-    A, B, _, _ = blocks.bicycle(config.vehicle, clamp(config, table, vx_prev))
-    Phi, Gamma = blocks.discretise(s["discretisation"], A, B, T)
-    xk, P = blocks.kf_predict(np.array([vy, r]), P, Phi, Gamma, np.array([delta_prev]),
-                              np.array(s["process_noise"]) * T)
-    _, _, C, D = blocks.bicycle(config.vehicle, clamp(config, table, u[1]))
+    """The 2-DOF KF (harness.reference.bicycle_kf): predict with the previous inputs, update with
+    z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-))."""
     z = np.array([roll_corrected(config, table, u[2]) - ay_offset, r_k])
-    innovation = z - C @ xk - D @ np.array([u[0]])
-    x_new, P_new = blocks.kf_update(xk, P, z, C, D, np.array([u[0]]), np.array(s["measurement_noise"]))
-    return x_new, P_new, innovation
+    return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, np.array([vy, r]), P,
+                           delta_prev, clamp(config, table, vx_prev), u[0], clamp(config, table, u[1]), z)
 
 
 def beta(config, table, vy, vx):

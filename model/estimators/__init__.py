@@ -38,7 +38,7 @@ def underived_warning(config: VehicleConfig, name: str) -> str | None:
     """A one-line warning when ``name``'s car-specific settings (``Definition.derived``) were not
     derived for ``config``'s [vehicle] table (``[estimator] derived_for`` differs from its
     fingerprint, e.g. a file copied from another car with only [vehicle] changed); else None."""
-    derived = DEFINITIONS[name].derived
+    derived = [key for key, rule in DEFINITIONS[name].derived.items() if not rule.optional]
     fingerprint = config.vehicle_fingerprint()
     if not derived or name not in config.estimators or config.derived_for == fingerprint:
         return None

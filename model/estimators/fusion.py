@@ -20,6 +20,7 @@ from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
     LOW_FRICTION,
     ROLL_GRADIENT,
+    TYRE_FRICTION,
     Definition,
     Estimator,
     Tunable,
@@ -120,7 +121,7 @@ def build(params: Parameters) -> Estimator:
                                    seed.initial_state(u), next_state, output, params, decisions)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
                      "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, structure, params,
-                     seed.notes())
+                     seed.notes(), kf2dof.rounding_gain(params.numeric.settings(NAME)))
 
 
 DEFINITIONS = (Definition(
@@ -130,4 +131,5 @@ DEFINITIONS = (Definition(
              "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE),
-    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **consistency.derived(kf2dof.CHANNELS)}),)
+    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION,
+             **consistency.derived(kf2dof.CHANNELS)}),)

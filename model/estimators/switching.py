@@ -30,6 +30,7 @@ from vsegen.model.estimator import (
     KF_MEASUREMENT_NOISE,
     LOW_FRICTION,
     ROLL_GRADIENT,
+    TYRE_FRICTION,
     Definition,
     Estimator,
     Tunable,
@@ -215,7 +216,8 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
-                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
+                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes(),
+                     kf2dof.rounding_gain(params.numeric.settings(NAME)))
 
 
 DEFINITIONS = (Definition(
@@ -225,4 +227,4 @@ DEFINITIONS = (Definition(
              "hysteresis": Tunable(0.0, 1.0, log=False, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED),
-    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE}),)
+    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION}),)

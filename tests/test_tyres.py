@@ -1,0 +1,99 @@
+"""The Kalman filter's saturating tyre model (model.tyres, tyre_model = "saturating"): its Jacobians,
+its linear limit, its bound, its C against the reference, and what it buys on the real race lap."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+from locations import REVS
+
+from vsegen.harness.project.vehicles import with_settings
+from vsegen.harness.reference import bicycle_kf
+from vsegen.harness.reference import kf2dof as reference
+from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.verify.equivalence import verify_estimator
+from vsegen.model.bicycle import GRAVITY
+from vsegen.model.calibration import baked
+from vsegen.model.estimators.kf2dof import dynamic_update
+from vsegen.model.params import parse_vehicle
+from vsegen.model.tyres import saturating_bicycle
+
+
+def saturating(text: str, friction=(1.0, 1.0), tables=("kf2dof",), name="c_class") -> str:
+    """``text`` with the saturating tyre model in each of ``tables``."""
+    for table in tables:
+        text = text.replace(f"[estimator.{table}]\n", f'[estimator.{table}]\ntyre_model = "saturating"\n'
+                                                      f"tyre_friction = {list(friction)}\n", 1)
+    return text
+
+
+def test_jacobians_are_the_derivatives_of_the_model(config):
+    x, delta, vx = ca.SX.sym("x", 2), 0.03, 17.0
+    model = saturating_bicycle(config.vehicle, (0.9, 1.1), x, delta, vx)
+    jacobian = ca.Function("j", [x], [model.A - ca.jacobian(model.f, x),
+                                      model.H - ca.jacobian(ca.vertcat(model.ay, x[1]), x)])
+    for point in ([0.0, 0.0], [0.4, 0.2], [-1.5, 0.6]):     # linear, near and far beyond the peak
+        for gap in jacobian(point):
+            assert np.abs(np.array(gap)).max() < 1e-12
+
+
+def test_the_reference_twin_computes_the_same_model(config):
+    x = ca.SX.sym("x", 2)
+    model = ca.Function("m", [x], [saturating_bicycle(config.vehicle, (0.8, 1.2), x, 0.05, 12.0).f])
+    for point in ([0.1, 0.3], [-0.9, -0.4]):
+        f, _, _, _ = bicycle_kf.saturating(config.vehicle, (0.8, 1.2), np.array(point), 0.05, 12.0)
+        np.testing.assert_allclose(np.array(model(point)).ravel(), f, rtol=1e-14)
+
+
+def test_lateral_force_is_bounded_by_the_friction(config):
+    """However large the slip, a_y stays within (mu_f F_zf + mu_r F_zr) / m."""
+    v = config.vehicle
+    l = v["cg_to_front_axle"] + v["cg_to_rear_axle"]
+    mu_f, mu_r = 0.7, 0.9
+    bound = GRAVITY * (mu_f * v["cg_to_rear_axle"] + mu_r * v["cg_to_front_axle"]) / l
+    for vy in (-30.0, -3.0, 3.0, 30.0):
+        _, _, ay, _ = bicycle_kf.saturating(v, (mu_f, mu_r), np.array([vy, 0.0]), 0.0, 10.0)
+        assert abs(ay) <= bound * (1 + 1e-12)
+    _, _, ay, _ = bicycle_kf.saturating(v, (mu_f, mu_r), np.array([-30.0, 0.0]), 0.0, 10.0)
+    assert ay == pytest.approx(bound, rel=1e-6)
+
+
+@pytest.mark.parametrize("method", ["zoh", "euler", "tustin"])
+def test_with_unbounded_friction_the_extended_kf_is_the_linear_kf(vehicle_text, method):
+    """The EKF's x + Gamma_I f(x) with linear forces is Phi x + Gamma delta, for every method."""
+    text = vehicle_text.replace('discretisation = "zoh"', f'discretisation = "{method}"', 1)
+    linear = dynamic_update(baked(parse_vehicle(text, "linear.toml", "c_class")))
+    extended = dynamic_update(baked(parse_vehicle(saturating(text, friction=(1e6, 1e6)), "sat.toml",
+                                                  "c_class")))
+    args = dict(x=[0.3, 0.12], P=[0.02, 0.001, 0.003], delta_prev=0.02, vx_prev=18.0, delta=0.025,
+                vx=18.2, ay=2.5, r_meas=0.13)
+    a, b = linear(**args), extended(**args)
+    for key in ("x_next", "P_next", "innovation"):
+        np.testing.assert_allclose(np.array(b[key]), np.array(a[key]), rtol=1e-9, atol=1e-15)
+
+
+def test_generated_c_equals_the_reference_on_every_scenario(vehicle_text):
+    """kf2dof, switching and fusion with saturating tyres (double, baked; the other forms are in the
+    slow suite's shipped-vehicle matrix)."""
+    config = parse_vehicle(saturating(vehicle_text), "saturating.toml", "c_class")
+    results = verify_estimator(config, "kf2dof")
+    assert results and all(r.ok for r in results), [r for r in results if not r.ok]
+
+
+def test_right_at_the_limit_of_the_real_lap(revs_lap):
+    """On a hard minute of the Revs lap's scoring half (|a_y| beyond 10 m/s^2), the same stiffnesses
+    (about what identify finds with the reference on the first half) score a smaller beta error with
+    saturating axles than with linear ones."""
+    base = with_settings((REVS / "car.toml").read_text(), "vehicle", cornering_stiffness_front=70000.0,
+                         cornering_stiffness_rear=125000.0)
+    base = with_settings(base, "estimator.kf2dof", tyre_friction=[1.05, 1.1])
+    linear = base.replace('tyre_model = "saturating"', 'tyre_model = "linear"')
+    piece = revs_lap.window(340.0, 400.0)
+    inputs = piece.matrix(reference.INPUTS)
+    errors = {}
+    for model, text in (("linear", linear), ("saturating", base)):
+        outputs, _ = run_reference(reference, parse_vehicle(text, "car.toml", "revs"), inputs)
+        errors[model] = float(np.sqrt(np.mean((outputs[:, 0] - piece["beta_ref"]) ** 2)))
+    assert np.abs(piece["ay"]).max() > 10.0
+    assert errors["saturating"] < 0.8 * errors["linear"], errors
