@@ -59,6 +59,9 @@ def saturating_bicycle(vehicle: Mapping[str, float], friction: Sequence, x: ca.S
 
 
 def _axle(stiffness, peak, slip):
-    """(F, dF/dalpha) of F = peak tanh(stiffness slip / peak)."""
-    t = ca.tanh(stiffness / peak * slip)
-    return peak * t, stiffness * (1 - t * t)
+    """(F, dF/dalpha) of F = peak tanh(u), u = stiffness slip / peak. The slope is written
+    stiffness / cosh(u)^2, not stiffness (1 - tanh(u)^2): beyond the peak tanh(u) rounds to within an
+    ulp of 1 and 1 - tanh^2 would keep only its rounding."""
+    u = stiffness / peak * slip
+    sech = 1 / ca.cosh(u)
+    return peak * ca.tanh(u), stiffness * (sech * sech)

@@ -13,6 +13,7 @@ from vsegen.harness.reference import bicycle_kf
 from vsegen.harness.reference import kf2dof as reference
 from vsegen.harness.reference.loop import run_reference
 from vsegen.harness.verify.equivalence import verify_estimator
+from vsegen.harness.verify.fuzz import fuzz_estimator
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import baked
 from vsegen.model.estimators.kf2dof import dynamic_update
@@ -73,12 +74,33 @@ def test_with_unbounded_friction_the_extended_kf_is_the_linear_kf(vehicle_text, 
         np.testing.assert_allclose(np.array(b[key]), np.array(a[key]), rtol=1e-9, atol=1e-15)
 
 
-def test_generated_c_equals_the_reference_on_every_scenario(vehicle_text):
-    """kf2dof, switching and fusion with saturating tyres (double, baked; the other forms are in the
-    slow suite's shipped-vehicle matrix)."""
-    config = parse_vehicle(saturating(vehicle_text), "saturating.toml", "c_class")
-    results = verify_estimator(config, "kf2dof")
+KF_ESTIMATORS = ("kf2dof", "switching", "fusion")
+FORMS = [("double", "baked"), ("float", "baked"), ("double", "calibratable"), ("float", "calibratable")]
+
+
+@pytest.fixture(scope="module")
+def saturating_car(vehicle_text):
+    """The default car with saturating tyres in every Kalman filter, the rear's friction below the
+    front's (the model's spin mode amplifies rounding most)."""
+    return parse_vehicle(saturating(vehicle_text, (1.0, 0.9), KF_ESTIMATORS), "saturating.toml", "c_class")
+
+
+@pytest.mark.parametrize("name,real,params", [
+    ("kf2dof", "double", "baked"), ("kf2dof", "float", "calibratable"),
+    *(pytest.param("kf2dof", real, params, marks=pytest.mark.slow) for real, params in FORMS[1:3]),
+    *(pytest.param(name, "float", "calibratable", marks=pytest.mark.slow) for name in KF_ESTIMATORS[1:])])
+def test_generated_c_equals_the_reference_in_every_form(saturating_car, name, real, params):
+    """Every form of kf2dof; switching and fusion (the same KF step) in the most demanding one, the
+    slow suite's (every form of all three verified when the option was added)."""
+    results = verify_estimator(saturating_car, name, real=real, params=params)
     assert results and all(r.ok for r in results), [r for r in results if not r.ok]
+
+
+@pytest.mark.parametrize("name", KF_ESTIMATORS)
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_a_million_adversarial_steps(saturating_car, name, real):
+    report = fuzz_estimator(saturating_car, name, real, 1_000_000, seed=7)
+    assert report.ok, report.message
 
 
 def test_right_at_the_limit_of_the_real_lap(revs_lap):

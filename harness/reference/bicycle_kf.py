@@ -56,5 +56,5 @@ def saturating(vehicle: Mapping[str, float], mu, x, delta: float, vx: float):
 
 
 def _tanh_axle(C: float, peak: float, alpha: float):
-    t = np.tanh(C * alpha / peak)
-    return peak * t, C * (1.0 - t * t)
+    u = C * alpha / peak
+    return peak * np.tanh(u), C / np.cosh(u) ** 2

@@ -121,7 +121,7 @@ def build(params: Parameters) -> Estimator:
                                    seed.initial_state(u), next_state, output, params, decisions)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
                      "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, structure, params,
-                     seed.notes(), kf2dof.rounding_gain(params.numeric.settings(NAME)))
+                     seed.notes())
 
 
 DEFINITIONS = (Definition(

@@ -120,19 +120,6 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     )
 
 
-SATURATING_ROUNDING_GAIN = 10.0
-"""``Estimator.rounding_gain`` of a KF with saturating tyres: its gain follows the state through the
-tyres' slope dF/dalpha, so from a state far from the measurements (switching handing over from a
-kinematic integrator that drifted to vy = -5.1 m/s with the gyro frozen) its few steps of
-Newton-like convergence amplify a rounding about 25-fold while vy crosses zero (measured on
-dlc(freeze=r:3:1): 3.3e-14 -> 8.2e-13 in four samples, then back to 4e-14)."""
-
-
-def rounding_gain(settings) -> float:
-    """How much the KF of [estimator.<table>] ``settings`` amplifies rounding (1 when linear)."""
-    return SATURATING_ROUNDING_GAIN if settings["tyre_model"] == "saturating" else 1.0
-
-
 def zoh_plan(params: Parameters, table: str = NAME) -> discretize.ZohPlan:
     """The ZOH series plan for the generated parameter values (with the calibration margin)."""
     numeric = params.numeric
@@ -225,8 +212,7 @@ def build(params: Parameters) -> Estimator:
     init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
     return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
-                     INPUTS, layout, OUTPUTS, init, structure, params, zoh_note(params),
-                     rounding_gain(params.numeric.settings(NAME)))
+                     INPUTS, layout, OUTPUTS, init, structure, params, zoh_note(params))
 
 
 DEFINITIONS = (Definition(

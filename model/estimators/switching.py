@@ -216,8 +216,7 @@ def build(params: Parameters) -> Estimator:
     init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
-                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes(),
-                     kf2dof.rounding_gain(params.numeric.settings(NAME)))
+                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
 
 
 DEFINITIONS = (Definition(
