@@ -383,6 +383,10 @@ KF_FIELDS: tuple[Field, ...] = (
     diagonal("tyre_friction", 2, "-", "[front, rear] peak lateral axle force over the axle's static load "
              "(the tyres' friction; tyre_model = \"saturating\" only)", default=(1.0, 1.0),
              minimum=MINIMUM_FRICTION, entries="front, rear"),
+    nonnegative("friction_floor", "-", "each axle's friction is at least this times the measured |a_y| / g "
+                "(the road carries what the car does; a tyre_friction set too low cannot make the filter "
+                "read the measured a_y as a runaway slip angle; 0 = tyre_friction alone; tyre_model = "
+                "\"saturating\" only)", default=1.15),
     *LOW_SPEED_FIELDS,
 )
 """The 2-DOF Kalman filter's settings, shared by every estimator that runs it."""

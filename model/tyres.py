@@ -14,6 +14,11 @@ angle). The state x = [vy, r] (m/s, rad/s) and the measurement [a_y, r] are the 
     vy' = (F_f + F_r)/m - vx r,   r' = (a F_f - b F_r)/I_z,   a_y = (F_f + F_r)/m.
 
 The road-wheel angle enters as alpha_f = delta - (vy + a r)/vx (small angles, as the linear model).
+
+The friction is estimated from below at every sample: the road carries at least what the car is
+measured to do, so each axle's mu is at least ``friction_floor`` |a_y| / g (:func:`friction`). A
+file's mu set or identified too low would otherwise leave the model unable to produce the measured
+a_y, and the filter would read it as an ever larger slip angle.
 """
 
 from __future__ import annotations
@@ -56,6 +61,13 @@ def saturating_bicycle(vehicle: Mapping[str, float], friction: Sequence, x: ca.S
     f = ca.vertcat(ay - vx * r, (a * force_f - b * force_r) / iz)
     A = ca.vertcat(d_ay + ca.horzcat(0, -vx), (a * d_front - b * d_rear) / iz)
     return Linearised(f, A, ay, ca.vertcat(d_ay, ca.horzcat(0, 1)))
+
+
+def friction(tyre_friction: Sequence, floor, ay) -> list:
+    """[mu_f, mu_r]: the file's ``tyre_friction``, raised to ``floor`` |ay| / g where the measured
+    lateral acceleration ``ay`` (m/s^2) shows the road carries more (``floor`` 0: the file's alone)."""
+    shown = floor * ca.fabs(ay) / GRAVITY
+    return [ca.fmax(mu, shown) for mu in tyre_friction]
 
 
 def _axle(stiffness, peak, slip):

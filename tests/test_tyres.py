@@ -119,3 +119,22 @@ def test_right_at_the_limit_of_the_real_lap(revs_lap):
         errors[model] = float(np.sqrt(np.mean((outputs[:, 0] - piece["beta_ref"]) ** 2)))
     assert np.abs(piece["ay"]).max() > 10.0
     assert errors["saturating"] < 0.8 * errors["linear"], errors
+
+
+def test_the_measured_lateral_acceleration_bounds_the_friction_from_below(revs_lap):
+    """A friction set far too low (0.5 on a dry track the car drives at 1.1 g): without the floor the
+    model cannot produce the measured a_y and reads it as a runaway slip angle; with it, beta stays
+    about as right as with the friction identify finds."""
+    base = with_settings((REVS / "car.toml").read_text(), "vehicle", cornering_stiffness_front=70000.0,
+                         cornering_stiffness_rear=125000.0)
+    piece = revs_lap.window(340.0, 400.0)
+    inputs = piece.matrix(reference.INPUTS)
+
+    def rmse(**settings):
+        config = parse_vehicle(with_settings(base, "estimator.kf2dof", **settings), "car.toml", "revs")
+        outputs, _ = run_reference(reference, config, inputs)
+        return float(np.degrees(np.sqrt(np.mean((outputs[:, 0] - piece["beta_ref"]) ** 2))))
+
+    right = rmse(tyre_friction=[1.05, 1.05])
+    assert rmse(tyre_friction=[0.5, 0.5], friction_floor=0.0) > 3 * right
+    assert rmse(tyre_friction=[0.5, 0.5]) < 1.5 * right

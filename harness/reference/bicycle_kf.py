@@ -22,7 +22,8 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
     Qd = np.array(settings["process_noise"]) * T
     R = np.array(settings["measurement_noise"])
     if settings["tyre_model"] == "saturating":
-        mu = settings["tyre_friction"]
+        shown = settings["friction_floor"] * abs(z[0]) / GRAVITY     # the road carries the measured a_y
+        mu = [max(m, shown) for m in settings["tyre_friction"]]
         f, A, _, _ = saturating(vehicle, mu, x, delta_prev, vx_prev)
         Phi, Gamma = blocks.discretise(settings["discretisation"], A, np.eye(2), T)
         x_pred, P_pred = x + Gamma @ f, Phi @ P @ Phi.T + Qd

@@ -97,7 +97,7 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     if settings["tyre_model"] == "saturating":
         # EKF: x- = x + Gamma_I f(x), the Jacobian's Phi and Gamma_I = int_0^T e^(A s) ds by the
         # configured method (exact for the linear model: Phi x + Gamma delta), P- = Phi P Phi' + Q_d
-        friction = settings["tyre_friction"]
+        friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], ay)
         prior = tyres.saturating_bicycle(vehicle, friction, x, delta_prev, model_speed(vx_prev))
         Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
         x_pred, P_pred = kalman.ekf_predict(x + ca.mtimes(Gamma, prior.f), P, Phi, Qd)
