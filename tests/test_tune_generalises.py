@@ -56,6 +56,14 @@ def test_without_a_friction_column_low_friction_is_inferred_from_the_yaw_rate():
         assert coverage([without_friction(case.simulate(c_class, 100.0, 1))], c_class).low_friction_limit < 0.5
 
 
+def test_a_dry_race_lap_is_no_low_friction_road(revs_lap, revs_car):
+    """The Revs lap (1.1 g, no mu column): its corner entries leave the linear model's yaw rate, but a
+    road that carries 0.6 g and more is not called low friction."""
+    lap = coverage([revs_lap.window(0.0, 275.0)], revs_car)
+    assert lap.ay_max > 10.0 and lap.beyond_linear >= MIN_TIME
+    assert lap.low_friction_limit == 0.0
+
+
 def test_settings_of_an_uncovered_regime_keep_their_base_values(saloon, dlc_logs):
     regimes = {key: t.regime for key, t in DEFINITIONS["switching"].tunable.items()}
     frozen = frozen_settings(regimes, coverage([dlc_logs["high"]], saloon))

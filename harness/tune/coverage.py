@@ -14,7 +14,9 @@ quasi-steady samples. Near the limit on low friction means, where the log has th
 mu g; without it, the evidence of saturated tyres at a low lateral acceleration: the measured yaw
 rate departs from the linear bicycle model's steady-state yaw rate for the steer angle by more
 than :data:`SATURATION` (either way) in quasi-steady driving (a transient's yaw lag is no saturation) while
-|a_y| < LOW_FRICTION_MU g; signals smoothed over ``logs.segments.SMOOTHING`` first.
+|a_y| < LOW_FRICTION_MU g, in a log that never reaches LOW_FRICTION_MU g (a road that carries that is no
+low-friction road: on a dry race lap the yaw rate leaves the linear model's in every corner entry);
+signals smoothed over ``logs.segments.SMOOTHING`` first.
 """
 
 from __future__ import annotations
@@ -121,6 +123,8 @@ def _measured(log: Log, config: VehicleConfig) -> dict:
     if "mu" in log:
         mu = np.asarray(log["mu"], dtype=float)
         low = (mu <= LOW_FRICTION_MU) & (np.abs(ay) >= NEAR_LIMIT * mu * GRAVITY)
+    elif np.max(np.abs(ay[used]), initial=0.0) >= LOW_FRICTION_MU * GRAVITY:
+        low = np.zeros(len(t), dtype=bool)     # a road that carried this much is no low-friction road
     else:
         low = steady & _saturated(delta, vx, r, ay, config)
     return {"duration": step * int(np.count_nonzero(used)), "speeds": vx[used],

@@ -126,7 +126,7 @@ def build(params: Parameters) -> Estimator:
 
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
-    tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+    tunable={**kf2dof.KF_TUNABLES,
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},

@@ -24,7 +24,15 @@ import casadi as ca
 from vsegen.model import consistency, discretize, input_monitors, kalman, signals, status, tyres
 from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
-from vsegen.model.estimator import KF_MEASUREMENT_NOISE, TYRE_FRICTION, Definition, Estimator, Tunable, make_guarded
+from vsegen.model.estimator import (
+    BEYOND_LINEAR,
+    KF_MEASUREMENT_NOISE,
+    TYRE_FRICTION,
+    Definition,
+    Estimator,
+    Tunable,
+    make_guarded,
+)
 from vsegen.model.guard import first_sample, hold, input_guard, previous_inputs, symbolic
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
@@ -60,6 +68,17 @@ OUTPUTS = Layout((
     Signal("r", "rad/s", "filtered yaw rate"),
     signals.STATUS,
 ))
+
+
+def _saturating(settings) -> bool:
+    return settings["tyre_model"] == "saturating"
+
+
+KF_TUNABLES = {"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+               "tyre_friction": Tunable(0.3, 1.6, log=False, when=_saturating, regime=BEYOND_LINEAR),
+               "friction_floor": Tunable(0.8, 1.5, log=False, when=_saturating, regime=BEYOND_LINEAR)}
+"""The settings ``vsegen tune`` may search in every estimator running this KF: the noises, and with
+saturating tyres their friction and its floor (they act beyond the linear range)."""
 
 
 def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
@@ -217,7 +236,7 @@ def build(params: Parameters) -> Estimator:
 
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
-    tunable={"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1)},
+    tunable=KF_TUNABLES,
     status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE,
                  *input_monitors.STATUS_BITS),
     derived={**KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **consistency.derived(CHANNELS)}),)
