@@ -5,7 +5,8 @@ written by ``python -m bench``).
 
 The options: the input monitors (frozen-signal monitor and cross-checks, model.input_monitors),
 the learned kinematic offset (model.estimators.kinematic_offset), switching's bounded kinematic
-dwell and fusion's disagreement check; each is one setting away from the papers' estimator.
+dwell and fusion's disagreement check; each is one setting away from the papers' estimator. Also
+what the saturating tyre model costs in each estimator with a 2-DOF Kalman filter.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from vsegen.harness.logs.table import Log
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.model import input_monitors
 from vsegen.model.estimators import build
+from vsegen.model.params import parse_vehicle
 
 SECTION = "## What the real-road options cost"
 OPTIONS_OFF = {**input_monitors.OFF, "offset_memory": 0.0, "kinematic_max_dwell": 0.0, "disagreement_limit": 0.0}
@@ -48,6 +50,26 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
         shipped, off = counts
         lines.append(f"| {name} | {', '.join(on)} | {shipped:.1f} | {off:.1f} | "
                      f"+{shipped - off:.0f} ({100 * (shipped / off - 1):.0f} %) |")
+    return lines + ["", *_tyre_model_rows(vehicle, config, log, folder)]
+
+
+def _tyre_model_rows(vehicle: Path, config, log: Log, folder: Path) -> list[str]:
+    """The saturating tyre model (an extended KF, model.tyres) against the shipped linear KF."""
+    lines = ["The saturating tyre model (`tyre_model = \"saturating\"`, off in the shipped file) against "
+             "the shipped linear tyres, same log and options:", "",
+             "| estimator | linear (shipped) | saturating | cost |", "|---|---|---|---|"]
+    for name in (n for n in config.estimators if "tyre_model" in config.settings(n)):
+        text = vehicle.read_text().replace(f"[estimator.{name}]\n",
+                                           f'[estimator.{name}]\ntyre_model = "saturating"\n', 1)
+        counts = []
+        for which in (config, parse_vehicle(text, str(vehicle), config.name)):
+            estimator = build(name, which)
+            inputs = log.matrix(estimator.inputs.names)
+            driver = generated_driver(estimator, render(which, name, "double"), "double")
+            counts.append(driver.instructions_per_step(write_inputs(inputs, folder), len(inputs)))
+        linear, saturating = counts
+        lines.append(f"| {name} | {linear:.1f} | {saturating:.1f} | "
+                     f"+{saturating - linear:.0f} ({100 * (saturating / linear - 1):.0f} %) |")
     return lines
 
 

@@ -14,6 +14,7 @@ import scipy.signal
 
 from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.sim.scenarios import Case
+from vsegen.harness.verify.equivalence import verify_estimator
 from vsegen.model import filters, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.estimators import ekf_rls
@@ -101,6 +102,28 @@ def test_stiffness_stays_inside_its_clamp_and_the_weight_in_0_1(config):
         assert values.max() <= s["stiffness_max"] * c0 + 1e-12
     weight = outputs[:, est.outputs.index("weight")]
     assert weight.min() >= 0.0 and weight.max() <= 1.0
+
+
+def test_tyres_past_their_linear_range_raise_beyond_linear_range(vehicle_text):
+    """linear_range and stiffness_drop_limit (beyond the paper): the bit follows |a_y| and the learned
+    stiffness exactly as documented, the C equals the reference, and both off raise nothing."""
+    text = vehicle_text.replace("[estimator.ekf_rls]\n", "[estimator.ekf_rls]\nlinear_range = 6.0\n"
+                                "stiffness_drop_limit = 0.7\n", 1)
+    config = parse_vehicle(text, "flagged.toml", "c_class")
+    case = Case.of("dlc", speed_kmh=100.0, mu=0.8)
+    est, log, outputs, _ = run(config, case)
+    flagged = (outputs[:, est.outputs.index("status")].astype(int) & status.BEYOND_LINEAR_RANGE) > 0
+    ay = log["ay"] / (1 + GRAVITY * config.settings(NAME)["roll_gradient"])
+    c_front, c_rear = (outputs[:, est.outputs.index(n)] for n in ("c_front", "c_rear"))
+    v = config.vehicle
+    expected = ((np.abs(ay) > 6.0) | (c_front < 0.7 * v["cornering_stiffness_front"])
+                | (c_rear < 0.7 * v["cornering_stiffness_rear"]))
+    assert flagged.any() and (c_front < 0.7 * v["cornering_stiffness_front"])[np.abs(ay) <= 6.0].any()
+    np.testing.assert_array_equal(flagged, expected)
+    (result,) = verify_estimator(config, NAME, cases=(case,))
+    assert result.ok, result
+    _, _, plain, _ = run(parse_vehicle(vehicle_text, "plain.toml", "c_class"), case)
+    assert not np.any(plain[:, est.outputs.index("status")].astype(int) & status.BEYOND_LINEAR_RANGE)
 
 
 def test_low_speed_holds_every_state(config):

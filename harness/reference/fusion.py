@@ -58,6 +58,7 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     beta = w * beta_kin + (1 - w) * beta_kf
     if s["disagreement_limit"] > 0 and w * abs(beta_kin - beta_kf) > s["disagreement_limit"]:
         status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
+    status |= blocks.beyond_linear_range(u[2], s)    # beyond the paper: the measured a_y
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
            "holding": 0.0, "mode": DYN, **monitor, **learned}

@@ -64,6 +64,7 @@ from vsegen.model.schema import (
     fraction,
     nonnegative,
     positive,
+    share,
     spd_matrix,
 )
 from vsegen.model.sensors import roll_corrected
@@ -100,6 +101,10 @@ SCHEMA = EstimatorSchema(
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         ROLL_CORRECTION,
         *consistency.fields(CHANNELS),
+        consistency.LINEAR_RANGE,
+        share("stiffness_drop_limit", "beyond the paper: either axle's online stiffness below this share "
+                 "of the vehicle file's raises BEYOND_LINEAR_RANGE (the tyres are past their linear range, "
+                 "where the linear stiffness it learns lags what they do; 0 = never)", default=0.0),
         *input_monitors.FIELDS,
         *LOW_SPEED_FIELDS,
     ),
@@ -427,6 +432,9 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
         # ... which concerns the output only while the EKF carries most of it (lambda < 1/2)
         suspect = ca.logic_and(ca.logic_and(active, check.suspect), weight < 0.5)
         code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
+    if choices["linear_range"] > 0 or choices["stiffness_drop_limit"] > 0:    # beyond the paper
+        code = code + ca.if_else(ca.logic_and(active, _beyond_linear_range(vehicle, settings, m.ay, k)),
+                                 status.BEYOND_LINEAR_RANGE, 0)
     next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
@@ -446,6 +454,15 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
         "c_rear": keep(k.c_rear, "c_rear"), "status": code,
     })
     return next_state, output
+
+
+def _beyond_linear_range(vehicle, settings, ay, k: _Stiffness):
+    """|a_y| beyond ``linear_range``, or an axle's learned stiffness below ``stiffness_drop_limit``
+    times the vehicle file's: the tyres work past their linear range."""
+    share = settings["stiffness_drop_limit"]
+    dropped = ca.logic_or(k.c_front < share * vehicle["cornering_stiffness_front"],
+                          k.c_rear < share * vehicle["cornering_stiffness_rear"])
+    return ca.logic_or(consistency.beyond_linear_range(ay, settings), dropped)
 
 
 def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic: dict) -> ca.SX:
@@ -482,5 +499,6 @@ DEFINITIONS = (Definition(
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
              "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
              "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, *input_monitors.STATUS_BITS),
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE,
+                 *input_monitors.STATUS_BITS),
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)

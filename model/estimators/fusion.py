@@ -51,7 +51,8 @@ SCHEMA = EstimatorSchema(
                         "from the KF, exceeds this (a bank or an offset drifts the integrator); "
                         "0 = never", default=0.0),
             *kinematic_offset.FIELDS,
-            *consistency.fields(kf2dof.CHANNELS)),
+            *consistency.fields(kf2dof.CHANNELS),
+            consistency.LINEAR_RANGE),
     rules=LOW_SPEED_RULES)
 
 OUTPUTS = Layout((
@@ -101,6 +102,9 @@ def build(params: Parameters) -> Estimator:
     if params.numeric.settings(NAME)["disagreement_limit"] > 0:   # beyond the paper
         apart = weight * ca.fabs(beta_kin - result["beta"]) > limit
         code = code + status.SCHEMES_DISAGREE * (active * apart)
+    if params.numeric.settings(NAME)["linear_range"] > 0:   # beyond the paper
+        code = code + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], seed.settings)),
+                                 status.BEYOND_LINEAR_RANGE, 0)
     if monitored:   # beyond the paper: the consistency monitor of the KF's innovations
         check = consistency.monitor(s, result["innovation"], seed.settings, T)
         monitor = check.updates
@@ -130,6 +134,7 @@ DEFINITIONS = (Definition(
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
-    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE),
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE,
+                 status.BEYOND_LINEAR_RANGE),
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION,
              **consistency.derived(kf2dof.CHANNELS)}),)
