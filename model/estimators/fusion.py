@@ -17,6 +17,7 @@ from vsegen.model import consistency, signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
+    BEYOND_LINEAR,
     KF_MEASUREMENT_NOISE,
     LOW_FRICTION,
     ROLL_GRADIENT,
@@ -132,7 +133,7 @@ DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable={**kf2dof.KF_TUNABLES,
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
-             "integral_gain": Tunable(0.05, 5.0, regime=LOW_FRICTION),
+             "integral_gain": Tunable(0.05, 5.0, regime=BEYOND_LINEAR),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE,
                  status.BEYOND_LINEAR_RANGE),
