@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from locations import REVS
 
 CONVERTER = REVS / "convert.py"
@@ -58,3 +59,18 @@ def test_the_unit_check_accepts_the_real_lap_with_a_first_guess_file_that_overst
 
     assert stability_factor(revs_car.vehicle) < 0
     assert check_units(revs_lap, revs_car.vehicle) == []
+
+
+def test_an_estimator_that_needs_wheel_speeds_says_why_and_what_runs_instead(revs_lap, revs_car):
+    """The lap has no wheel speeds: the unscented filters refuse in one line that says why and names
+    the estimators that run without them."""
+    from vsegen.harness.host.run_log import run_estimator
+    from vsegen.harness.logs.table import LogError
+
+    piece = revs_lap.window(200.0, 201.0)
+    with pytest.raises(LogError) as refused:
+        run_estimator(revs_car, "ukf", piece)
+    message = str(refused.value)
+    assert "\n" not in message and "missing column 'omega_fl'" in message and "longitudinal" in message
+    assert "kf2dof" in message and "ukf" not in message.split("run ")[-1]
+    assert run_estimator(revs_car, "kf2dof", piece)["beta"].shape == (len(piece),)

@@ -108,7 +108,7 @@ def lap_errors(revs_lap):
     with the reference on the first half."""
     base = with_settings((REVS / "car.toml").read_text(), "vehicle", cornering_stiffness_front=70000.0,
                          cornering_stiffness_rear=125000.0)
-    piece = revs_lap.window(370.0, 400.0)
+    piece = revs_lap.window(555.0, 585.0)
     assert np.abs(piece["ay"]).max() > 10.0
     inputs = piece.matrix(reference.INPUTS)
     variants = {"linear": dict(tyre_model="linear"), "saturating": dict(tyre_friction=[1.05, 1.1]),

@@ -9,6 +9,7 @@ from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.logs.table import Log, LogError
 from vsegen.model.estimators import build
 from vsegen.model.params import VehicleConfig
+from vsegen.model.signals import WHEEL_SPEEDS
 
 BACKENDS = ("c", "reference")
 COMPILED = Memo(size=16)
@@ -30,8 +31,16 @@ def inputs_of(config: VehicleConfig, name: str) -> tuple[str, ...]:
 
 
 def estimator_inputs(estimator, log: Log):
-    """The log's columns the estimator reads, as a matrix; one line when one is missing."""
+    """The log's columns the estimator reads, as a matrix; one line when one is missing (for wheel
+    speeds, with why the estimator cannot do without them)."""
     missing = log.missing(estimator.inputs.names)
+    if missing and set(missing) <= set(WHEEL_SPEEDS):
+        config = estimator.parameters.numeric
+        others = [n for n in config.estimators if not set(WHEEL_SPEEDS) & set(inputs_of(config, n))]
+        raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs the four "
+                       f"wheel speeds ({', '.join(WHEEL_SPEEDS)}, rad/s): its 3-DOF model's longitudinal tyre "
+                       "forces come from the wheels' slip, which v_x and a_x alone do not give; without wheel "
+                       f"speeds run {', '.join(others) or 'an estimator that does not read them'}")
     if missing:
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs "
                        f"{', '.join(estimator.inputs.names)}")
