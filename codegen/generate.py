@@ -75,7 +75,13 @@ def forms_to_write(name: str, default: tuple[str, str]) -> list[tuple[str, str, 
     """(real, params, folder name) of every form of ``name`` written to the repository's
     ``generated/<vehicle>/``: the default first, then its REVIEWED_FORMS."""
     others = [form for form in REVIEWED_FORMS.get(name, ()) if form != default]
-    return [(*default, name), *((real, params, f"{name}-{real}-{params}") for real, params in others)]
+    return [(*default, name), *((real, params, form_folder(name, (real, params), default)) for real, params in others)]
+
+
+def form_folder(name: str, form: tuple[str, str], default: tuple[str, str]) -> str:
+    """The folder of ``generated/<vehicle>/`` that holds estimator ``name`` in ``form`` (real,
+    params): ``<name>`` for the vehicle file's ``default`` form, else ``<name>-<real>-<params>``."""
+    return name if form == default else f"{name}-{form[0]}-{form[1]}"
 
 
 def render(config: VehicleConfig, name: str, real: str | None = None,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from locations import DEFAULT_VEHICLE, REPO
 
@@ -20,6 +22,25 @@ def test_verify_default_vehicle_prints_table(vsegen):
     result = vsegen.process("verify")
     assert result.exit_code == 0, result.stderr
     assert "verify passed: 126 runs" in result.stdout
+
+
+def test_verify_compiles_the_checked_in_c_and_fails_first_on_an_edit(tmp_path, vsegen):
+    """A kernel constant multiplied by 1.01 in the project's generated/: verify fails before any
+    run, with the diff and the command that regenerates the folder; a form never generated too."""
+    (tmp_path / "vehicles").mkdir()
+    (tmp_path / "vehicles" / "c_class.toml").write_text(DEFAULT_VEHICLE.read_text())
+    assert vsegen.process("generate", "--estimator", "kf2dof", cwd=tmp_path).exit_code == 0
+    kernel = tmp_path / "generated" / "c_class" / "kf2dof" / "vse_kf2dof_kernel.c"
+    text = kernel.read_text()
+    line = re.search(r"\n(\s*a\d+=)(\d\.\d+e[+-]\d+);", text)
+    kernel.write_text(text.replace(line.group(0), f"\n{line.group(1)}{float(line.group(2)) * 1.01!r};", 1))
+    result = vsegen.process("verify", "--estimator", "kf2dof", cwd=tmp_path)
+    assert result.exit_code == 1 and "verifying" not in result.stderr
+    assert f"+{line.group(1)}{line.group(2)};" in result.stdout        # the diff back to the generated line
+    assert ("generated/c_class/kf2dof differs from what" in result.stderr
+            and "run `vsegen generate --vehicle" in result.stderr and "--estimator kf2dof`" in result.stderr)
+    missing = vsegen.process("verify", "--estimator", "switching", cwd=tmp_path)
+    assert missing.exit_code == 1 and "generated/c_class/switching is missing" in missing.stderr
 
 
 def test_generate_check_is_clean_on_the_repository(vsegen):

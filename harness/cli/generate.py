@@ -32,7 +32,7 @@ def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
     default = (config.codegen["real"], config.codegen["params"])
     chosen = (real or default[0], params or default[1])
     if real or params or out.resolve() != project().generated:
-        return [(*chosen, name if chosen == default else f"{name}-{chosen[0]}-{chosen[1]}")]
+        return [(*chosen, codegen.form_folder(name, chosen, default))]
     return codegen.forms_to_write(name, default)
 
 

@@ -9,17 +9,22 @@ from pathlib import Path
 import click
 from rich.table import Table
 
+from vsegen.codegen import generate as codegen
 from vsegen.harness.cli.common import (
     PARAMS_OPTION,
     REAL_OPTION,
     VEHICLE_OPTION,
     chosen_estimators,
     console,
+    display,
     user_errors,
     vehicle_config,
 )
 from vsegen.harness.jobs.progress import RunProgress
+from vsegen.harness.project.files import folder_diffs
+from vsegen.harness.project.paths import project
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.model.params import VehicleConfig
 
 
 @click.command()
@@ -32,13 +37,17 @@ from vsegen.harness.sim.scenarios import VERIFICATION_SET
 @user_errors
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
            params: str | None) -> None:
-    """Compile the generated C and compare it step by step with the NumPy reference."""
+    """Check that the project's generated/ holds what the vehicle file generates, compile that C and
+    compare it step by step with the NumPy reference."""
     from vsegen.harness.verify.equivalence import verify as verify_all
 
     config = vehicle_config(vehicle)
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
     names = chosen_estimators(config, estimators)
+    stale = [name for name in names if not _checked_in(config, name, real, params)]
+    if stale:
+        sys.exit(1)
     with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
         results = verify_all(config, names, seed=seed, real=real, params=params,
                              on_done=lambda result: progress.done(result.estimator, result.ok))
@@ -51,6 +60,23 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
         sys.exit(1)
     console.print(f"verify passed: {len(results)} runs, every output within tolerance")
+
+
+def _checked_in(config: VehicleConfig, name: str, real: str, params: str) -> bool:
+    """Whether the project's generated/ holds exactly what the vehicle file generates for ``name``
+    in this form, so that the C verify compiles is the C that is checked in; if not, prints the
+    diff and the command that regenerates it."""
+    default = (config.codegen["real"], config.codegen["params"])
+    folder = project().generated / config.name / codegen.form_folder(name, (real, params), default)
+    diffs = folder_diffs(codegen.render(config, name, real, params), folder, display(folder))
+    for diff in diffs if folder.is_dir() else ():
+        click.echo(diff, nl=False)
+    if diffs:
+        form = "" if (real, params) == default else f" --real {real} --params {params}"
+        what = "differs from" if folder.is_dir() else "is missing: it would hold"
+        click.echo(f"vsegen: verify FAILED: {display(folder)} {what} what {config.source} generates; run "
+                   f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`", err=True)
+    return not diffs
 
 
 def difference_table(title: str, results, extra_rows=None) -> Table:
