@@ -24,6 +24,8 @@ from vsegen.harness.jobs.progress import RunProgress
 from vsegen.harness.project.files import folder_diffs
 from vsegen.harness.project.paths import project
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.harness.verify import report
+from vsegen.harness.verify.report import checks
 from vsegen.model.params import VehicleConfig
 
 
@@ -34,9 +36,13 @@ from vsegen.model.params import VehicleConfig
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
 @REAL_OPTION
 @PARAMS_OPTION
+@click.option("--junit", type=click.Path(path_type=Path), default=None,
+              help="Also write the results as JUnit XML (a test case per estimator, scenario and signal).")
+@click.option("--json", "json_out", type=click.Path(path_type=Path), default=None,
+              help="Also write the results as JSON.")
 @user_errors
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
-           params: str | None) -> None:
+           params: str | None, junit: Path | None, json_out: Path | None) -> None:
     """Check that the project's generated/ holds what the vehicle file generates, compile that C and
     compare it step by step with the NumPy reference."""
     from vsegen.harness.verify.equivalence import verify as verify_all
@@ -45,8 +51,9 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
     names = chosen_estimators(config, estimators)
-    stale = [name for name in names if not _checked_in(config, name, real, params)]
+    stale = {name: why for name in names if (why := _checked_in(config, name, real, params))}
     if stale:
+        _write_reports(junit, json_out, report.Run(config.name, real, params, stale), [])
         sys.exit(1)
     with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
         results = verify_all(config, names, seed=seed, real=real, params=params,
@@ -55,6 +62,7 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
                               f"T = {config.sample_time} s, {real}, {params} parameters", results)
     console.print(table)
     explain_differences(real, any(r.flips for r in results), any(r.crossings for r in results))
+    _write_reports(junit, json_out, report.Run(config.name, real, params), results)
     failed = [r for r in results if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
@@ -62,10 +70,16 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
     console.print(f"verify passed: {len(results)} runs, every output within tolerance")
 
 
-def _checked_in(config: VehicleConfig, name: str, real: str, params: str) -> bool:
-    """Whether the project's generated/ holds exactly what the vehicle file generates for ``name``
-    in this form, so that the C verify compiles is the C that is checked in; if not, prints the
-    diff and the command that regenerates it."""
+def _write_reports(junit: Path | None, json_out: Path | None, run: report.Run, results) -> None:
+    for path, text in ((junit, report.as_junit), (json_out, report.as_json)):
+        if path is not None:
+            path.write_text(text(run, results))
+
+
+def _checked_in(config: VehicleConfig, name: str, real: str, params: str) -> str:
+    """'' when the project's generated/ holds exactly what the vehicle file generates for ``name``
+    in this form, so that the C verify compiles is the C that is checked in; else prints the diff
+    and the command that regenerates it, and returns that line."""
     default = (config.codegen["real"], config.codegen["params"])
     folder = project().generated / config.name / codegen.form_folder(name, (real, params), default)
     diffs = folder_diffs(codegen.render(config, name, real, params), folder, display(folder))
@@ -74,9 +88,11 @@ def _checked_in(config: VehicleConfig, name: str, real: str, params: str) -> boo
     if diffs:
         form = "" if (real, params) == default else f" --real {real} --params {params}"
         what = "differs from" if folder.is_dir() else "is missing: it would hold"
-        click.echo(f"vsegen: verify FAILED: {display(folder)} {what} what {config.source} generates; run "
-                   f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`", err=True)
-    return not diffs
+        why = (f"{display(folder)} {what} what {config.source} generates; run "
+               f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`")
+        click.echo(f"vsegen: verify FAILED: {why}", err=True)
+        return why
+    return ""
 
 
 def difference_table(title: str, results, extra_rows=None) -> Table:
@@ -87,8 +103,7 @@ def difference_table(title: str, results, extra_rows=None) -> Table:
                    "tolerance", "result"):
         table.add_column(column, justify="right" if column.startswith(("max", "sam", "tol")) else "left")
     for i, result in enumerate(results):
-        stepwise = () if result.stepwise is result.states else (result.stepwise,)
-        for diff in (*result.outputs, result.states, *stepwise):
+        for diff in checks(result):
             tolerance = "identical" if diff.integer else f"{diff.tolerance:.0e}"
             table.add_row(result.estimator, result.case, str(result.samples), diff.name,
                           f"{diff.max_abs:.2e}", "-" if diff.integer else f"{diff.max_rel:.2e}",
