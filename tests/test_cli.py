@@ -8,15 +8,6 @@ import pytest
 from locations import DEFAULT_VEHICLE, REPO
 
 
-def test_verify_prints_the_table_and_a_progress_line_per_estimator(vsegen):
-    result = vsegen.process("verify", "--estimator", "kf2dof", "--estimator", "switching")
-    assert result.exit_code == 0, result.stderr
-    assert "verify passed: 28 runs" in result.stdout
-    assert "dlc(speed_kmh=120.0)" in result.stdout and "max rel diff" in result.stdout
-    progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
-    assert sorted(progress) == ["verifying kf2dof: ok", "verifying switching: ok"]
-
-
 @pytest.mark.slow
 def test_verify_default_vehicle_prints_table(vsegen):
     result = vsegen.process("verify")

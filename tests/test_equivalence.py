@@ -36,7 +36,12 @@ def check_every_scenario(config, name, real, params):
     return results
 
 
-@pytest.mark.parametrize("name", ESTIMATORS)
+PARTICLE_FILTERS = ("pf_adaptive", "pf_improved")
+"""Their double-baked runs take 19-25 s each: in the slow suite, with their other forms."""
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in PARTICLE_FILTERS else n
+                                  for n in ESTIMATORS])
 def test_generated_c_equals_the_reference_on_every_scenario(config, name):
     check_every_scenario(config, name, "double", "baked")
 

@@ -12,6 +12,7 @@ from vsegen.harness.project.vehicles import with_settings
 from vsegen.harness.reference import bicycle_kf
 from vsegen.harness.reference import kf2dof as reference
 from vsegen.harness.reference.loop import run_reference
+from vsegen.harness.sim.scenarios import VERIFICATION_SET
 from vsegen.harness.verify.equivalence import verify_estimator
 from vsegen.harness.verify.fuzz import fuzz_estimator
 from vsegen.model.bicycle import GRAVITY
@@ -84,14 +85,24 @@ def saturating_car(vehicle_text):
     return parse_vehicle(saturating(vehicle_text, (1.0, 0.9), KF_ESTIMATORS), "saturating.toml", "c_class")
 
 
-@pytest.mark.parametrize("name,real,params", [
-    ("kf2dof", "double", "baked"),
-    *(pytest.param(name, "float", "calibratable", marks=pytest.mark.slow) for name in KF_ESTIMATORS)])
+@pytest.mark.slow
+@pytest.mark.parametrize("name", KF_ESTIMATORS)
+@pytest.mark.parametrize("real,params", [("double", "baked"), ("float", "calibratable")])
 def test_generated_c_equals_the_reference_in_every_form(saturating_car, name, real, params):
-    """Double baked, and in the slow suite the most demanding form, float calibratable, of each
-    estimator running the KF (every form of all three verified when the option was added)."""
+    """Double baked and the most demanding form, float calibratable, of each estimator running the
+    KF on every scenario (every form of all three verified when the option was added)."""
     results = verify_estimator(saturating_car, name, real=real, params=params)
     assert results and all(r.ok for r in results), [r for r in results if not r.ok]
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "switching"])
+def test_generated_c_equals_the_reference_after_a_hand_over_from_a_drifted_integrator(saturating_car, name):
+    """The scenario with the gyro frozen, where switching hands its KF a kinematic state far beyond
+    the tyres' peak (the slope once computed as C (1 - tanh^2) kept only rounding there)."""
+    case = next(c for c in VERIFICATION_SET if "freeze=r" in c.label)
+    for real in ("double", "float"):
+        (result,) = verify_estimator(saturating_car, name, cases=(case,), real=real)
+        assert result.ok, result
 
 
 @pytest.mark.parametrize("name", ["kf2dof", *(pytest.param(n, marks=pytest.mark.slow) for n in KF_ESTIMATORS[1:])])

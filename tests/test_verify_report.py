@@ -18,6 +18,9 @@ def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, v
     junit, data = tmp_path / "verify.xml", tmp_path / "verify.json"
     result = vsegen.process("verify", "--estimator", "kf2dof", "--junit", str(junit), "--json", str(data))
     assert result.exit_code == 0, result.stderr
+    assert "verify passed: 14 runs" in result.stdout and "max rel diff" in result.stdout
+    progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
+    assert progress == ["verifying kf2dof: ok"]
     suites = list(JUnitXml.fromfile(str(junit)))
     assert [s.name for s in suites] == ["c_class.kf2dof.double-baked"]
     cases = list(suites[0])
