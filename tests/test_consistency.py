@@ -13,7 +13,7 @@ from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.logs.table import Log
 from vsegen.harness.project.vehicles import load_vehicle
-from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
+from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time, worse_than_zero
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
 from vsegen.model import consistency
 from vsegen.model.estimators import DEFINITIONS, build
@@ -54,6 +54,23 @@ def test_silent_error_time_counts_only_unflagged_wrong_samples_before_a_spin():
     assert longest == pytest.approx(0.2)
     nan = np.where(t >= 3.0, np.nan, 0.0)                               # a NaN is wrong
     assert silent_error_time(*_log(t, truth, nan, np.zeros_like(t)))[0] == pytest.approx(1.0)
+
+
+def test_worse_than_zero_binds_the_run_or_else_its_unflagged_samples():
+    t = np.arange(0.0, 4.0, 0.01)
+    truth = np.deg2rad(2.0) * np.sin(t)                                 # RMS 1.4 deg: bound about 1 deg
+    status = np.zeros_like(t)
+    assert worse_than_zero(*_log(t, truth, truth + np.deg2rad(0.5), status)) is None
+    assert worse_than_zero(*_log(t, truth, np.zeros_like(t), status)) is not None      # answering beta = 0 itself
+    wrong = truth + np.where(t >= 2.0, np.deg2rad(5.0), 0.0)           # 5 deg off for 2 s
+    rmse, bound = worse_than_zero(*_log(t, truth, wrong, status))
+    assert np.degrees(rmse) == pytest.approx(5.0 / np.sqrt(2.0), rel=1e-6)  # half the run 5 deg off
+    assert bound == pytest.approx(0.7 * np.sqrt(np.mean(truth**2)))     # unflagged: every sample
+    status[t >= 2.0] = 256                                              # flagged where it is wrong
+    assert worse_than_zero(*_log(t, truth, wrong, status)) is None
+    straight = np.zeros_like(t)                                         # straight: the 0.1 deg floor
+    assert worse_than_zero(*_log(t, straight, straight + np.deg2rad(0.09), np.zeros_like(t))) is None
+    assert worse_than_zero(*_log(t, straight, straight + np.deg2rad(0.2), np.zeros_like(t))) is not None
 
 
 MONITORED = tuple(name for name in DEFINITIONS if "beta" in build(name, load_vehicle(VEHICLES / "c_class.toml"))

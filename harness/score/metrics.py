@@ -104,6 +104,31 @@ SILENT_DURATION = 0.5
 """s: the longest an error beyond :data:`SILENT_LIMIT` may last with status 0."""
 
 
+BETTER_THAN_ZERO = 0.7
+"""An unflagged sideslip estimate must score an RMSE within this share of RMS(beta_ref) over the same
+samples (or within :data:`ZERO_FLOOR`): else answering beta = 0 would do about as well."""
+ZERO_FLOOR = np.deg2rad(0.1)
+"""rad: the RMSE every unflagged estimate may have, however straight the driving."""
+
+
+def worse_than_zero(log: Log, estimates: Log) -> tuple[float, float] | None:
+    """None when the run beats answering beta = 0 ("better than zero, or flagged"): its beta RMSE
+    is within max(BETTER_THAN_ZERO x RMS(beta_ref), ZERO_FLOOR), or it is within that bound over
+    the samples with status 0 (the status covers where it is not). Else (RMSE, bound) in rad over
+    those unflagged samples. Samples from a spin on are not scored."""
+    kept = ~np.maximum.accumulate(np.abs(log["beta_ref"]) > SPIN_SIDESLIP)
+    unflagged = kept & (estimates["status"] == 0)
+    for part in (kept, unflagged):
+        if not part.any():
+            return None
+        error = np.nan_to_num(estimates["beta"][part] - log["beta_ref"][part], nan=np.inf)
+        rmse = float(np.sqrt(np.mean(error**2)))
+        bound = float(max(BETTER_THAN_ZERO * np.sqrt(np.mean(log["beta_ref"][part] ** 2)), ZERO_FLOOR))
+        if rmse <= bound:
+            return None
+    return rmse, bound
+
+
 def silent_error_time(log: Log, estimates: Log, limit: float = SILENT_LIMIT) -> tuple[float, float]:
     """(longest stretch, its start) in s of consecutive samples with |beta - beta_ref| > ``limit``
     (rad) and status 0, before the car spins (|beta_ref| > 15 deg from then on is not scored): the
