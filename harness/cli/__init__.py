@@ -7,6 +7,9 @@ status 2; a failed check ends with status 1.
 
 from __future__ import annotations
 
+import os
+import sys
+
 import click
 
 from vsegen.harness.cli import campaign, generate, identify, project, run, score, simulate, target, tune, verify
@@ -22,3 +25,23 @@ for command in (project.init, project.list_, project.docs, simulate.simulate, id
                 generate.generate, verify.verify, run.run, score.score, score.plot, campaign.campaign,
                 target.pil_command, target.size, target.misra, target.a2l):
     main.add_command(command)
+
+
+def entry() -> None:
+    """The console entry point: run :func:`main`, then leave without Python's final teardown.
+
+    A command's work is done (files closed, clusters shut down, output flushed below) when ``main``
+    returns; in the teardown, a library's native worker thread still alive aborts the process now
+    and then (SIGABRT, "terminate called without an active exception"; seen about once in 100
+    `vsegen score` runs; apache/arrow#34314), which would turn a finished command into a failure."""
+    try:
+        main()
+        code: int | str | None = 0
+    except SystemExit as done:
+        code = done.code
+    if isinstance(code, str):
+        print(code, file=sys.stderr)
+        code = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code or 0)

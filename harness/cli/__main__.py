@@ -1,5 +1,5 @@
 """``python -m vsegen.harness.cli``: the vsegen command line."""
 
-from vsegen.harness.cli import main
+from vsegen.harness.cli import entry
 
-main()
+entry()

@@ -194,7 +194,10 @@ def _batches(path: Path, header: list[str], columns: tuple[str, ...]):
                                                  include_columns=list(columns), null_values=[],
                                                  strings_can_be_null=False))
         with handle:
-            yield from reader
+            try:
+                yield from reader
+            finally:
+                reader.close()    # join its read-ahead thread now: one alive at exit aborts Python (apache/arrow#34314)
     except (pa.ArrowException, OSError, EOFError, lzma.LZMAError):
         raise _NotFast from None
 
