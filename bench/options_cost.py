@@ -41,16 +41,18 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
         variant, on = switched_off(vehicle, name, OPTIONS_OFF)
         if not on:
             continue
-        counts = []
-        for which in (config, variant):
-            estimator = build(name, which)
-            inputs = log.matrix(estimator.inputs.names)
-            driver = generated_driver(estimator, render(which, name, "double"), "double")
-            counts.append(driver.instructions_per_step(write_inputs(inputs, folder), len(inputs)))
-        shipped, off = counts
+        shipped, off = (instructions_per_step(name, which, log, folder) for which in (config, variant))
         lines.append(f"| {name} | {', '.join(on)} | {shipped:.1f} | {off:.1f} | "
                      f"+{shipped - off:.0f} ({100 * (shipped / off - 1):.0f} %) |")
     return lines + ["", *_tyre_model_rows(vehicle, config, log, folder)]
+
+
+def instructions_per_step(name: str, config, log: Log, folder: Path) -> float:
+    """Instructions per step (callgrind, double, -O2) of ``name``'s generated C for ``config`` on ``log``."""
+    estimator = build(name, config)
+    inputs = log.matrix(estimator.inputs.names)
+    driver = generated_driver(estimator, render(config, name, "double"), "double")
+    return driver.instructions_per_step(write_inputs(inputs, folder), len(inputs))
 
 
 def _tyre_model_rows(vehicle: Path, config, log: Log, folder: Path) -> list[str]:
@@ -61,13 +63,8 @@ def _tyre_model_rows(vehicle: Path, config, log: Log, folder: Path) -> list[str]
     for name in (n for n in config.estimators if "tyre_model" in config.settings(n)):
         text = vehicle.read_text().replace(f"[estimator.{name}]\n",
                                            f'[estimator.{name}]\ntyre_model = "saturating"\n', 1)
-        counts = []
-        for which in (config, parse_vehicle(text, str(vehicle), config.name)):
-            estimator = build(name, which)
-            inputs = log.matrix(estimator.inputs.names)
-            driver = generated_driver(estimator, render(which, name, "double"), "double")
-            counts.append(driver.instructions_per_step(write_inputs(inputs, folder), len(inputs)))
-        linear, saturating = counts
+        linear, saturating = (instructions_per_step(name, which, log, folder)
+                              for which in (config, parse_vehicle(text, str(vehicle), config.name)))
         lines.append(f"| {name} | {linear:.1f} | {saturating:.1f} | "
                      f"+{saturating - linear:.0f} ({100 * (saturating / linear - 1):.0f} %) |")
     return lines
