@@ -11,8 +11,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from vsegen.harness.reference import blocks
-
-GRAVITY = 9.81
+from vsegen.harness.reference.blocks import GRAVITY
 
 
 def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_prev: float,

@@ -158,8 +158,8 @@ def step(config, state, u):
     if s["residual_window"] > 0 and suspect_ekf and weight < 0.5:   # the EKF carries the output
         status |= blocks.MODEL_INCONSISTENT
     share = s["stiffness_drop_limit"]          # beyond the paper: the tyres past their linear range
-    if ((s["linear_range"] > 0 and abs(ay) > s["linear_range"])
-            or cf < share * v["cornering_stiffness_front"] or cr < share * v["cornering_stiffness_rear"]):
+    status |= blocks.beyond_linear_range(ay, s)
+    if cf < share * v["cornering_stiffness_front"] or cr < share * v["cornering_stiffness_rear"]:
         status |= blocks.BEYOND_LINEAR_RANGE
 
     new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),

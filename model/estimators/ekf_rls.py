@@ -35,6 +35,7 @@ Hold rule (model.guard): while not active every state is kept and beta = 0.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -433,7 +434,7 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
         suspect = ca.logic_and(ca.logic_and(active, check.suspect), weight < 0.5)
         code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
     if choices["linear_range"] > 0 or choices["stiffness_drop_limit"] > 0:    # beyond the paper
-        code = code + ca.if_else(ca.logic_and(active, _beyond_linear_range(vehicle, settings, m.ay, k)),
+        code = code + ca.if_else(ca.logic_and(active, _beyond_linear_range(vehicle, settings, choices, m.ay, k)),
                                  status.BEYOND_LINEAR_RANGE, 0)
     next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
@@ -456,13 +457,18 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
     return next_state, output
 
 
-def _beyond_linear_range(vehicle, settings, ay, k: _Stiffness):
+def _beyond_linear_range(vehicle, settings, choices, ay, k: _Stiffness):
     """|a_y| beyond ``linear_range``, or an axle's learned stiffness below ``stiffness_drop_limit``
-    times the vehicle file's: the tyres work past their linear range."""
-    share = settings["stiffness_drop_limit"]
-    dropped = ca.logic_or(k.c_front < share * vehicle["cornering_stiffness_front"],
-                          k.c_rear < share * vehicle["cornering_stiffness_rear"])
-    return ca.logic_or(consistency.beyond_linear_range(ay, settings), dropped)
+    times the vehicle file's: the tyres work past their linear range. Only the checks switched on
+    (``choices``, the numeric settings) generate code."""
+    tests = []
+    if choices["linear_range"] > 0:
+        tests.append(consistency.beyond_linear_range(ay, settings))
+    if choices["stiffness_drop_limit"] > 0:
+        share = settings["stiffness_drop_limit"]
+        tests += [k.c_front < share * vehicle["cornering_stiffness_front"],
+                  k.c_rear < share * vehicle["cornering_stiffness_rear"]]
+    return functools.reduce(ca.logic_or, tests)
 
 
 def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic: dict) -> ca.SX:
