@@ -133,6 +133,32 @@ def warn_underived(config: VehicleConfig, name: str) -> None:
         click.echo(f"vsegen: {warning}", err=True)
 
 
+def stale_kit(config: VehicleConfig, name: str, real: str, params: str, command: str,
+              missing_ok: bool = False) -> str:
+    """'' when the project's generated/ holds exactly what the vehicle file generates for ``name``
+    in this form (or, with ``missing_ok``, holds no folder for it), so that the C ``command``
+    builds is the C that is checked in; else prints the diff and the command that regenerates it,
+    and returns that line."""
+    from vsegen.codegen.generate import form_folder, render
+    from vsegen.harness.project.files import folder_diffs
+
+    default = (config.codegen["real"], config.codegen["params"])
+    folder = project().generated / config.name / form_folder(name, (real, params), default)
+    if missing_ok and not folder.is_dir():
+        return ""
+    diffs = folder_diffs(render(config, name, real, params), folder, display(folder))
+    for diff in diffs if folder.is_dir() else ():
+        click.echo(diff, nl=False)
+    if diffs:
+        form = "" if (real, params) == default else f" --real {real} --params {params}"
+        what = "differs from" if folder.is_dir() else "is missing: it would hold"
+        why = (f"{display(folder)} {what} what {config.source} generates; run "
+               f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`")
+        click.echo(f"vsegen: {command} FAILED: {why}", err=True)
+        return why
+    return ""
+
+
 def display(path: Path) -> str:
     try:
         return str(path.resolve().relative_to(Path.cwd()))

@@ -9,24 +9,20 @@ from pathlib import Path
 import click
 from rich.table import Table
 
-from vsegen.codegen import generate as codegen
 from vsegen.harness.cli.common import (
     PARAMS_OPTION,
     REAL_OPTION,
     VEHICLE_OPTION,
     chosen_estimators,
     console,
-    display,
+    stale_kit,
     user_errors,
     vehicle_config,
 )
 from vsegen.harness.jobs.progress import RunProgress
-from vsegen.harness.project.files import folder_diffs
-from vsegen.harness.project.paths import project
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
 from vsegen.harness.verify import report
 from vsegen.harness.verify.report import checks
-from vsegen.model.params import VehicleConfig
 
 
 @click.command()
@@ -51,7 +47,7 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
     real = real or config.codegen["real"]
     params = params or config.codegen["params"]
     names = chosen_estimators(config, estimators)
-    stale = {name: why for name in names if (why := _checked_in(config, name, real, params))}
+    stale = {name: why for name in names if (why := stale_kit(config, name, real, params, 'verify'))}
     if stale:
         _write_reports(junit, json_out, report.Run(config.name, real, params, stale), [])
         sys.exit(1)
@@ -74,25 +70,6 @@ def _write_reports(junit: Path | None, json_out: Path | None, run: report.Run, r
     for path, text in ((junit, report.as_junit), (json_out, report.as_json)):
         if path is not None:
             path.write_text(text(run, results))
-
-
-def _checked_in(config: VehicleConfig, name: str, real: str, params: str) -> str:
-    """'' when the project's generated/ holds exactly what the vehicle file generates for ``name``
-    in this form, so that the C verify compiles is the C that is checked in; else prints the diff
-    and the command that regenerates it, and returns that line."""
-    default = (config.codegen["real"], config.codegen["params"])
-    folder = project().generated / config.name / codegen.form_folder(name, (real, params), default)
-    diffs = folder_diffs(codegen.render(config, name, real, params), folder, display(folder))
-    for diff in diffs if folder.is_dir() else ():
-        click.echo(diff, nl=False)
-    if diffs:
-        form = "" if (real, params) == default else f" --real {real} --params {params}"
-        what = "differs from" if folder.is_dir() else "is missing: it would hold"
-        why = (f"{display(folder)} {what} what {config.source} generates; run "
-               f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`")
-        click.echo(f"vsegen: verify FAILED: {why}", err=True)
-        return why
-    return ""
 
 
 def difference_table(title: str, results, extra_rows=None) -> Table:
