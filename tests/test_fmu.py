@@ -6,12 +6,14 @@ error status, and the run goes on unchanged."""
 
 from __future__ import annotations
 
+import shutil
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 from fmpy import calloc, extract, free, read_model_description, simulate_fmu
+from fmpy.build import build_platform_binary
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
     FMU2Slave,
@@ -73,6 +75,20 @@ def test_every_estimator_and_form_as_an_fmu_is_the_c_of_run_on_every_verificatio
         for params in ("baked", "calibratable"):
             assert_same_as_run(config, name, real, params, 3, VERIFICATION_SET, tmp_path)
             assert_same_as_run(config, name, real, params, 2, VERIFICATION_SET[:1], tmp_path)
+
+
+@pytest.mark.parametrize("fmi", [3, 2])
+def test_the_fmu_sources_build_with_fmpy_into_the_same_estimator(config, fmi, tmp_path):
+    """An outside build of the FMU's sources/ (FMPy's CMake project, its own FMI headers, Release
+    flags) instead of our binary: the same outputs, bit for bit."""
+    path = build_fmu(config, "kf2dof", "float", "calibratable", fmi, tmp_path / "kf.fmu").path
+    directory = Path(extract(str(path), unzipdir=str(tmp_path / "unzipped")))
+    shutil.rmtree(directory / "binaries")
+    (tmp_path / "build").mkdir()
+    build_platform_binary(directory, build_dir=tmp_path / "build")
+    estimator, compiled = compile_estimator(config, "kf2dof", "float", "calibratable")
+    inputs = case_inputs(config, estimator, DLC, 1, "float")
+    assert np.array_equal(fmu_run(directory, estimator, inputs, config.sample_time), compiled.run(inputs)[0])
 
 
 def test_the_fmu_describes_units_bounds_and_the_sample_time(config, tmp_path):
