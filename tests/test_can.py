@@ -99,6 +99,10 @@ def test_run_reads_a_blf_with_its_dbc(drive, vsegen, tmp_path):
                     str(drive / "map.toml"), "--estimator", "kf2dof", "--out", str(tmp_path / "est.csv"))
     assert result.exit_code == 0, result.output
     assert "CAN signals" in result.stderr
+    result = vsegen("plot", "--log", str(drive / "drive.blf"), "--dbc", str(drive / "car.dbc"), "--channels",
+                    str(drive / "map.toml"), "--est", str(tmp_path / "est.csv"), "--out", str(tmp_path / "est.png"))
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "est.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.mark.parametrize("change,fragment", [

@@ -79,6 +79,7 @@ def test_list(vsegen):
     assert result.exit_code == 0 and "kf2dof" in result.stdout and "dlc" in result.stdout
     text = " ".join(result.stdout.split())                      # rich may wrap long lines
     assert "[options: mu=0.85 v_start=12.5" in text and "yaw_moment=0.0]" in text
+    assert "bank=0.0 (% cross slope, 3 % = 1.7 deg)" in text and "freeze= (channel:start s:duration s)" in text
 
 
 def test_simulate_run_score_plot(tmp_path, vsegen):
@@ -97,6 +98,25 @@ def test_simulate_run_score_plot(tmp_path, vsegen):
     result = vsegen.process("plot", "--log", str(log), "--est", str(est), "--est", str(ref), "--out", str(fig))
     assert result.exit_code == 0, result.stderr
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_score_and_plot_read_every_format_run_writes(tmp_path, vsegen):
+    log = tmp_path / "log.csv"
+    assert vsegen.process("simulate", "dlc", "--out", str(log)).exit_code == 0
+    tables = {}
+    for suffix in (".csv", ".mf4", ".parquet"):
+        est = tmp_path / f"est{suffix}"
+        assert vsegen.process("run", "--log", str(log), "--estimator", "switching", "--out", str(est)).exit_code == 0
+        result = vsegen.process("score", "--log", str(log), "--est", str(est))
+        assert result.exit_code == 0, result.stderr
+        tables[suffix] = [line for line in result.stdout.splitlines() if "beta (deg)" in line]
+        result = vsegen.process("plot", "--log", str(log), "--est", str(est), "--out", str(tmp_path / "fig.png"))
+        assert result.exit_code == 0, result.stderr
+    assert tables[".csv"] and tables[".csv"] == tables[".mf4"] == tables[".parquet"]
+    (tmp_path / "bad.parquet").write_text("t,beta\n0,0\n")
+    result = vsegen.process("score", "--log", str(log), "--est", str(tmp_path / "bad.parquet"))
+    assert result.exit_code == 2 and "bad.parquet: not a Parquet file" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
 
 
 def test_run_at_another_rate_generates_for_it(tmp_path, vsegen):

@@ -19,7 +19,7 @@ from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.tune.objective import combined
-from vsegen.harness.tune.search import dimensions, tune
+from vsegen.harness.tune.search import Trial, TuneResult, dimensions, harm, tune
 from vsegen.model.calibration import calibration_values
 from vsegen.model.params import parse_vehicle
 
@@ -84,6 +84,20 @@ def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_compu
     tuning.set_calibration(calibration_values(tuned, "switching", estimator.parameters.names))
     inputs = log.matrix(estimator.inputs.names)
     assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
+
+
+def test_keeping_the_base_because_nothing_beat_it_is_no_harm():
+    base = Trial({}, [0.010, 0.012], [0.0, 0.0], 0.0, 0.011)
+    other = Trial({"threshold": 2.0}, [0.011, 0.013], [0.0, 0.0], 0.1, 0.013)
+    worse_cv = (0.011, 0.013)                  # the folds chose `other`: the search rates worse than the base
+
+    def result(best):
+        return TuneResult(None, {}, [], [other], base, best, ["a", "b"], worse_cv, None, None, [], "")
+
+    assert result(base).unchanged and harm(result(base)) == []
+    assert not result(other).unchanged
+    assert [line.split(":")[0] for line in harm(result(other))] == ["training log a", "training log b",
+                                                                     "cross-validated (leave one log out)"]
 
 
 def test_tune_needs_ground_truth_and_says_so_in_one_line(tmp_path: Path, logs, vsegen):

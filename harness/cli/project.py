@@ -17,6 +17,7 @@ from vsegen.harness.cli.common import (
 from vsegen.harness.project import reference_docs
 from vsegen.harness.project.files import file_diff, write_text_atomic
 from vsegen.harness.project.paths import project, shipped_vehicle_names
+from vsegen.harness.sim import disturbances
 from vsegen.harness.sim.scenarios import SCENARIOS
 from vsegen.model.estimators import DEFINITIONS
 
@@ -46,9 +47,12 @@ def list_() -> None:
     console.print("estimators: " + ", ".join(DEFINITIONS))
     console.print("scenarios:")
     for s in SCENARIOS.values():
-        options = " ".join(f"{k}={v}" for k, v in s.defaults.items())
+        options = " ".join(f"{k}={v}" for k, v in s.defaults.items() if k not in disturbances.OPTIONS)
         console.print(f"  {s.name}: {s.description}" + (f"  [options: {options}]" if options else ""),
                       markup=False)  # the brackets are text, not rich markup
+    console.print("disturbances, options of every scenario (--set KEY=VALUE; neutral value, unit):")
+    console.print("  " + "; ".join(f"{k}={v} ({disturbances.UNITS[k]})" for k, v in disturbances.OPTIONS.items()),
+                  markup=False)
     files = project().vehicle_files()
     if files:
         console.print("vehicles:   " + ", ".join(display(p) for p in files))

@@ -23,9 +23,9 @@ from vsegen.harness.logs.estimates import open_estimates, read_estimates
 
 @click.command()
 @click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
-              help="Log CSV with ground truth.")
+              help="Log with ground truth (CSV, MDF4 or raw CAN with --dbc).")
 @click.option("--est", "est_path", type=click.Path(path_type=Path), required=True,
-              help="Estimates CSV from `vsegen run`.")
+              help="Estimates from `vsegen run` (CSV, .mf4 or .parquet).")
 @CHANNELS_OPTION
 @DBC_OPTION
 @window_options
@@ -55,20 +55,22 @@ def score(log_path: Path, est_path: Path, channels: Path | None, dbc: Path | Non
 
 @click.command()
 @click.option("--log", "log_path", type=click.Path(path_type=Path), required=True,
-              help="Log CSV with ground truth.")
+              help="Log (CSV, MDF4 or raw CAN with --dbc), with or without ground truth.")
 @click.option("--est", "est_paths", type=click.Path(path_type=Path), multiple=True, required=True,
-              help="Estimates CSV (repeatable).")
+              help="Estimates from `vsegen run` (CSV, .mf4 or .parquet; repeatable).")
 @click.option("--out", type=click.Path(path_type=Path), required=True, help="PNG to write.")
 @CHANNELS_OPTION
+@DBC_OPTION
 @window_options
 @user_errors
-def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None, start: float | None,
-         stop: float | None) -> None:
+def plot(log_path: Path, est_paths: tuple[Path, ...], out: Path, channels: Path | None, dbc: Path | None,
+         start: float | None, stop: float | None) -> None:
     """Plot beta against the reference and |delta beta| over time (seed 000 Fig. 8 style); without a
     reference in the log, the estimates and their status."""
     from vsegen.harness.score.plot import plot as draw
 
-    log = read_user_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time, (start, stop))
+    log = read_user_log(log_path, channels, lambda: read_estimates(est_paths[0]).sample_time, (start, stop),
+                        dbc=dbc)
     estimates = {}
     for path in est_paths:
         est = read_estimates(path)

@@ -83,6 +83,12 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     for key, why in result.frozen.items():
         console.print(f"kept at its base value: {key} ({why}; --free {key} to search it anyway)")
     console.print(_scores_table(result, estimator, objective, output, unit, trials))
+    console.print("cross-validated: for each training log, the candidate the other logs rank best, scored on "
+                  "the log left out (it rates the search; equal to the training mean when every fold "
+                  "chooses the same candidate)")
+    if result.unchanged:
+        console.print(f"no candidate beat the base settings on the training logs: {out} keeps every value "
+                      f"of {vehicle}")
     for dim in result.dimensions:
         if dim.label in result.best.point:
             console.print(f"  {dim.label} = {result.best.point[dim.label]:.4g}")

@@ -1,7 +1,8 @@
 """Estimates files, as ``vsegen run`` writes them and ``score`` and ``plot`` read them: CSV, ASAM
-MDF4 when the name ends in .mf4/.mdf (or Parquet, .parquet), with ``t`` and the estimator's
-outputs in SI units. An MDF4 file carries each channel's unit; on reading, a unit of the vocabulary of channel maps is
-converted to SI, and a unit of the wrong kind or an unknown one is refused in one line."""
+MDF4 when the name ends in .mf4/.mdf, Parquet when it ends in .parquet, with ``t`` and the
+estimator's outputs in SI units. An MDF4 file carries each channel's unit; on reading, a unit of
+the vocabulary of channel maps is converted to SI, and a unit of the wrong kind or an unknown one
+is refused in one line."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from vsegen.harness.logs.stream import LogSource, arrow_floats, open_csv_log
 from vsegen.harness.logs.table import ESTIMATED, Log, LogError
 from vsegen.harness.project.files import atomic_path
 
+PARQUET = ".parquet"
 KNOWN_UNITS = {"beta": "rad", "beta_ekf": "rad", "beta_int": "rad", "vx": "m/s", "vy": "m/s", "r": "rad/s",
                "ax": "m/s^2", "ay": "m/s^2", "yaw_moment": "N*m", "status": "-", "mode": "-"}
 """The SI unit of the outputs ``score`` and ``plot`` read (others are kept as they are)."""
@@ -35,7 +37,7 @@ class EstimatesWriter:
         self.path = Path(path)
         self.units = units
         self.kind = "mdf" if self.path.suffix.lower() in SUFFIXES else \
-            "parquet" if self.path.suffix.lower() == ".parquet" else "csv"
+            "parquet" if self.path.suffix.lower() == PARQUET else "csv"
         self.samples = 0
 
     def __enter__(self) -> EstimatesWriter:
@@ -121,9 +123,11 @@ def read_estimates(path: Path) -> Log:
 
 
 def open_estimates(path: Path) -> LogSource:
-    """An estimates file (CSV or MDF4, as :func:`read_estimates` takes) as a source of chunks."""
+    """An estimates file (CSV, MDF4 or Parquet, as :func:`read_estimates` takes) as a source of chunks."""
     if Path(path).suffix.lower() in SUFFIXES:
         source = _open_mdf_estimates(path)
+    elif Path(path).suffix.lower() == PARQUET:
+        source = _open_parquet_estimates(path)
     else:
         source = open_csv_log(path, required=("t",), all_numeric=True)
     if not any(name in source.names for name in ESTIMATED):
@@ -171,6 +175,35 @@ def _open_mdf_estimates(path: Path) -> LogSource:
             yield Log({"t": columns.pop("t"), **columns}, str(path))
 
     return LogSource(str(path), sample_time, records, ("t", *channels), chunks, closers=[mdf.close])
+
+
+def _open_parquet_estimates(path: Path) -> LogSource:
+    """The estimates of a Parquet file (``vsegen run --out EST.parquet``), read a record batch at a
+    time: every numeric column, ``t`` first."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        parquet = pq.ParquetFile(path)
+    except (OSError, pa.ArrowException) as exc:
+        raise LogError(f"{path}: not a Parquet file ({str(exc).splitlines()[0]})") from None
+    schema = parquet.schema_arrow
+    numeric = tuple(f.name for f in schema if pa.types.is_floating(f.type) or pa.types.is_integer(f.type))
+    if "t" not in numeric:
+        raise LogError(f"{path}: no numeric column 't': expected the estimates of `vsegen run --out EST.parquet`")
+    samples = parquet.metadata.num_rows
+    if samples < 2:
+        raise LogError(f"{path}: {samples} row(s): expected at least 2")
+    t = parquet.read(columns=["t"]).column("t").to_numpy()
+    sample_time = float((t[-1] - t[0]) / (samples - 1))
+
+    def chunks(rows: int, names: tuple[str, ...]) -> Iterator[Log]:
+        for batch in parquet.iter_batches(batch_size=rows, columns=list(names)):
+            yield Log({name: batch.column(name).to_numpy(zero_copy_only=False).astype(float) for name in names},
+                      str(path))
+
+    return LogSource(str(path), sample_time, samples, ("t", *(n for n in numeric if n != "t")), chunks,
+                     closers=[parquet.close])
 
 
 def _to_si(path: Path, name: str, unit: str) -> float:

@@ -48,6 +48,16 @@ OPTIONS: dict[str, Any] = {
 }
 """The disturbance options and their neutral values (every plant scenario takes them)."""
 
+UNITS: dict[str, str] = {
+    "bank": "% cross slope, 3 % = 1.7 deg", "grade": "%", "ax_offset": "m/s^2", "ay_offset": "m/s^2",
+    "offset_time": "s", "gyro_bias": "rad/s", "gyro_drift": "rad/s per sqrt(s)", "steer_offset": "rad",
+    "mount_roll": "rad", "mount_pitch": "rad", "mount_yaw": "rad", "latency": "channel:s,...",
+    "quantise": "channel:LSB,...", "spikes": "channel:count x size,...", "freeze": "channel:start s:duration s",
+    "dropout": "channel:start s:duration s", "mass_added": "kg", "cg_shift": "m behind the CG",
+    "tyre_scale": "factor on the cornering stiffness",
+}
+"""The unit or form of each option, as ``vsegen list`` shows it."""
+
 SEED_OFFSET = 7919
 """The disturbances draw from seed + this, apart from the sensor noise's generator."""
 

@@ -233,6 +233,11 @@ class TuneResult:
     text: str
     """The tuned vehicle file (its header comments say how it was tuned)."""
 
+    @property
+    def unchanged(self) -> bool:
+        """No candidate beat the base settings: the choice is the base itself."""
+        return self.best is self.base
+
 
 def _calibration(text: str, source: str, vehicle_name: str, name: str,
                  names: tuple[str, ...]) -> tuple[float, ...] | None:
@@ -371,7 +376,11 @@ def cross_validated(candidates: Sequence[Trial], base: Trial) -> tuple[float, fl
 def harm(result: TuneResult) -> list[str]:
     """Where the chosen settings do harm (one line each; empty: none): worse than the base by more
     than HARM_MARGIN on a training log, in the cross-validated score or on the hold-out, or silently
-    wrong on the hold-out where the base was not."""
+    wrong on the hold-out where the base was not. When nothing beat the base, the choice is the base
+    and harms nothing (its cross-validated score may still be worse: it rates the search, whose
+    folds may choose other candidates, not the settings written)."""
+    if result.unchanged:
+        return []
     found = []
     for log, base, chosen in zip(result.train_names, result.base.scores, result.best.scores):
         if chosen > (1 + HARM_MARGIN) * base:
