@@ -118,6 +118,37 @@ def test_the_baseline_comparison_lists_the_logs_where_new_settings_are_worse(dat
                      "--baseline", str(out / "results.parquet"), "--out", str(tmp_path / "release"))
     assert release.exit_code == 0, release.output
     assert "No log is worse." in (tmp_path / "release" / "summary.md").read_text()
+    again = vsegen("campaign", str(database / "*.csv"), "--estimator", "kf2dof", "--vehicle", str(heavy),
+                   "--scheduler", "serial", "--baseline", str(out / "results.parquet"),
+                   "--out", str(tmp_path / "again"))
+    assert again.exit_code == 1 and "0 computed" in again.output      # broken.csv; every run from the cache
+    assert "No log is worse." in (tmp_path / "again" / "summary.md").read_text()   # heavy against heavy, not c_class
+
+
+def test_a_baseline_table_of_several_settings_files_is_matched_by_name_or_refused(database, cache, vsegen, tmp_path):
+    from vsegen.harness.campaign.report import baseline_settings, write_table
+
+    rows = [{"log": "a.csv", "estimator": "kf2dof", "settings": label, "duration_s": 1.0, "time_flagged_s": 0.0,
+             "beta_rmse_deg": 0.1, "silent_longest_s": 0.0} for label in ("car", "car_v2", "baseline:car_v1")]
+    assert baseline_settings(rows, ["car_v2"], tmp_path / "t.parquet") == {"car_v2": "car_v2"}
+    assert baseline_settings(rows[:1] + rows[2:], ["car_v3"], tmp_path / "t.parquet") == {"car_v3": "car"}
+    write_table(rows, tmp_path / "two.parquet")
+    result = vsegen("campaign", str(database / "dlc_60.csv"), "--baseline", str(tmp_path / "two.parquet"),
+                    "--scheduler", "serial", "--out", str(tmp_path / "out"))
+    assert result.exit_code == 2 and len(result.stderr.strip().splitlines()) == 1, result.output
+    assert "two.parquet: rows of the settings car, car_v2: expected one of them to be named c_class" in result.stderr
+
+
+def test_a_silently_wrong_run_is_listed_and_fails_the_campaign(database, cache, vsegen, tmp_path, write_vehicle):
+    wrong = write_vehicle("mass = 1412.0", "mass = 5000.0", name="wrong.toml")      # kf2dof: 0.73 s silent
+    out = tmp_path / "out"
+    result = vsegen("campaign", str(database / "dlc_60.csv"), "--estimator", "kf2dof", "--vehicle", str(wrong),
+                    "--scheduler", "serial", "--out", str(out))
+    assert result.exit_code == 1, result.output
+    assert "vsegen: silently wrong: kf2dof (wrong) on" in result.stderr and "for 0.73 s" in result.stderr
+    section = (out / "summary.md").read_text().split("## Silently wrong (a bug)")[1]
+    assert "| dlc_60.csv | wrong | kf2dof | 0.73 |" in section
+    assert "Silently wrong (a bug)" in (out / "report.html").read_text()
 
 
 def test_campaign_mistakes_are_one_line(vsegen, database, cache, tmp_path):

@@ -16,12 +16,11 @@ import numpy as np
 from vsegen.harness.campaign.row import LATERAL_COLUMNS, SPEED_COLUMNS
 from vsegen.harness.logs.table import LogError
 from vsegen.harness.project.files import write_atomic, write_text_atomic
+from vsegen.harness.score.metrics import SILENT_DURATION
 
 WORSE_RMSE_RATIO = 1.05
 WORSE_RMSE_MARGIN = 0.01
 """deg: a log's beta RMSE is worse when it exceeds the baseline's by 5 % plus this."""
-SILENT_DURATION = 0.5
-"""s: a silent stretch longer than this, and longer than the baseline's, is worse."""
 WORSE_FLAGGED = 0.01
 """Without a reference: flagged for longer than the baseline by this share of the log (and 1 s)."""
 
@@ -69,14 +68,37 @@ def read_table(path: Path) -> list[dict]:
     return table.to_pylist()
 
 
-def compare(rows: Sequence[dict], baseline: Sequence[dict]) -> list[Worse]:
-    """Where ``rows`` do worse than ``baseline`` (matched by log and estimator): a beta RMSE above
-    the baseline's by more than 5 % + 0.01 deg, a silent stretch beyond 0.5 s and the baseline's,
-    or, without a reference, more time flagged."""
-    base = {(row["log"], row["estimator"]): row for row in baseline}
+BASELINE_PREFIX = "baseline:"
+"""The settings label of a campaign's --baseline settings file (its rows are not its results)."""
+
+
+def baseline_settings(table: Sequence[dict], labels: Sequence[str], path: Path) -> dict[str, str]:
+    """Which settings of an earlier campaign's ``table`` each new settings label is compared with:
+    the one of the same name, else the table's only one; rows of the earlier campaign's own
+    baseline do not count. LogError (one line) when that is ambiguous."""
+    old = sorted({row.get("settings", "") for row in table} - {""}
+                 - {label for label in {row.get("settings", "") for row in table} if label.startswith(BASELINE_PREFIX)})
+    old = old or [""]
+    chosen = {}
+    for label in labels:
+        if label in old or len(old) == 1:
+            chosen[label] = label if label in old else old[0]
+        else:
+            raise LogError(f"{path}: rows of the settings {', '.join(old)}: expected one of them to be named "
+                           f"{label} like the new settings file, or a table of one settings file")
+    return chosen
+
+
+def compare(rows: Sequence[dict], baseline: Sequence[dict], matched: dict[str, str] | None = None) -> list[Worse]:
+    """Where ``rows`` do worse than ``baseline``, matched by log, estimator and settings
+    (``matched``: new settings label -> the baseline's; None: every row against every baseline row
+    of the same log and estimator, the baseline holding one settings file): a beta RMSE above the
+    baseline's by more than 5 % + 0.01 deg, a silent stretch beyond 0.5 s and the baseline's, or,
+    without a reference, more time flagged."""
+    base = {(row["log"], row["estimator"], row.get("settings", "") if matched else ""): row for row in baseline}
     worse = []
     for row in rows:
-        old = base.get((row["log"], row["estimator"]))
+        old = base.get((row["log"], row["estimator"], matched.get(row["settings"], "") if matched else ""))
         if old is None:
             continue
         new_rmse, old_rmse = row["beta_rmse_deg"], old["beta_rmse_deg"]
@@ -107,6 +129,8 @@ class Summary:
     worse: list[list[str]]
     failed: list[list[str]]
     worst_rows: list[dict]
+    silent: list[list[str]]
+    """Runs silently wrong (|beta error| > 2 deg with status 0) for longer than SILENT_DURATION: bugs."""
 
 
 def summarise(result, estimators: Sequence[str], labels: Sequence[str], worse: Sequence[Worse] | None,
@@ -155,7 +179,17 @@ def summarise(result, estimators: Sequence[str], labels: Sequence[str], worse: S
     worse_table = [["log", "estimator", "measure", "new", f"baseline ({baseline})"]] + [
         [Path(w.log).name, w.estimator, w.measure, f"{w.new:.3f}", f"{w.baseline:.3f}"] for w in (worse or [])]
     failed = [["log", "reason"]] + [[Path(log).name, reason] for log, reason in result.failed]
-    return Summary(headline, groups, coverage, worst_table, worse_table if baseline else [], failed, worst_rows)
+    silent = [["log", "settings", "estimator", "longest silent (s)", "beta RMSE (deg)"]] + [
+        [Path(row["log"]).name, row["settings"], row["estimator"], _number(row["silent_longest_s"], 2),
+         _number(row["beta_rmse_deg"])]
+        for row in sorted(rows, key=lambda row: -row["silent_longest_s"]) if silently_wrong(row)]
+    return Summary(headline, groups, coverage, worst_table, worse_table if baseline else [], failed, worst_rows,
+                   silent)
+
+
+def silently_wrong(row: dict) -> bool:
+    """A run's estimate was wrong with status 0 for longer than SILENT_DURATION (a bug)."""
+    return _finite(row["silent_longest_s"]) and row["silent_longest_s"] > SILENT_DURATION
 
 
 def _badness(row: dict) -> tuple[float, float]:
@@ -181,6 +215,9 @@ def markdown(summary: Summary) -> str:
     parts = ["# Campaign", "", summary.headline, "", "## Per settings and estimator", "", _md(summary.groups),
              "", "## Coverage (the logs' time in each band)", "", _md(summary.coverage), "",
              "## Worst logs", "", _md(summary.worst)]
+    if len(summary.silent) > 1:
+        parts += ["", f"## Silently wrong (a bug): |beta error| > 2 deg with status 0 for more than "
+                      f"{SILENT_DURATION:g} s", "", _md(summary.silent)]
     if summary.worse:
         parts += ["", "## Where the new settings are worse than the baseline", "",
                   _md(summary.worse) if len(summary.worse) > 1 else "No log is worse."]
@@ -201,7 +238,8 @@ def html(summary: Summary, plots: Sequence[tuple[str, bytes]]) -> str:
 
     env = Environment(loader=PackageLoader("vsegen.harness.campaign", "."), autoescape=select_autoescape(["j2"]))
     return env.get_template("report.html.j2").render(
-        summary=summary, plots=[(caption, base64.b64encode(png).decode()) for caption, png in plots])
+        summary=summary, plots=[(caption, base64.b64encode(png).decode()) for caption, png in plots],
+        silent_duration=f"{SILENT_DURATION:g}")
 
 
 def worst_plots(summary: Summary, estimates_of, count: int) -> list[tuple[str, bytes]]:
