@@ -3,10 +3,13 @@ line and a clean slate of the per-process memos."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+os.environ.pop("COLUMNS", None)     # pytest-xdist's workers set 80; the commands' tables honour it
 
 import pytest
 from click.testing import CliRunner

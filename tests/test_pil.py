@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from junitparser import JUnitXml
 from locations import DEFAULT_VEHICLE, REPO
 
 from vsegen.codegen.generate import render
@@ -100,9 +101,15 @@ def test_a_recorded_log_replays_on_the_target(tmp_path, vsegen):
     log = tmp_path / "drive.csv"
     simulated = vsegen("simulate", "fishhook", "--vehicle", vehicle, "--seed", "4", "--no-truth", "--out", log)
     assert simulated.exit_code == 0
-    result = vsegen("pil", "--vehicle", vehicle, "--log", log, "--estimator", "kf2dof", "--target", "m4f")
+    junit = tmp_path / "pil.xml"
+    result = vsegen("pil", "--vehicle", vehicle, "--log", log, "--estimator", "kf2dof", "--target", "m4f",
+                    "--junit", junit)
     assert result.exit_code == 0, result.output
     assert "drive.csv" in result.stdout and "PIL passed" in result.stdout
+    (suite,) = JUnitXml.fromfile(str(junit))
+    assert suite.name == "rwd_saloon.kf2dof.float-baked@m4f" and suite.failures == 0
+    names = [case.name for case in suite]
+    assert "drive.csv: beta" in names and "drive.csv: vs host build" in names and "cost on the target" in names
 
 
 def test_a_log_at_another_rate_is_refused_in_one_line(tmp_path, vsegen):

@@ -11,11 +11,14 @@ import click
 from vsegen.harness.cli.common import (
     CHANNELS_OPTION,
     DBC_OPTION,
+    JSON_OPTION,
+    JUNIT_OPTION,
     UserError,
     chosen_estimators,
     console,
     user_errors,
 )
+from vsegen.harness.project.results import Check, write_results
 
 DEFAULT_ESTIMATORS = ("switching",)
 PLOTS = 3
@@ -38,9 +41,12 @@ PLOTS = 3
                    "Dask scheduler, e.g. tcp://host:8786 (its workers must see the logs at the same paths).")
 @click.option("--out", type=click.Path(path_type=Path), default=Path("campaign"), show_default=True,
               help="Folder for results.parquet, summary.md and report.html.")
+@JUNIT_OPTION
+@JSON_OPTION
 @user_errors
 def campaign(logs: tuple[str, ...], estimators: tuple[str, ...], vehicles: tuple[Path, ...], baseline: Path | None,
-             channels: Path | None, dbc: Path | None, scheduler: str | None, out: Path) -> None:
+             channels: Path | None, dbc: Path | None, scheduler: str | None, out: Path, junit: Path | None,
+             json_out: Path | None) -> None:
     """Run LOGS (files, folders searched for logs, or glob patterns) through every estimator with
     every settings file. Each run's row is cached by (log content, generated C, settings): a second
     campaign computes only what changed. Logs that cannot be read are listed with their reason and
@@ -91,11 +97,33 @@ def campaign(logs: tuple[str, ...], estimators: tuple[str, ...], vehicles: tuple
     for _, reason in result.failed:
         click.echo(f"vsegen: failed: {reason}", err=True)
     silent = [row for row in new if report.silently_wrong(row)]
+    write_results(junit, json_out, f"vsegen campaign {out}", _checks(result, worse or []),
+                  {"headline": summary.headline})
     for row in silent:
         click.echo(f"vsegen: silently wrong: {row['estimator']} ({row['settings']}) on {row['log']}: "
                    f"|beta error| > 2 deg with status 0 for {row['silent_longest_s']:.2f} s", err=True)
     if result.failed or silent:
         raise SystemExit(1)
+
+
+def _checks(result, worse) -> list[Check]:
+    """A check per run (log x estimator x settings; a failure when silently wrong, its figures and
+    where it is worse than the baseline) and one per log that failed."""
+    from vsegen.harness.campaign import report
+
+    worse_by_run = {}
+    for w in worse:
+        worse_by_run.setdefault((w.log, w.estimator), []).append(f"{w.measure}: {w.new:.3f} against {w.baseline:.3f}")
+    checks = [Check(f"{row['settings']}.{row['estimator']}", row["log"],
+                    {"estimator": row["estimator"], "settings": row["settings"], "duration_s": row["duration_s"],
+                     "time_flagged_s": row["time_flagged_s"], "beta_rmse_deg": row["beta_rmse_deg"],
+                     "beta_max_deg": row["beta_max_deg"], "silent_longest_s": row["silent_longest_s"],
+                     "input_faults": row["input_faults"],
+                     "worse_than_baseline": "; ".join(worse_by_run.get((row["log"], row["estimator"]), [])) or None},
+                    f"silently wrong for {row['silent_longest_s']:.2f} s (|beta error| > 2 deg with status 0)"
+                    if report.silently_wrong(row) else None, "silently wrong")
+              for row in result.rows if not row["settings"].startswith(report.BASELINE_PREFIX)]
+    return checks + [Check("failed logs", log, {}, reason, "log failed") for log, reason in result.failed]
 
 
 def _settings(path: Path | None, label: str | None = None):

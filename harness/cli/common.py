@@ -4,12 +4,14 @@ the vehicle and estimator choice, and reading a user's log."""
 from __future__ import annotations
 
 import functools
+import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import click
 from rich.console import Console
+from rich.table import Table
 
 from vsegen.harness.logs.table import LogError
 from vsegen.harness.project.paths import ProjectError, project
@@ -18,7 +20,8 @@ from vsegen.harness.sim.scenarios import ScenarioError
 from vsegen.model.estimators import DEFINITIONS, underived_warning
 from vsegen.model.params import ParameterError, VehicleConfig
 
-console = Console(highlight=False, width=None if sys.stdout.isatty() else 120)
+console = Console(highlight=False, width=None if sys.stdout.isatty() or os.environ.get("COLUMNS") else 120)
+"""stdout: the terminal's width, else $COLUMNS, else 120 columns."""
 
 
 class UserError(click.ClickException):
@@ -61,6 +64,11 @@ UNIT_CHECK_OPTION = click.option("--no-unit-check", "no_unit_check", is_flag=Tru
                                       "delta against l r / v_x).")
 DBC_OPTION = click.option("--dbc", type=click.Path(path_type=Path), default=None,
                            help="The car's DBC: decode a raw CAN log (BLF, ASC, or bus-logging MDF4) with it.")
+JUNIT_OPTION = click.option("--junit", type=click.Path(path_type=Path), default=None,
+                            help="Also write the results as JUnit XML (a test case per thing checked, figures as "
+                                 "properties).")
+JSON_OPTION = click.option("--json", "json_out", type=click.Path(path_type=Path), default=None,
+                           help="Also write the results as JSON (a record per thing checked).")
 VEHICLE_OPTION = click.option("--vehicle", type=click.Path(path_type=Path), default=None,
                               help="Vehicle TOML. Default: the project's only vehicle file, else its "
                                    "vehicles/c_class.toml.")
@@ -157,6 +165,19 @@ def stale_kit(config: VehicleConfig, name: str, real: str, params: str, command:
         click.echo(f"vsegen: {command} FAILED: {why}", err=True)
         return why
     return ""
+
+
+def print_table(table: Table) -> None:
+    """Print ``table`` on stdout without cutting a number: right-aligned (number) columns never wrap;
+    when even so the table is wider than the console, it is printed at its own width."""
+    for column in table.columns:
+        if column.justify == "right":
+            column.no_wrap = True
+    needed = console.measure(table).minimum
+    if needed <= console.width:
+        console.print(table)
+    else:
+        Console(highlight=False, width=needed, file=console.file).print(table)
 
 
 def display(path: Path) -> str:

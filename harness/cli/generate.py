@@ -9,6 +9,8 @@ import click
 
 from vsegen.codegen import generate as codegen
 from vsegen.harness.cli.common import (
+    JSON_OPTION,
+    JUNIT_OPTION,
     PARAMS_OPTION,
     REAL_OPTION,
     chosen_estimators,
@@ -19,6 +21,7 @@ from vsegen.harness.cli.common import (
 )
 from vsegen.harness.project.files import folder_diffs, write_folder
 from vsegen.harness.project.paths import project
+from vsegen.harness.project.results import Check, write_results
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.model.params import VehicleConfig
 
@@ -45,14 +48,14 @@ def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
                   for folder in vehicle.iterdir() if folder.is_dir() and folder.resolve() not in expected)
 
 
-def _up_to_date(files: dict[str, str], folder: Path) -> bool:
-    """Whether ``folder`` holds exactly ``files``; prints the diffs if not."""
+def _up_to_date(files: dict[str, str], folder: Path) -> list[str]:
+    """The diffs between ``folder`` and ``files`` (printed; none: up to date)."""
     diffs = folder_diffs(files, folder, display(folder))
     for diff in diffs:
         click.echo(diff, nl=False)
     if not diffs:
         console.print(f"up to date  {display(folder)}")
-    return not diffs
+    return diffs
 
 
 @click.command()
@@ -66,11 +69,14 @@ def _up_to_date(files: dict[str, str], folder: Path) -> bool:
               help="Do not write: compare with --out and print a unified diff of what would change.")
 @REAL_OPTION
 @PARAMS_OPTION
+@JUNIT_OPTION
+@JSON_OPTION
 @user_errors
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path | None,
-             check_only: bool, real: str | None, params: str | None) -> None:
+             check_only: bool, real: str | None, params: str | None, junit: Path | None,
+             json_out: Path | None) -> None:
     """Generate the C of each estimator (or check that --out is up to date)."""
-    stale, expected = [], set()
+    stale, expected, checks = [], set(), []
     out = out or project().generated
     for path in vehicles or project().required_vehicle_files():
         config = load_vehicle(path)
@@ -80,16 +86,27 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
                 folder = out / config.name / folder_name
                 expected.add(folder.resolve())
                 files = codegen.render(config, name, form_real, form_params)
-                if check_only and not _up_to_date(files, folder):
+                diffs = _up_to_date(files, folder) if check_only else []
+                if diffs:
                     stale.append(display(folder))
                 elif not check_only:
                     write_folder(files, folder)
                     console.print(f"generated   {display(folder)}  ({', '.join(sorted(files))})")
+                form = "" if folder_name == name else f" --real {form_real} --params {form_params}"
+                checks.append(Check(f"{config.name}.{name}.{form_real}-{form_params}", display(folder),
+                                    {"vehicle": config.name, "estimator": name, "real": form_real,
+                                     "params": form_params, "files": len(files), "files_differing": len(diffs)},
+                                    f"{len(diffs)} file(s) differ from what {config.source} generates; run "
+                                    f"`vsegen generate --vehicle {config.source} --estimator {name}{form}`"
+                                    if diffs else None, "stale generated code"))
     if check_only and not (vehicles or estimators or real or params):   # the whole tree: no folder left over
         for folder in _stray_folders(out, expected):
             click.echo(f"vsegen: {display(folder)}: no vehicle file or estimator generates this folder "
                        f"(remove it)", err=True)
             stale.append(display(folder))
+            checks.append(Check("stray folders", display(folder), {},
+                                "no vehicle file or estimator generates this folder (remove it)", "stray folder"))
+    write_results(junit, json_out, f"vsegen generate{' --check' if check_only else ''}", checks)
     if stale:
         click.echo(f"vsegen: generated code is stale in {', '.join(stale)}: run `vsegen generate`",
                    err=True)

@@ -13,6 +13,7 @@ from vsegen.harness.cli.common import (
     UserError,
     console,
     open_user_log,
+    print_table,
     read_user_log,
     say_notes,
     user_errors,
@@ -47,7 +48,7 @@ def score(log_path: Path, est_path: Path, channels: Path | None, dbc: Path | Non
     for s in scores:
         table.add_row(f"{s.signal} ({s.unit})", str(s.samples), f"{s.max:.3f}", f"{s.mean:.3f}",
                       f"{s.rmse:.3f}")
-    console.print(table)
+    print_table(table)
     if sums.first_off_course is not None:
         console.print(f"warning: the run left the course or spun from t = {sums.first_off_course:.2f} s "
                       f"(column off_course); these scores include those samples")

@@ -17,6 +17,7 @@ from vsegen.harness.cli.common import (
     UserError,
     chosen_estimators,
     console,
+    print_table,
     read_user_log,
     user_errors,
 )
@@ -82,7 +83,7 @@ def tune(estimator: str, log_paths: tuple[Path, ...], vehicle: Path, out: Path, 
     console.print(f"training coverage: {result.coverage.describe()}")
     for key, why in result.frozen.items():
         console.print(f"kept at its base value: {key} ({why}; --free {key} to search it anyway)")
-    console.print(_scores_table(result, estimator, objective, output, unit, trials))
+    print_table(_scores_table(result, estimator, objective, output, unit, trials))
     console.print("cross-validated: for each training log, the candidate the other logs rank best, scored on "
                   "the log left out (it rates the search; equal to the training mean when every fold "
                   "chooses the same candidate)")

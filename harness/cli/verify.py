@@ -10,11 +10,14 @@ import click
 from rich.table import Table
 
 from vsegen.harness.cli.common import (
+    JSON_OPTION,
+    JUNIT_OPTION,
     PARAMS_OPTION,
     REAL_OPTION,
     VEHICLE_OPTION,
     chosen_estimators,
     console,
+    print_table,
     stale_kit,
     user_errors,
     vehicle_config,
@@ -32,10 +35,8 @@ from vsegen.harness.verify.report import checks
 @click.option("--seed", default=1, show_default=True, help="Seed of the simulated sensor noise.")
 @REAL_OPTION
 @PARAMS_OPTION
-@click.option("--junit", type=click.Path(path_type=Path), default=None,
-              help="Also write the results as JUnit XML (a test case per estimator, scenario and signal).")
-@click.option("--json", "json_out", type=click.Path(path_type=Path), default=None,
-              help="Also write the results as JSON.")
+@JUNIT_OPTION
+@JSON_OPTION
 @user_errors
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
            params: str | None, junit: Path | None, json_out: Path | None) -> None:
@@ -56,7 +57,7 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
                              on_done=lambda result: progress.done(result.estimator, result.ok))
     table = difference_table(f"generated C vs NumPy reference, vehicle {config.name}, "
                               f"T = {config.sample_time} s, {real}, {params} parameters", results)
-    console.print(table)
+    print_table(table)
     explain_differences(real, any(r.flips for r in results), any(r.crossings for r in results))
     _write_reports(junit, json_out, report.Run(config.name, real, params), results)
     failed = [r for r in results if not r.ok]
