@@ -24,7 +24,7 @@ import numpy as np
 from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, options_cost, pil, seed003, versus_hand
 from bench.document import provenance, section_of, with_section
 from bench.measure import CC, FLAGS, LOG_CASE, generated_driver, write_inputs
-from vsegen.codegen.generate import REVIEWED_FORMS, render
+from vsegen.codegen.generate import render
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import REFERENCES
 from vsegen.harness.target.toolchains import available, build_for_target, target_for
@@ -113,8 +113,7 @@ def main(argv: list[str] | None = None) -> None:
     lines += ["", f"## Fuzzing ({args.fuzz_steps:,} steps per estimator and precision, ASan + UBSan)", "",
               "| estimator | form | steps | rejected inputs | result |", "|---|---|---|---|---|"]
     forms = [(name, real, "baked") for name in config.estimators for real in ("double", "float")]
-    forms += [(name, real, params) for name, reviewed in REVIEWED_FORMS.items() for real, params in reviewed
-              if params == "calibratable"]
+    forms += [(name, real, params) for name, real, params in config.codegen["forms"] if params == "calibratable"]
     for name, real, params in forms:
         report = fuzz_estimator(config, name, real, steps=args.fuzz_steps, seed=2, params=params)
         form = real if params == "baked" else f"{real}, calibration fuzzed too"

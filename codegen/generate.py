@@ -51,15 +51,6 @@ def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
     )
 
 
-REVIEWED_FORMS: dict[str, tuple[tuple[str, str], ...]] = {
-    "kf2dof": (("float", "baked"), ("double", "calibratable"), ("float", "calibratable")),
-    "pf_improved": (("float", "baked"), ("double", "calibratable"), ("float", "calibratable")),
-}
-"""Forms other than a vehicle's [codegen] default whose output is committed to the repository's
-``generated/`` too (as ``<vehicle>/<estimator>-<real>-<params>/``), so a change to the float or
-calibratable output shows up in a reviewed diff: a plain filter and a particle filter."""
-
-
 def ziggurat_literals(real: str) -> dict[str, list[str]]:
     """The ziggurat's tables (``model.ziggurat``) as C literals of type ``real``: a float build's
     entries are the double tables rounded once to float (written as that float's exact value)."""
@@ -71,10 +62,12 @@ def ziggurat_literals(real: str) -> dict[str, list[str]]:
             **reals}
 
 
-def forms_to_write(name: str, default: tuple[str, str]) -> list[tuple[str, str, str]]:
-    """(real, params, folder name) of every form of ``name`` written to the repository's
-    ``generated/<vehicle>/``: the default first, then its REVIEWED_FORMS."""
-    others = [form for form in REVIEWED_FORMS.get(name, ()) if form != default]
+def forms_to_write(config: VehicleConfig, name: str) -> list[tuple[str, str, str]]:
+    """(real, params, folder name) of every form of ``name`` the vehicle file declares: its
+    [codegen] default first, then those of its [codegen] ``forms``."""
+    default = (config.codegen["real"], config.codegen["params"])
+    others = [(real, params) for estimator, real, params in config.codegen["forms"]
+              if estimator == name and (real, params) != default]
     return [(*default, name), *((real, params, form_folder(name, (real, params), default)) for real, params in others)]
 
 

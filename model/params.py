@@ -53,7 +53,8 @@ class VehicleConfig:
         estimators: per estimator name, its validated settings.
         plant: the truth plant's parameters ([plant], simulation only), or None.
         sensors: the simulated sensors' parameters ([sensors]), or None.
-        codegen: generation defaults ([codegen]): ``real`` and ``params``.
+        codegen: generation defaults ([codegen]): ``real``, ``params`` and the other ``forms``
+            flashed, a tuple of (estimator, real, params).
     """
 
     name: str
@@ -64,7 +65,7 @@ class VehicleConfig:
     estimators: Mapping[str, Mapping[str, Any]]
     plant: Mapping[str, Any] | None = None
     sensors: Mapping[str, float] | None = None
-    codegen: Mapping[str, str] = field(
+    codegen: Mapping[str, Any] = field(
         default_factory=lambda: MappingProxyType({f.key: f.default for f in CODEGEN}))
     derived_for: str = ""
     """``[estimator] derived_for``: the :meth:`vehicle_fingerprint` the car-specific settings were
@@ -171,6 +172,10 @@ def parse_vehicle(text: str, source: str, name: str) -> VehicleConfig:
         raise ParameterError(f"{where.at(('codegen',))}: [codegen] is not a table")
     _reject_unknown(codegen_table, {f.key for f in CODEGEN}, ("codegen",), where)
     codegen = _fields(codegen_table, ("codegen",), CODEGEN, where)
+    for form in codegen["forms"]:
+        if form[0] not in estimators:
+            raise ParameterError(f"{where.at(('codegen', 'forms'))}: [codegen] forms names {form[0]}: expected "
+                                 f"an estimator the file configures ({', '.join(estimators)})")
     return VehicleConfig(
         codegen=MappingProxyType(codegen),
         name=name,

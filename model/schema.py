@@ -309,10 +309,32 @@ SENSORS: tuple[Field, ...] = (
 # [codegen]: how the C is generated for this vehicle (command-line options override). Optional.
 REALS = ("double", "float")
 PARAMETER_MODES = ("baked", "calibratable")
+def forms_field(key: str, doc: str) -> Field:
+    """A list of forms "<estimator>:<real>-<params>", e.g. "switching:float-calibratable"
+    (optional, empty when absent); normalised to a tuple of (estimator, real, params)."""
+    expected = (f'a list of "<estimator>:<real>-<params>" strings, <real> one of {", ".join(REALS)} and '
+                f'<params> one of {", ".join(PARAMETER_MODES)} (e.g. "switching:float-calibratable")')
+
+    def check(value: Any) -> tuple[tuple[str, str, str], ...]:
+        if not isinstance(value, list):
+            raise Invalid(expected)
+        forms = []
+        for entry in value:
+            match = re.fullmatch(r"([a-z0-9_]+):([a-z]+)-([a-z]+)", entry) if isinstance(entry, str) else None
+            if not match or match.group(2) not in REALS or match.group(3) not in PARAMETER_MODES:
+                raise Invalid(expected)
+            forms.append(match.groups())
+        return tuple(dict.fromkeys(forms))
+
+    return Field(key, expected, check, doc, ())
+
+
 CODEGEN: tuple[Field, ...] = (
     choice("real", REALS, "C floating-point type of the generated code", default="double"),
     choice("params", PARAMETER_MODES, "parameters as literals (baked) or read at run time from a "
            "const calibration struct (calibratable)", default="baked"),
+    forms_field("forms", "forms flashed besides the default one, each generated into generated/<vehicle>/"
+                "<estimator>-<real>-<params>/, checked by `generate --check` and verified by `verify`"),
 )
 
 # [estimator]: common to all estimators of the file

@@ -10,9 +10,9 @@ from locations import DEFAULT_VEHICLE, REPO
 
 @pytest.mark.slow
 def test_verify_default_vehicle_prints_table(vsegen):
-    result = vsegen.process("verify")
+    result = vsegen.process("verify", "--real", "double", "--params", "baked")
     assert result.exit_code == 0, result.stderr
-    assert "verify passed: 126 runs" in result.stdout
+    assert "verify passed: 126 runs in 1 form(s)" in result.stdout
 
 
 def test_verify_compiles_the_checked_in_c_and_fails_first_on_an_edit(tmp_path, vsegen):
@@ -32,6 +32,28 @@ def test_verify_compiles_the_checked_in_c_and_fails_first_on_an_edit(tmp_path, v
             and "run `vsegen generate --vehicle" in result.stderr and "--estimator kf2dof`" in result.stderr)
     missing = vsegen.process("verify", "--estimator", "switching", cwd=tmp_path)
     assert missing.exit_code == 1 and "generated/c_class/switching is missing" in missing.stderr
+
+
+def test_a_form_generated_once_is_declared_then_regenerated_checked_and_verified(tmp_path, vsegen):
+    (tmp_path / "vehicles").mkdir()
+    vehicle = tmp_path / "vehicles" / "c_class.toml"
+    vehicle.write_text(re.sub(r"\nforms = \[[^\]]*\]", "", DEFAULT_VEHICLE.read_text()))
+    generated = vsegen.process("generate", "--estimator", "kf2dof", "--real", "float", "--params", "baked",
+                               cwd=tmp_path)
+    assert generated.exit_code == 0, generated.stderr
+    assert "declared    kf2dof:float-baked in vehicles/c_class.toml [codegen] forms" in generated.stdout
+    assert 'forms = ["kf2dof:float-baked"]' in vehicle.read_text()
+    assert vsegen.process("generate", "--estimator", "kf2dof", cwd=tmp_path).exit_code == 0
+    check = vsegen.process("generate", "--check", "--estimator", "kf2dof", cwd=tmp_path)
+    assert check.exit_code == 0 and "up to date  generated/c_class/kf2dof-float-baked" in check.stdout
+    verified = vsegen.process("verify", "--estimator", "kf2dof", cwd=tmp_path)
+    assert verified.exit_code == 0, verified.stderr
+    assert "verify passed: 28 runs in 2 form(s)" in verified.stdout
+    vehicle.write_text(vehicle.read_text().replace("mass = 1412.0", "mass = 1500.0"))
+    stale = vsegen.process("generate", "--check", "--estimator", "kf2dof", cwd=tmp_path)
+    assert stale.exit_code == 1 and "generated/c_class/kf2dof-float-baked" in stale.stderr
+    assert vsegen.process("generate", "--estimator", "kf2dof", cwd=tmp_path).exit_code == 0
+    assert vsegen.process("generate", "--check", "--estimator", "kf2dof", cwd=tmp_path).exit_code == 0
 
 
 def test_generate_check_is_clean_on_the_repository(vsegen):

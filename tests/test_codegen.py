@@ -209,15 +209,16 @@ def test_integration_kit_builds_and_reproduces_the_harness(tmp_path, config, fil
         assert result.returncode == 0, result.stdout + result.stderr
 
 
-def test_reviewed_forms_follow_the_default_without_repeating_it():
+def test_declared_forms_follow_the_default_without_repeating_it(config, variant):
     from vsegen.codegen.generate import forms_to_write
-    assert forms_to_write("kf2dof", ("double", "baked")) == [
+    assert forms_to_write(config, "kf2dof") == [
         ("double", "baked", "kf2dof"), ("float", "baked", "kf2dof-float-baked"),
         ("double", "calibratable", "kf2dof-double-calibratable"),
         ("float", "calibratable", "kf2dof-float-calibratable")]
-    assert forms_to_write("kf2dof", ("float", "baked"))[:2] == [
+    floating = variant("codegen", real="float")
+    assert forms_to_write(floating, "kf2dof")[:2] == [
         ("float", "baked", "kf2dof"), ("double", "calibratable", "kf2dof-double-calibratable")]
-    assert forms_to_write("switching", ("double", "baked")) == [("double", "baked", "switching")]
+    assert forms_to_write(config, "switching") == [("double", "baked", "switching")]
 
 
 def test_only_the_entry_points_of_casadis_exports_are_kept_and_a_new_export_fails(tmp_path):

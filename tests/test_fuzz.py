@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from locations import DEFAULT_VEHICLE
 
-from vsegen.codegen.generate import REVIEWED_FORMS, render
+from vsegen.codegen.generate import render
+from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.reference import blocks
 from vsegen.harness.reference import kf2dof as reference
 from vsegen.harness.verify.fuzz import fuzz_estimator
@@ -64,9 +66,9 @@ def test_reference_invariants(config, rows):
         assert bool(int(output[3]) & blocks.INVALID_INPUT) == rejected
 
 
-CALIBRATABLE_FORMS = [(name, real) for name, reviewed in REVIEWED_FORMS.items() for real, params in reviewed
+CALIBRATABLE_FORMS = [(name, real) for name, real, params in load_vehicle(DEFAULT_VEHICLE).codegen["forms"]
                       if params == "calibratable"]
-"""The calibratable forms committed to generated/ (kf2dof and pf_improved, double and float)."""
+"""The calibratable forms the default vehicle declares (kf2dof and pf_improved, double and float)."""
 
 
 @pytest.mark.parametrize("name,real", CALIBRATABLE_FORMS)

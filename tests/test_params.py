@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle, with_form
 from vsegen.model.params import ParameterError, parse_vehicle
 
 
@@ -62,6 +62,9 @@ BAD_FILES = [
     ("sample_time = 0.01", "sample_time = 0", ["sample_time = 0", "> 0 and <= 10000 (s)"]),
     ("[inputs]", "[input]", ["unknown key 'input'"]),
     ("mass = 1412.0", "mass = = 3", ["not valid TOML", "line 5"]),
+    ('"kf2dof:float-baked"', '"kf2dof:half-baked"', ["[codegen] forms", '"<estimator>:<real>-<params>"', ":35:"]),
+    ('"kf2dof:float-baked"', '"nope:float-baked"', ["[codegen] forms names nope: expected an estimator the file "
+                                                    "configures", ":35:"]),
 ]
 
 
@@ -106,3 +109,20 @@ def test_with_settings_edits_one_table_only(vehicle_text):
     assert config.settings("fusion")["threshold"] == 1.5          # same key, other table: kept
     with pytest.raises(KeyError, match=r"\[estimator.switching\] has no key nope"):
         with_settings(vehicle_text, "estimator.switching", nope=1.0)
+
+
+@pytest.mark.parametrize("edit", ["as shipped", "no forms key", "no codegen table"])
+def test_a_form_is_added_to_the_vehicle_file_and_nothing_else_changes(vehicle_text, edit):
+    import re
+
+    text = {"as shipped": vehicle_text,
+            "no forms key": re.sub(r"\n# the other forms.*\nforms = \[[^\]]*\]", "", vehicle_text),
+            "no codegen table": vehicle_text[:vehicle_text.index("[codegen]")]
+            + vehicle_text[vehicle_text.index("[estimator]\n"):]}[edit]
+    before = parse_vehicle(text, "car.toml", "car")
+    after = parse_vehicle(with_form(text, "switching", "float", "calibratable"), "car.toml", "car")
+    assert after.codegen["forms"] == (*before.codegen["forms"], ("switching", "float", "calibratable"))
+    assert (after.vehicle, after.estimators, after.codegen["real"]) == (before.vehicle, before.estimators,
+                                                                        before.codegen["real"])
+    assert with_form(with_form(text, "switching", "float", "calibratable"), "switching", "float", "calibratable") \
+        == with_form(text, "switching", "float", "calibratable")

@@ -16,7 +16,8 @@ from vsegen.harness.verify.equivalence import CaseResult
 
 def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, vsegen):
     junit, data = tmp_path / "verify.xml", tmp_path / "verify.json"
-    result = vsegen.process("verify", "--estimator", "kf2dof", "--junit", str(junit), "--json", str(data))
+    result = vsegen.process("verify", "--estimator", "kf2dof", "--real", "double", "--params", "baked",
+                            "--junit", str(junit), "--json", str(data))
     assert result.exit_code == 0, result.stderr
     assert "verify passed: 14 runs" in result.stdout and "max rel diff" in result.stdout
     progress = [line.split(" (")[0] for line in result.stderr.splitlines()]

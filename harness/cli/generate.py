@@ -19,24 +19,33 @@ from vsegen.harness.cli.common import (
     user_errors,
     warn_underived,
 )
-from vsegen.harness.project.files import folder_diffs, write_folder
+from vsegen.harness.project.files import folder_diffs, write_folder, write_text_atomic
 from vsegen.harness.project.paths import project
 from vsegen.harness.project.results import Check, write_results
-from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.project.vehicles import load_vehicle, with_form
 from vsegen.model.params import VehicleConfig
 
 
-def _forms(config: VehicleConfig, name: str, out: Path, real: str | None,
-           params: str | None) -> list[tuple[str, str, str]]:
-    """(real, params, folder name) to generate: the one asked for, or the vehicle file's default
-    and, in the repository's generated/, the reviewed forms (codegen.REVIEWED_FORMS). A form other
-    than the vehicle file's default goes to ``<estimator>-<real>-<params>/``, so generating two
-    forms into one place never replaces one kit with the other."""
+def _forms(config: VehicleConfig, name: str, real: str | None, params: str | None) -> list[tuple[str, str, str]]:
+    """(real, params, folder name) to generate: the one asked for, else every form the vehicle file
+    declares (its [codegen] default and ``forms``). A form other than the default goes to
+    ``<estimator>-<real>-<params>/``, so two forms generated into one place never replace each other."""
     default = (config.codegen["real"], config.codegen["params"])
-    chosen = (real or default[0], params or default[1])
-    if real or params or out.resolve() != project().generated:
+    if real or params:
+        chosen = (real or default[0], params or default[1])
         return [(*chosen, codegen.form_folder(name, chosen, default))]
-    return codegen.forms_to_write(name, default)
+    return codegen.forms_to_write(config, name)
+
+
+def _declare(path: Path, config: VehicleConfig, name: str, real: str, params: str) -> None:
+    """Record a form generated into the project's generated/ in the vehicle file's [codegen] forms,
+    so that plain generate, generate --check and verify keep it."""
+    if (real, params) == (config.codegen["real"], config.codegen["params"]) or \
+            (name, real, params) in config.codegen["forms"]:
+        return
+    write_text_atomic(Path(path), with_form(Path(path).read_text(), name, real, params))
+    console.print(f"declared    {name}:{real}-{params} in {display(Path(path))} [codegen] forms "
+                  f"(generate, generate --check and verify keep it)", markup=False)
 
 
 def _stray_folders(out: Path, expected: set[Path]) -> list[Path]:
@@ -56,6 +65,16 @@ def _up_to_date(files: dict[str, str], folder: Path) -> list[str]:
     if not diffs:
         console.print(f"up to date  {display(folder)}")
     return diffs
+
+
+def _stray_fix(folder: Path) -> str:
+    """How to mend a stray folder: remove it, or declare its form if it is one."""
+    parts = folder.name.split("-")
+    if len(parts) == 3:
+        name, real, params = parts
+        return (f"remove it, or keep the form: `vsegen generate --vehicle vehicles/{folder.parent.name}.toml "
+                f"--estimator {name} --real {real} --params {params}` (declares it in [codegen] forms)")
+    return "remove it"
 
 
 @click.command()
@@ -82,7 +101,10 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
         config = load_vehicle(path)
         for name in chosen_estimators(config, estimators):
             warn_underived(config, name)
-            for form_real, form_params, folder_name in _forms(config, name, out, real, params):
+            forms = _forms(config, name, real, params)
+            if not check_only and (real or params) and out.resolve() == project().generated.resolve():
+                _declare(path, config, name, *forms[0][:2])
+            for form_real, form_params, folder_name in forms:
                 folder = out / config.name / folder_name
                 expected.add(folder.resolve())
                 files = codegen.render(config, name, form_real, form_params)
@@ -101,11 +123,12 @@ def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path 
                                     if diffs else None, "stale generated code"))
     if check_only and not (vehicles or estimators or real or params):   # the whole tree: no folder left over
         for folder in _stray_folders(out, expected):
-            click.echo(f"vsegen: {display(folder)}: no vehicle file or estimator generates this folder "
-                       f"(remove it)", err=True)
+            click.echo(f"vsegen: {display(folder)}: no vehicle file or estimator generates this folder: "
+                       f"{_stray_fix(folder)}", err=True)
             stale.append(display(folder))
             checks.append(Check("stray folders", display(folder), {},
-                                "no vehicle file or estimator generates this folder (remove it)", "stray folder"))
+                                f"no vehicle file or estimator generates this folder: {_stray_fix(folder)}",
+                                "stray folder"))
     write_results(junit, json_out, f"vsegen generate{' --check' if check_only else ''}", checks)
     if stale:
         click.echo(f"vsegen: generated code is stale in {', '.join(stale)}: run `vsegen generate`",

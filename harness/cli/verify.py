@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 from rich.table import Table
 
+from vsegen.codegen.generate import forms_to_write
 from vsegen.harness.cli.common import (
     JSON_OPTION,
     JUNIT_OPTION,
@@ -23,9 +24,11 @@ from vsegen.harness.cli.common import (
     vehicle_config,
 )
 from vsegen.harness.jobs.progress import RunProgress
+from vsegen.harness.project.results import write_results
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
 from vsegen.harness.verify import report
 from vsegen.harness.verify.report import checks
+from vsegen.model.params import VehicleConfig
 
 
 @click.command()
@@ -41,36 +44,55 @@ from vsegen.harness.verify.report import checks
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
            params: str | None, junit: Path | None, json_out: Path | None) -> None:
     """Check that the project's generated/ holds what the vehicle file generates, compile that C and
-    compare it step by step with the NumPy reference."""
+    compare it step by step with the NumPy reference: every form the vehicle file declares ([codegen]
+    real/params and forms), or the one --real/--params ask for."""
     from vsegen.harness.verify.equivalence import verify as verify_all
 
     config = vehicle_config(vehicle)
-    real = real or config.codegen["real"]
-    params = params or config.codegen["params"]
     names = chosen_estimators(config, estimators)
-    stale = {name: why for name in names if (why := stale_kit(config, name, real, params, 'verify'))}
-    if stale:
-        _write_reports(junit, json_out, report.Run(config.name, real, params, stale), [])
+    forms = _forms(config, names, real, params)
+    stale = {form: {name: why for name in mine if (why := stale_kit(config, name, *form, "verify"))}
+             for form, mine in forms.items()}
+    if any(stale.values()):
+        _write_reports(junit, json_out, [report.as_checks(report.Run(config.name, *form, why), [])
+                                         for form, why in stale.items() if why])
         sys.exit(1)
-    with RunProgress("verifying", {name: len(VERIFICATION_SET) for name in names}) as progress:
-        results = verify_all(config, names, seed=seed, real=real, params=params,
-                             on_done=lambda result: progress.done(result.estimator, result.ok))
-    table = difference_table(f"generated C vs NumPy reference, vehicle {config.name}, "
-                              f"T = {config.sample_time} s, {real}, {params} parameters", results)
-    print_table(table)
-    explain_differences(real, any(r.flips for r in results), any(r.crossings for r in results))
-    _write_reports(junit, json_out, report.Run(config.name, real, params), results)
-    failed = [r for r in results if not r.ok]
+    runs = []
+    for (form_real, form_params), mine in forms.items():
+        label = "verifying" if len(forms) == 1 else f"verifying {form_real}-{form_params}"
+        with RunProgress(label, {name: len(VERIFICATION_SET) for name in mine}) as progress:
+            results = verify_all(config, tuple(mine), seed=seed, real=form_real, params=form_params,
+                                 on_done=lambda result, progress=progress: progress.done(result.estimator, result.ok))
+        print_table(difference_table(f"generated C vs NumPy reference, vehicle {config.name}, T = "
+                                     f"{config.sample_time} s, {form_real}, {form_params} parameters", results))
+        explain_differences(form_real, any(r.flips for r in results), any(r.crossings for r in results))
+        runs.append((report.Run(config.name, form_real, form_params), results))
+    _write_reports(junit, json_out, [report.as_checks(run, results) for run, results in runs])
+    every = [r for _, results in runs for r in results]
+    failed = [r for r in every if not r.ok]
     if failed:
-        click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(results)} runs", err=True)
+        click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(every)} runs", err=True)
         sys.exit(1)
-    console.print(f"verify passed: {len(results)} runs, every output within tolerance")
+    console.print(f"verify passed: {len(every)} runs in {len(runs)} form(s), every output within tolerance")
 
 
-def _write_reports(junit: Path | None, json_out: Path | None, run: report.Run, results) -> None:
-    for path, text in ((junit, report.as_junit), (json_out, report.as_json)):
-        if path is not None:
-            path.write_text(text(run, results))
+def _forms(config: VehicleConfig, names: list[str], real: str | None, params: str | None) -> dict:
+    """{(real, params): estimators} to verify: the form asked for, else every form declared."""
+    if real or params:
+        return {(real or config.codegen["real"], params or config.codegen["params"]): names}
+    forms: dict[tuple[str, str], list[str]] = {}
+    for name in names:
+        for form_real, form_params, _ in forms_to_write(config, name):
+            forms.setdefault((form_real, form_params), []).append(name)
+    return forms
+
+
+def _write_reports(junit: Path | None, json_out: Path | None, checks: list[list]) -> None:
+    every = [check for part in checks for check in part]
+    write_results(junit, json_out, "vsegen verify", every,
+                  {"runs": len({(c.suite, c.figures.get("scenario")) for c in every if "scenario" in c.figures}),
+                   "failed_runs": len({(c.suite, c.figures.get("scenario")) for c in every
+                                       if not c.ok and "scenario" in c.figures})})
 
 
 def difference_table(title: str, results, extra_rows=None) -> Table:

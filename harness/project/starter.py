@@ -6,6 +6,7 @@ folder that already has any of these files is refused in one line, before anythi
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from vsegen.harness.project.files import write_text_atomic
@@ -29,7 +30,8 @@ def vehicle_text(like: str) -> str:
     if name not in shipped_vehicle_names():
         choices = ", ".join(n.removesuffix(".toml") for n in shipped_vehicle_names())
         raise StarterError(f"--like {like}: no such shipped vehicle: expected one of {choices}")
-    body = shipped_vehicle(name)
+    body = re.sub(r"^forms = \[[^\]]*\]\n", '# forms = ["switching:float-calibratable"]\n', shipped_vehicle(name),
+                  flags=re.MULTILINE)      # vsegen's own reviewed forms are not the user's
     return (f"# Your car's vehicle file, started from vsegen's shipped {like}.toml: replace the values with\n"
             f"# your car's. `vsegen identify --log DRIVE --vehicle vehicles/car.toml --out vehicles/car.toml`\n"
             f"# derives mass-independent ones (cornering stiffness, roll gradient, sensor noise, ...) from\n"

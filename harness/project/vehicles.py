@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import tomllib
 from pathlib import Path
 
 from vsegen.harness.project.files import read_user_text
@@ -47,3 +48,27 @@ def with_settings(text: str, section: str, comments: dict[str, str] | None = Non
     if missing:
         raise KeyError(f"[{section}] has no key {', '.join(sorted(missing))}")
     return "\n".join(lines)
+
+
+def with_form(text: str, estimator: str, real: str, params: str) -> str:
+    """``text`` of a vehicle file with the form "<estimator>:<real>-<params>" added to [codegen]
+    ``forms`` (the key, or the table, added where missing); the rest of the file as it was."""
+    entry = f"{estimator}:{real}-{params}"
+    data = tomllib.loads(text)
+    forms = list(data.get("codegen", {}).get("forms", []))
+    if entry in forms:
+        return text
+    rendered = "forms = [" + ", ".join(f'"{form}"' for form in [*forms, entry]) + "]"
+    lines = text.split("\n")
+    table = next((i for i, line in enumerate(lines) if re.match(r"\s*\[codegen\]\s*(#.*)?$", line)), None)
+    if table is None:
+        return text.rstrip("\n") + f"\n\n[codegen]\n{rendered}\n"
+    end = next((i for i in range(table + 1, len(lines)) if re.match(r"\s*\[", lines[i])), len(lines))
+    start = next((i for i in range(table + 1, end) if re.match(r"\s*forms\s*=", lines[i])), None)
+    if start is None:
+        last_key = max((i for i in range(table + 1, end) if re.match(r"\s*[A-Za-z_]", lines[i])), default=table)
+        return "\n".join([*lines[:last_key + 1], rendered, *lines[last_key + 1:]])
+    stop = start
+    while "]" not in lines[stop].split("#")[0]:
+        stop += 1
+    return "\n".join([*lines[:start], rendered, *lines[stop + 1:]])
