@@ -94,7 +94,9 @@ def _stray_fix(folder: Path) -> str:
 def generate(vehicles: tuple[Path, ...], estimators: tuple[str, ...], out: Path | None,
              check_only: bool, real: str | None, params: str | None, junit: Path | None,
              json_out: Path | None) -> None:
-    """Generate the C of each estimator (or check that --out is up to date)."""
+    """Generate the C of each estimator in every form its vehicle file declares ([codegen] real, params
+    and forms), or the one --real/--params ask for (declared in [codegen] forms when written to the
+    project's generated/); with --check, compare instead of writing."""
     stale, expected, checks = [], set(), []
     out = out or project().generated
     for path in vehicles or project().required_vehicle_files():
