@@ -68,7 +68,7 @@ def generate_kernel(estimator: Estimator, real: str = "double") -> Kernel:
     c_text, h_text = _drop_metadata(c_text, h_text, [function.name() for function in functions])
     c_text = _document_entries(c_text, functions, _argument_names(estimator))
     c_text = _include_own_header(_drop_pointer_checks(_mark_unused(c_text)), f"{base}.h")
-    c_text = _explicit_truth(_compare_min_max(c_text))
+    c_text = _essentially_real(_explicit_truth(_compare_min_max(c_text)))
     for entry in estimator.structure.in_place:
         c_text = _read_state_first(c_text, entry)
     if real == "float":
@@ -185,6 +185,19 @@ def _explicit_truth(c_text: str) -> str:
     c_text = _CONDITION.sub(r"((\1!=0.)?", c_text)
     c_text = _NOT.sub(r"(\1==0.)", c_text)
     return _LOGIC.sub(r"=((\1!=0.)\2(\3!=0.));", c_text)
+
+
+_ZERO_ELSE = re.compile(r"\?(a\d+):0\)")
+_TRUTH_ASSIGNED = re.compile(r"^(\s*a\d+)=(\((?:a\d+(?:<=|>=|==|!=|<|>)(?:a\d+|[\d.eE+-]+)"
+                             r"|\(a\d+!=0\.\)(?:&&|\|\|)\(a\d+!=0\.\))\));$", re.MULTILINE)
+
+
+def _essentially_real(c_text: str) -> str:
+    """Every value assigned to a ``casadi_real`` made essentially real (MISRA C:2012 rule 10.3,
+    required): a comparison's or a logical operation's 0/1 by an explicit cast,
+    ``a=(casadi_real)(b<c);``, and the else-branch constant of a condition as a real literal,
+    ``(c?b:0.)``. The conversions C made implicitly, now written: the same machine code (tested)."""
+    return _TRUTH_ASSIGNED.sub(r"\1=(casadi_real)\2;", _ZERO_ELSE.sub(r"?\1:0.)", c_text))
 
 
 _STATE_READ = re.compile(r"arg\[0\]\[(\d+)\]")

@@ -325,3 +325,30 @@ def test_a_guarded_step_runs_no_hold_rule_work_on_an_active_sample(vehicle_text)
     holding = estimator.states.index("holding")
     assert "?" not in active and f"arg[0][{holding}]" not in active
     assert "/" in active and "/" not in held and "atan" not in held
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "switching", "fusion", "ekf_rls"])
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_the_misra_10_3_rewrite_leaves_the_machine_code_as_it_was(config, monkeypatch, tmp_path, name, real):
+    """codegen.kernel._essentially_real writes CasADi's implicit conversions to casadi_real as casts
+    and real literals: the object code of the kernel (gcc -O2, .text and .rodata) is byte for byte
+    what it was without it."""
+    from vsegen.codegen import kernel as kernel_module
+    from vsegen.model.estimators import build
+
+    estimator = build(name, config, "baked")
+    rewritten = kernel_module.generate_kernel(estimator, real)
+    monkeypatch.setattr(kernel_module, "_essentially_real", lambda text: text)
+    plain = kernel_module.generate_kernel(estimator, real)
+    assert "(casadi_real)(" in rewritten.c_text and rewritten.c_text != plain.c_text
+    sections = {}
+    for label, kernel in (("rewritten", rewritten), ("plain", plain)):
+        folder = tmp_path / label
+        folder.mkdir()
+        (folder / kernel.c_name).write_text(kernel.c_text)
+        (folder / kernel.h_name).write_text(kernel.h_text)
+        subprocess.run(["gcc", "-std=c99", "-O2", "-c", kernel.c_name, "-o", "k.o"], cwd=folder, check=True)
+        for section in (".text", ".rodata"):
+            subprocess.run(["objcopy", "-O", "binary", "-j", section, "k.o", f"k{section}"], cwd=folder, check=True)
+        sections[label] = [(folder / f"k{section}").read_bytes() for section in (".text", ".rodata")]
+    assert sections["rewritten"] == sections["plain"]
