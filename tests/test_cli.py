@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import pytest
+from junitparser import JUnitXml, Properties
 from locations import DEFAULT_VEHICLE, REPO
 
 
@@ -56,12 +58,21 @@ def test_a_form_generated_once_is_declared_then_regenerated_checked_and_verified
     assert vsegen.process("generate", "--check", "--estimator", "kf2dof", cwd=tmp_path).exit_code == 0
 
 
-def test_generate_check_is_clean_on_the_repository(vsegen):
-    result = vsegen.process("generate", "--check")
+def test_generate_check_is_clean_on_the_repository_and_reports_each_folder(vsegen, tmp_path):
+    junit, data = tmp_path / "generate.xml", tmp_path / "generate.json"
+    result = vsegen.process("generate", "--check", "--junit", str(junit), "--json", str(data))
     assert result.exit_code == 0, result.stdout + result.stderr
     for folder in ("c_class/kf2dof", "c_class/kf2dof-float-calibratable",
                    "c_class/pf_improved-float-baked", "ev_seed002/aukf"):
         assert f"up to date  generated/{folder}\n" in result.stdout
+    folders = sorted(p for vehicle in (REPO / "generated").iterdir() for p in vehicle.iterdir() if p.is_dir())
+    cases = {(suite.name, case.name): case for suite in JUnitXml.fromfile(str(junit)) for case in suite}
+    assert len(cases) == len(folders) and all(case.is_passed for case in cases.values())
+    form = cases[("c_class.kf2dof.float-calibratable", "generated/c_class/kf2dof-float-calibratable")]
+    assert {p.name: p.value for p in next(form.iterchildren(Properties))} == {
+        "vehicle": "c_class", "estimator": "kf2dof", "real": "float", "params": "calibratable", "files": "11",
+        "files_differing": "0"}
+    assert json.loads(data.read_text())["ok"]
 
 
 def test_generate_then_check_detects_an_edit(tmp_path, vsegen):

@@ -16,12 +16,13 @@ from vsegen.harness.verify.equivalence import CaseResult
 
 def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, vsegen):
     junit, data = tmp_path / "verify.xml", tmp_path / "verify.json"
+    coverage = tmp_path / "coverage.md"
     result = vsegen.process("verify", "--estimator", "kf2dof", "--real", "double", "--params", "baked",
-                            "--junit", str(junit), "--json", str(data))
+                            "--junit", str(junit), "--json", str(data), "--coverage", str(coverage))
     assert result.exit_code == 0, result.stderr
     assert "verify passed: 14 runs" in result.stdout and "max rel diff" in result.stdout
     progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
-    assert progress == ["verifying kf2dof: ok"]
+    assert progress == ["verifying kf2dof: ok", "coverage kf2dof: ok"]
     suites = list(JUnitXml.fromfile(str(junit)))
     assert [s.name for s in suites] == ["c_class.kf2dof.double-baked"]
     cases = list(suites[0])
@@ -34,6 +35,11 @@ def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, v
     document = json.loads(data.read_text())
     assert document["ok"] and document["runs"] == len(VERIFICATION_SET) and len(document["checks"]) == len(cases)
     assert {(c["estimator"], c["real"], c["params"]) for c in document["checks"]} == {("kf2dof", "double", "baked")}
+    assert f"wrote {coverage}: model decisions both ways or justified" in " ".join(result.stdout.split())
+    text = coverage.read_text()
+    row = next(line for line in text.splitlines() if line.startswith("| c_class | kf2dof |"))
+    assert "| double-baked | 38/38 (100.0 %) |" in row
+    assert "## c_class / kf2dof" in text and "speed clamp's upper bound" in text
 
 
 def test_a_signal_out_of_tolerance_is_a_failure_with_its_figures(tmp_path):

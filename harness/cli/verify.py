@@ -18,12 +18,15 @@ from vsegen.harness.cli.common import (
     VEHICLE_OPTION,
     chosen_estimators,
     console,
+    display,
     print_table,
     stale_kit,
     user_errors,
     vehicle_config,
 )
 from vsegen.harness.jobs.progress import RunProgress
+from vsegen.harness.project.files import write_text_atomic
+from vsegen.harness.project.paths import project
 from vsegen.harness.project.results import write_results
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
 from vsegen.harness.verify import report
@@ -40,9 +43,12 @@ from vsegen.model.params import VehicleConfig
 @PARAMS_OPTION
 @JUNIT_OPTION
 @JSON_OPTION
+@click.option("--coverage", "coverage_out", is_flag=False, flag_value="", default=None,
+              help="Also measure model and code coverage of what is verified and write it to this file "
+                   "(given without a file: the project's docs/coverage.md).")
 @user_errors
 def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: str | None,
-           params: str | None, junit: Path | None, json_out: Path | None) -> None:
+           params: str | None, junit: Path | None, json_out: Path | None, coverage_out: str | None) -> None:
     """Check that the project's generated/ holds what the vehicle file generates, compile that C and
     compare it step by step with the NumPy reference: every form the vehicle file declares ([codegen]
     real/params and forms), or the one --real/--params ask for."""
@@ -68,12 +74,35 @@ def verify(vehicle: Path | None, estimators: tuple[str, ...], seed: int, real: s
         explain_differences(form_real, any(r.flips for r in results), any(r.crossings for r in results))
         runs.append((report.Run(config.name, form_real, form_params), results))
     _write_reports(junit, json_out, [report.as_checks(run, results) for run, results in runs])
+    if coverage_out is not None:
+        _coverage(config, forms, Path(coverage_out) if coverage_out else project().reports / "coverage.md", seed)
     every = [r for _, results in runs for r in results]
     failed = [r for r in every if not r.ok]
     if failed:
         click.echo(f"vsegen: verify FAILED on {len(failed)} of {len(every)} runs", err=True)
         sys.exit(1)
     console.print(f"verify passed: {len(every)} runs in {len(runs)} form(s), every output within tolerance")
+
+
+def _coverage(config: VehicleConfig, forms: dict, out: Path, seed: int) -> None:
+    """Model and code coverage of every estimator in its verified forms, written to ``out``."""
+    from vsegen.harness.project.paths import cache_dir
+    from vsegen.harness.target.misra import provenance
+    from vsegen.harness.verify import coverage
+
+    names = list(dict.fromkeys(name for mine in forms.values() for name in mine))
+    results = []
+    with RunProgress("coverage", {name: 1 for name in names}) as progress:
+        for name in names:
+            mine = [form for form, estimators in forms.items() if name in estimators]
+            results.append(coverage.measure(config, name, mine, cache_dir() / "coverage", seed=seed))
+            progress.done(name, True)
+    write_text_atomic(out, coverage.markdown(results, provenance(project().root).replace("vsegen misra",
+                                                                                           "vsegen verify --coverage")))
+    shares = coverage.totals(results)
+    console.print(f"wrote {display(out)}: model decisions both ways or justified {shares['model']:.1f} % "
+                  f"({shares['not_justified']:.0f} not justified), template statements {shares['statements']:.1f} %, "
+                  f"template branches {shares['branches']:.1f} %")
 
 
 def _forms(config: VehicleConfig, names: list[str], real: str | None, params: str | None) -> dict:
