@@ -9,11 +9,12 @@ import json
 import os
 import shutil
 
-import pytest
 from junitparser import Failure, JUnitXml, Properties
 from locations import DEFAULT_VEHICLE, REPO
 
+from vsegen.harness.logs.table import write_log
 from vsegen.harness.project.results import Check, as_junit
+from vsegen.harness.sim.scenarios import Case
 
 
 def cases(path):
@@ -78,13 +79,13 @@ def test_a_failed_check_is_a_failure_and_the_document_validates(tmp_path):
     assert figures(cases(path)[("s", "fine")]) == {"x": "1.5", "nan": "nan"}
 
 
-@pytest.mark.parametrize("columns", ["60", "200"])
-def test_tables_honour_columns_and_never_cut_a_number(tmp_path, vsegen, columns):
+def test_tables_honour_columns_and_never_cut_a_number(tmp_path, vsegen, config):
     log, est = tmp_path / "log.csv", tmp_path / "est.csv"
-    assert vsegen.process("simulate", "dlc", "--out", str(log)).exit_code == 0
-    assert vsegen.process("run", "--log", str(log), "--estimator", "kf2dof", "--out", str(est)).exit_code == 0
-    result = vsegen.process("score", "--log", str(log), "--est", str(est), env={**os.environ, "COLUMNS": columns})
-    assert result.exit_code == 0, result.stderr
-    row = next(line for line in result.stdout.splitlines() if "beta (deg)" in line)
-    assert "…" not in result.stdout and len(row.split("│")) == 7        # every cell on the row, none cut
-    assert max(len(line) for line in result.stdout.splitlines()) <= max(int(columns), len(row))
+    write_log(Case.of("dlc").simulate(config, 100.0, 1), log)
+    assert vsegen("run", "--log", log, "--estimator", "kf2dof", "--out", est).exit_code == 0
+    for columns in ("60", "200"):
+        result = vsegen.process("score", "--log", str(log), "--est", str(est), env={**os.environ, "COLUMNS": columns})
+        assert result.exit_code == 0, result.stderr
+        row = next(line for line in result.stdout.splitlines() if "beta (deg)" in line)
+        assert "…" not in result.stdout and len(row.split("│")) == 7        # every cell on the row, none cut
+        assert max(len(line) for line in result.stdout.splitlines()) <= max(int(columns), len(row))

@@ -133,25 +133,6 @@ def test_simulate_run_score_plot(tmp_path, vsegen):
     assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_score_and_plot_read_every_format_run_writes(tmp_path, vsegen):
-    log = tmp_path / "log.csv"
-    assert vsegen.process("simulate", "dlc", "--out", str(log)).exit_code == 0
-    tables = {}
-    for suffix in (".csv", ".mf4", ".parquet"):
-        est = tmp_path / f"est{suffix}"
-        assert vsegen.process("run", "--log", str(log), "--estimator", "switching", "--out", str(est)).exit_code == 0
-        result = vsegen.process("score", "--log", str(log), "--est", str(est))
-        assert result.exit_code == 0, result.stderr
-        tables[suffix] = [line for line in result.stdout.splitlines() if "beta (deg)" in line]
-        result = vsegen.process("plot", "--log", str(log), "--est", str(est), "--out", str(tmp_path / "fig.png"))
-        assert result.exit_code == 0, result.stderr
-    assert tables[".csv"] and tables[".csv"] == tables[".mf4"] == tables[".parquet"]
-    (tmp_path / "bad.parquet").write_text("t,beta\n0,0\n")
-    result = vsegen.process("score", "--log", str(log), "--est", str(tmp_path / "bad.parquet"))
-    assert result.exit_code == 2 and "bad.parquet: not a Parquet file" in result.stderr
-    assert len(result.stderr.strip().splitlines()) == 1
-
-
 def test_run_at_another_rate_generates_for_it(tmp_path, vsegen):
     log, est = tmp_path / "log.csv", tmp_path / "est.csv"
     assert vsegen.process("simulate", "sine_steer", "--rate", "200", "--out", str(log)).exit_code == 0

@@ -65,7 +65,7 @@ def test_forms_of_a_kit_never_overwrite_one_another(tmp_path, vsegen):
     for form in ((), ("--real", "float"), ("--real", "double", "--params", "calibratable")):
         assert vsegen(*base, *form).exit_code == 0
     kits = sorted(p.name for p in (tmp_path / "c_class").iterdir())
-    assert kits == ["kf2dof", "kf2dof-double-calibratable", "kf2dof-float-baked"]
+    assert kits == ["kf2dof", "kf2dof-double-calibratable", "kf2dof-float-baked", "kf2dof-float-calibratable"]
     header = (tmp_path / "c_class" / "kf2dof-float-baked" / "vse_kf2dof_kernel.h").read_text()
     assert "#define casadi_real float" in header
     assert (tmp_path / "c_class" / "kf2dof-double-calibratable" / "vse_kf2dof.a2l").exists()
@@ -95,3 +95,21 @@ def test_the_plot_tells_holds_from_the_kf_mode(tmp_path, config, vsegen):
     spans = state_spans(read_estimates(est_path))
     kf, hold = spans[("dynamic scheme (KF)", "tab:green")], spans[("hold (low speed or invalid input)", "0.5")]
     assert hold.any() and kf.any() and not (kf & hold).any()
+
+
+def test_score_and_plot_read_every_format_run_writes(tmp_path, vsegen, dlc_csv):
+    tables = {}
+    for suffix in (".csv", ".mf4", ".parquet"):
+        est = tmp_path / f"est{suffix}"
+        assert vsegen("run", "--log", dlc_csv, "--estimator", "switching", "--out", est).exit_code == 0
+        result = vsegen("score", "--log", dlc_csv, "--est", est)
+        assert result.exit_code == 0, result.stderr
+        tables[suffix] = [line for line in result.stdout.splitlines() if "beta (deg)" in line]
+    assert tables[".csv"] and tables[".csv"] == tables[".mf4"] == tables[".parquet"]
+    result = vsegen("plot", "--log", dlc_csv, "--est", tmp_path / "est.parquet", "--est", tmp_path / "est.mf4",
+                    "--out", tmp_path / "fig.png")
+    assert result.exit_code == 0, result.stderr
+    (tmp_path / "bad.parquet").write_text("t,beta\n0,0\n")
+    result = vsegen.process("score", "--log", str(dlc_csv), "--est", str(tmp_path / "bad.parquet"))
+    assert result.exit_code == 2 and "bad.parquet: not a Parquet file" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1

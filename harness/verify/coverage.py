@@ -22,7 +22,7 @@ from vsegen.model.estimator import Particles
 from vsegen.model.params import VehicleConfig
 
 JUSTIFIED: tuple[tuple[str, str, str], ...] = (
-    ("*", r"fmin\(fmax\(.*,3\),90\)$|fmin\(fmax\(state_\d+,3\),90\)$",
+    ("*", r"fmin\(fmax\(state_\d+,3\),90\)$|@1=90, @2=\(fabs\(input_1\)<=@1\), @3=3, fmin\(fmax\(.*,@3\),@1\)$",
      "the speed clamp's upper bound: v_x is held at its last plausible value, and a plausible v_x is "
      "at most vx_max (90 m/s), so the clamp never returns 90 from above"),
 )
