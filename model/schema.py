@@ -271,7 +271,7 @@ INPUT_LIMITS: tuple[Field, ...] = tuple(
     for key, entries in signals.inputs_by_limit().items())
 """[inputs]: one plausibility limit per input (wheel speeds share one), from model.signals."""
 
-# [plant]: the truth plant of harness/plant (simulation only; never in generated code). Optional.
+# [plant]: the truth plant of harness/sim (simulation only; never in generated code). Optional.
 PLANT: tuple[Field, ...] = (
     positive("tyre_nominal_load", "N", "F_z0 of the Magic Formula load law"),
     positive("tyre_cornering_factor", "-", "p_Ky1: peak of K_y/F_z0 in K_y = p_Ky1 F_z0 sin(2 atan(F_z/(p_Ky2 F_z0)))"),

@@ -1,6 +1,6 @@
 """Processor-in-the-loop: the generated C built for a Cortex-M and run under QEMU.
 
-Each estimator is cross-built with the board files in ``harness/boards`` (a vector table whose
+Each estimator is cross-built with the board files in ``harness/target/boards`` (a vector table whose
 reset handler enables the FPU, a linker script for QEMU's MPS2 boards) and ``pil_main.c.j2`` (log
 in, outputs and states out, through newlib's semihosting), then run on ``qemu-system-arm`` with
 ``-icount shift=0``, so that guest time advances exactly 1 ns per instruction. The driver counts
