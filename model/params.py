@@ -96,6 +96,11 @@ class VehicleConfig:
             "settings": _plain(self.settings(estimator)),
         }
 
+    @property
+    def driven_axle(self) -> str | None:
+        """The axle the [plant] table says is driven ("front" or "rear"; None without [plant])."""
+        return None if self.plant is None else self.plant.get("driven_axle")
+
     def fingerprint(self) -> str:
         """SHA-256 of the whole configuration (every table), e.g. to memoise simulations."""
         everything = {"name": self.name, "vehicle": dict(self.vehicle), "inputs": dict(self.limits),

@@ -26,7 +26,7 @@ def log_job(log: str, channels: str | None, dbc: str | None,
         first = runs[0][2]
         with open_log(Path(log), Path(channels) if channels else None, first.sample_time,
                       dbc=Path(dbc) if dbc else None) as source:
-            check_units_of_head(source, first.vehicle)
+            check_units_of_head(source, first.vehicle, first.driven_axle)
             streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
             sums = [RowSums(source.sample_time) for _ in runs]
             for chunk in source.chunks():

@@ -101,7 +101,8 @@ def read_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     if unit_check is not None:
         from vsegen.harness.logs.units import check_units
 
-        _say_unchecked(path, check_units(log, unit_check.vehicle))
+        notes: list[str] = []
+        _say_unchecked(path, check_units(log, unit_check.vehicle, unit_check.driven_axle, notes), notes)
     return log
 
 
@@ -118,7 +119,8 @@ def open_user_log(path: Path, channels: Path | None, sample_time: float | Callab
 
     source = open_log(path, channels, sample_time, window, dbc)
     if unit_check is not None:
-        _say_unchecked(path, check_units_of_head(source, unit_check.vehicle))
+        notes: list[str] = []
+        _say_unchecked(path, check_units_of_head(source, unit_check.vehicle, unit_check.driven_axle, notes), notes)
     return source
 
 
@@ -129,7 +131,11 @@ def say_notes(path: Path, notes: dict[str, str]) -> None:
             click.echo(f"vsegen: {path}: {notes[key]}", err=True)
 
 
-def _say_unchecked(path: Path, unchecked: list[str]) -> None:
+def _say_unchecked(path: Path, unchecked: list[str], notes: list[str]) -> None:
+    """The unit check's notes (frozen stretches, a scaled yaw rate) and the columns it could not
+    judge, a line each on stderr."""
+    for note in notes:
+        click.echo(f"vsegen: {path}: {note}", err=True)
     if unchecked:
         click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
 

@@ -4,8 +4,12 @@ Every relation below holds in any manoeuvre, not only in steady cornering, so a 
 wherever the car moves enough:
 
 * **v_x against the wheel speeds**: v_x is the free axle's rolling speed, R_eff mean(|omega|)
-  (at each sample the axle rolling nearest v_x: a driven axle's wheels spin up on a slippery road);
-* **r against that axle's wheel speed difference**: r = R_eff (omega_right - omega_left) / t_w;
+  (the non-driven axle when the vehicle file's [plant] names the driven one; else, at each sample,
+  the axle rolling nearest v_x: a driven axle's wheels spin up on a slippery road);
+* **r against an axle's wheel speed difference**: r = R_eff (omega_right - omega_left) / t_w (the
+  non-driven axle; else, at each sample, the axle whose difference is nearest r: an unloaded
+  inner wheel of the driven axle spins up in a long corner, while a wrong unit or sign is far
+  from both);
 * **a_y against r v_x**: a_y = v_y' + r v_x, and v_y' is small beside r v_x in most samples (the
   body's roll adds g k a_y, a few tens of percent);
 * **delta against the yaw rate through the bicycle model**: the linear 2-DOF model driven by the
@@ -18,6 +22,10 @@ everywhere, a spin only from where it starts), is one line naming the column and
 cause (v_x in km/h or mph, r in deg/s, a_y in g, delta in degrees or as the steering-wheel
 angle), exit 2. A column no relation could judge (no wheel speeds, too little motion) is listed
 by :func:`check_units`, so the caller can say that its unit was not checked.
+
+A signal that repeats one value bit for bit (a frozen sensor or CAN signal) is judged on the rest
+of the log, and said in a note; so is a yaw rate whose ratio to the wheels', inside the band, is
+far from 1 (a scaling error of the yaw rate, e.g. a factor typed wrong in a DBC).
 """
 
 from __future__ import annotations
@@ -54,6 +62,14 @@ AGREEING = 0.25
 """A relation refuses only when fewer than this share of its samples agree with it: a unit is
 wrong on every sample, while a car that spins part way through a log breaks the relations only
 from there on."""
+YAW_SCALE_NOTE = (0.78, 1.15)
+"""r / (R_eff (omega_right - omega_left) / t_w) outside this (but inside YAW_RATIO) is said in a
+note: healthy logs give 0.99-1.01 in the median (0.81 braking hard in a bend), a yaw-rate factor
+typed 30 % wrong gives 1.3 or 0.77."""
+FROZEN_TIME = 0.5
+"""s: an inertial column that repeats one value bit for bit this long is frozen there (sensor
+noise makes a live one change every sample; a steering angle or a speed may rightly stand still)."""
+FROZEN_CHECKED = ("ay", "r")
 MIN_YAW_RATE = 0.03
 """rad/s: yaw rates below this say little about a ratio."""
 MIN_LATERAL = 0.5
@@ -81,40 +97,54 @@ HEAD_SPAN = 600.0
 sample; the physics check is the slow part of reading)."""
 
 
-def check_units_of_head(source, vehicle: Mapping[str, float]) -> list[str]:
+def check_units_of_head(source, vehicle: Mapping[str, float], driven_axle: str | None = None,
+                        notes: list[str] | None = None) -> list[str]:
     """:func:`check_units` on the first HEAD_SPAN s of ``source`` (a ``harness.logs.stream.LogSource``)."""
-    return check_units(next(source.chunks(max(2, round(HEAD_SPAN / source.sample_time)))), vehicle)
+    return check_units(next(source.chunks(max(2, round(HEAD_SPAN / source.sample_time)))), vehicle,
+                       driven_axle, notes)
 
 
-def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
+def check_units(log: Log, vehicle: Mapping[str, float], driven_axle: str | None = None,
+                notes: list[str] | None = None) -> list[str]:
     """Raise LogError (one line: file, relation, likely cause) when the log's physics says a unit
-    is wrong; return "column (why)" for each input column no relation could judge."""
+    is wrong; return "column (why)" for each input column no relation could judge. ``driven_axle``
+    ("front", "rear", None: unknown) chooses the wheels; ``notes`` receives a line for each frozen
+    stretch and for a yaw rate scaled far from the wheels'."""
     need = ("delta", "vx", "ay", "r")
     if any(name not in log for name in need):
         return []
+    notes = [] if notes is None else notes
     window = max(1, round(SMOOTHING / log.sample_time))
-    delta, vx, ay, r = (_smoothed(np.asarray(log[name], dtype=float), window) for name in need)
+    live = {name: ~_frozen(np.asarray(log[name], dtype=float), log, name, notes) if name in FROZEN_CHECKED
+            else np.ones(len(log), dtype=bool) for name in need}
+    delta, vx, ay, r = (np.where(live[name], _smoothed(np.asarray(log[name], dtype=float), window), np.nan)
+                        for name in need)
     judged: set[str] = set()
     wheels = all(name in log for name in WHEELS)
     if wheels:
-        rolling, yaw = _free_axle(log, vehicle, vx, window)
+        rolling, yaw = _free_axle(log, vehicle, vx, r, window, driven_axle)
         moving = np.isfinite(vx) & np.isfinite(rolling) & (rolling > MIN_SPEED)
         _judge(log, "v_x / (R_eff mean |omega|)", vx, rolling, moving, SPEED_RATIO, SPEED_CAUSES, judged, "vx")
         turning = moving & np.isfinite(r) & (np.abs(yaw) > MIN_YAW_RATE)
-        _judge(log, "r / (R_eff (omega_rr - omega_rl) / t_w)", r, yaw, turning, YAW_RATIO, YAW_CAUSES, judged, "r")
+        ratio = _judge(log, "r / (R_eff (omega_right - omega_left) / t_w)", r, yaw, turning, YAW_RATIO, YAW_CAUSES,
+                       judged, "r")
+        if ratio is not None and not YAW_SCALE_NOTE[0] <= ratio <= YAW_SCALE_NOTE[1]:
+            notes.append(f"r / (R_eff (omega_right - omega_left) / t_w) = {ratio:.3g}: the yaw rate reads "
+                         f"{abs(ratio - 1):.0%} {'above' if ratio > 1 else 'below'} the wheel speeds': a scaling "
+                         f"error (a factor in the DBC or the channel map)? The estimates will be off")
     speed = rolling if wheels else np.abs(vx)
     moving = np.isfinite(speed) & (speed > MIN_SPEED)
     centripetal = r * vx
     lateral = moving & np.isfinite(ay) & np.isfinite(centripetal) & (np.abs(centripetal) > MIN_LATERAL) \
         & (np.abs(centripetal) < MAX_LATERAL)
     if _judge(log, "a_y / (r v_x)", ay, centripetal, lateral, LATERAL_RATIO, LATERAL_CAUSES, judged, "ay",
-              invert=True):
+              invert=True) is not None:
         judged |= {"r", "vx"}
     predicted = bicycle_yaw_rate(delta, speed, vehicle, log.sample_time)
     linear = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
         & (np.abs(ay) < LINEAR_LATERAL) & (np.abs(centripetal) < LINEAR_LATERAL)
-    if not _judge(log, "r / r_model(delta)", r, predicted, linear, STEER_RATIO, STEER_CAUSES, judged, "delta",
-                  invert=True):   # a log beyond the linear range: the tyres saturate, a wider band
+    if _judge(log, "r / r_model(delta)", r, predicted, linear, STEER_RATIO, STEER_CAUSES, judged, "delta",
+              invert=True) is None:   # a log beyond the linear range: the tyres saturate, a wider band
         steering = moving & np.isfinite(r) & np.isfinite(predicted) & (np.abs(predicted) > MIN_YAW_RATE) \
             & (r * predicted > 0)
         _judge(log, "r / r_model(delta) beyond the linear range", r, predicted, steering, SATURATED_STEER_RATIO,
@@ -123,19 +153,43 @@ def check_units(log: Log, vehicle: Mapping[str, float]) -> list[str]:
             for name in need if name not in judged]
 
 
-def _free_axle(log: Log, vehicle: Mapping[str, float], vx: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
+def _free_axle(log: Log, vehicle: Mapping[str, float], vx: np.ndarray, r: np.ndarray, window: int,
+               driven_axle: str | None) -> tuple[np.ndarray, np.ndarray]:
     """(rolling speed R_eff mean |omega|, yaw rate R_eff (omega_right - omega_left) / t_w) of the
-    axle that rolls nearest v_x at each sample: the free one, whose wheels neither spin under
-    drive torque nor lock under braking (on a low-friction road a driven axle's wheels run far
-    ahead of the car)."""
+    free axle: the one the drive does not reach when ``driven_axle`` names the other; else, at each
+    sample, the axle rolling nearest v_x (whose wheels neither spin under drive torque nor lock
+    under braking) and the axle whose yaw rate is nearest r (an unloaded inner wheel of the
+    driven axle spins up in a long corner; a wrong unit or sign of r is far from both)."""
     omega = {name: _smoothed(np.asarray(log[name], dtype=float), window) for name in WHEELS}
     radius, track = vehicle["wheel_radius"], vehicle["track_width"]
     axles = [(radius * (np.abs(omega[left]) + np.abs(omega[right])) / 2, radius * (omega[right] - omega[left]) / track)
              for left, right in (("omega_fl", "omega_fr"), ("omega_rl", "omega_rr"))]
     (front, front_yaw), (rear, rear_yaw) = axles
+    if driven_axle is not None:
+        return (rear, rear_yaw) if driven_axle == "front" else (front, front_yaw)
     with np.errstate(divide="ignore", invalid="ignore"):
-        front_nearer = np.abs(np.log(np.abs(vx / front))) <= np.abs(np.log(np.abs(vx / rear)))
-    return np.where(front_nearer, front, rear), np.where(front_nearer, front_yaw, rear_yaw)
+        front_rolls = np.abs(np.log(np.abs(vx / front))) <= np.abs(np.log(np.abs(vx / rear)))
+        front_yaws = np.abs(np.log(np.abs(r / front_yaw))) <= np.abs(np.log(np.abs(r / rear_yaw)))
+    return np.where(front_rolls, front, rear), np.where(front_yaws, front_yaw, rear_yaw)
+
+
+def _frozen(raw: np.ndarray, log: Log, name: str, notes: list[str]) -> np.ndarray:
+    """Where ``raw`` repeats one value bit for bit for FROZEN_TIME or longer (a note each stretch)."""
+    same = np.concatenate([[False], raw[1:] == raw[:-1]])
+    frozen = np.zeros(len(raw), dtype=bool)
+    minimum = max(2, round(FROZEN_TIME / log.sample_time))
+    start = None
+    for k, repeated in enumerate([*same, False]):
+        if repeated and start is None:
+            start = k - 1
+        elif not repeated and start is not None:
+            if k - start >= minimum:
+                frozen[start:k] = True
+                t = np.asarray(log["t"], dtype=float)
+                notes.append(f"column '{name}' repeats one value for {(k - start) * log.sample_time:.2f} s from "
+                             f"t = {t[start]:.2f} s: a frozen sensor or CAN signal? (its unit was judged on the rest)")
+            start = None
+    return frozen
 
 
 def _smoothed(x: np.ndarray, window: int) -> np.ndarray:
@@ -193,11 +247,11 @@ def _expm2(M: np.ndarray) -> np.ndarray:
 
 
 def _judge(log: Log, relation: str, signal: np.ndarray, predicted: np.ndarray, mask: np.ndarray,
-           expected: tuple[float, float], causes, judged: set[str], column: str, invert: bool = False) -> bool:
-    """Judge one relation on the ``mask``ed samples (True when it could); LogError when the median
-    ratio ``signal / predicted`` lies outside ``expected``."""
+           expected: tuple[float, float], causes, judged: set[str], column: str, invert: bool = False) -> float | None:
+    """Judge one relation on the ``mask``ed samples (its median ratio, None when it could not);
+    LogError when the median ratio ``signal / predicted`` lies outside ``expected``."""
     if np.count_nonzero(mask) < MIN_SAMPLES:
-        return False
+        return None
     ratios = signal[mask] / predicted[mask]
     ratio = float(np.median(ratios))
     agreeing = float(np.mean((ratios >= expected[0]) & (ratios <= expected[1])))
@@ -206,7 +260,7 @@ def _judge(log: Log, relation: str, signal: np.ndarray, predicted: np.ndarray, m
                        f"{expected[0]:g} to {expected[1]:g}; {_cause(ratio, causes, invert)} "
                        f"(--no-unit-check to run anyway)")
     judged.add(column)
-    return True
+    return ratio
 
 
 def _cause(ratio: float, causes, invert: bool = False) -> str:
