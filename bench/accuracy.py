@@ -23,10 +23,10 @@ from rich.progress import Progress
 
 from bench import DEFAULT_VEHICLE, REPO, seed001, seed002, seed003, table3, transfer, tuning, yaw_rate
 from bench.document import provenance
+from vsegen.harness.campaign.job import scenario_job
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
-from vsegen.harness.score.metrics import score_case
 from vsegen.harness.score.plot import plot
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import build
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> None:
     jobs = [(config, case, seed, tuple(names)) for case in SCORING_SET for seed in range(1, args.seeds + 1)]
     with Progress(console=Console(stderr=True)) as progress, DaskPool(args.scheduler) as cluster:
         task = progress.add_task(f"scoring {len(jobs)} runs x {len(names)} estimators", total=len(jobs))
-        results = cluster.map(score_case, jobs, lambda *_: progress.advance(task))
+        results = cluster.map(scenario_job, jobs, lambda *_: progress.advance(task))
     for index, case in enumerate(SCORING_SET):
         runs = results[index * args.seeds:(index + 1) * args.seeds]
         notes = runs[0][0]

@@ -1,6 +1,7 @@
-"""The job a campaign's worker runs: one log, read once in chunks, through every (estimator,
-settings) it still needs; one row each (:mod:`~vsegen.harness.campaign.row`). A log that cannot
-be read, or lacks what an estimator needs, comes back as its one-line reason instead."""
+"""The jobs a campaign's workers run: one log, read once in chunks, through every (estimator,
+settings) it still needs; one row each (:mod:`~vsegen.harness.campaign.row`); a log that cannot
+be read, or lacks what an estimator needs, comes back as its one-line reason instead. And one
+simulated scenario scored for a Monte-Carlo sweep (``python -m bench.accuracy``)."""
 
 from __future__ import annotations
 
@@ -9,10 +10,11 @@ import socket
 from pathlib import Path
 
 from vsegen.harness.campaign.row import RowSums
-from vsegen.harness.host.run_log import EstimatorStream
+from vsegen.harness.host.run_log import EstimatorStream, run_estimator
 from vsegen.harness.logs.sources import open_log
 from vsegen.harness.logs.table import LogError
 from vsegen.harness.logs.units import check_units_of_head
+from vsegen.harness.score.metrics import Score, score
 from vsegen.model.params import ParameterError, VehicleConfig
 
 
@@ -37,3 +39,11 @@ def log_job(log: str, channels: str | None, dbc: str | None,
     rows = [{"estimator": name, "settings": label, "sample_time_s": source.sample_time, **row.row()}
             for (name, label, _), row in zip(runs, sums)]
     return {"rows": rows, "worker": worker}
+
+
+def scenario_job(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:
+    """(the run's notes, per estimator its scores against the truth) of scenario ``case``
+    (``harness.sim.scenarios.Case``) with sensor-noise ``seed``, each estimator's generated C run over
+    the log: one job of a Monte-Carlo sweep on the cluster (workers need only vsegen installed)."""
+    log = case.simulate(config, 1.0 / config.sample_time, seed)
+    return dict(log.notes), {name: score(log, run_estimator(config, name, log)) for name in names}

@@ -19,6 +19,7 @@ from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import ScenarioError
 from vsegen.model.estimators import DEFINITIONS, underived_warning
 from vsegen.model.params import ParameterError, VehicleConfig
+from vsegen.model.schema import PARAMETER_MODES, REALS
 
 console = Console(highlight=False, width=None if sys.stdout.isatty() or os.environ.get("COLUMNS") else 120)
 """stdout: the terminal's width, else $COLUMNS, else 120 columns."""
@@ -46,9 +47,9 @@ def user_errors(command):
     return wrapper
 
 
-REAL_OPTION = click.option("--real", type=click.Choice(["double", "float"]), default=None,
+REAL_OPTION = click.option("--real", type=click.Choice(REALS), default=None,
                            help="C floating-point type. Default: the vehicle file's [codegen] real.")
-PARAMS_OPTION = click.option("--params", type=click.Choice(["baked", "calibratable"]), default=None,
+PARAMS_OPTION = click.option("--params", type=click.Choice(PARAMETER_MODES), default=None,
                              help="Parameters as constants or a const calibration struct. "
                                   "Default: the vehicle file's [codegen] params.")
 def window_options(command):

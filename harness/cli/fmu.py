@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from vsegen.codegen.fmu import FMI_VERSIONS
 from vsegen.harness.cli.common import (
     PARAMS_OPTION,
     REAL_OPTION,
@@ -25,7 +26,8 @@ from vsegen.harness.cli.common import (
 @click.option("--estimator", "name", required=True, help="Estimator name.")
 @REAL_OPTION
 @PARAMS_OPTION
-@click.option("--fmi", type=click.Choice(["3", "2"]), default="3", show_default=True, help="FMI version.")
+@click.option("--fmi", type=click.Choice([str(v) for v in reversed(FMI_VERSIONS)]), default=str(max(FMI_VERSIONS)),
+              show_default=True, help="FMI version.")
 @click.option("--out", type=click.Path(path_type=Path), default=None,
               help="The FMU file to write. Default: vse_<estimator>.fmu in the current folder.")
 @user_errors

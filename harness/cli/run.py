@@ -25,6 +25,7 @@ from vsegen.harness.cli.common import (
     warn_underived,
     window_options,
 )
+from vsegen.harness.host.run_log import BACKENDS
 from vsegen.harness.logs.estimates import EstimatesWriter
 
 
@@ -34,7 +35,7 @@ from vsegen.harness.logs.estimates import EstimatesWriter
                    "bus-logging .mf4) with --dbc.")
 @click.option("--estimator", required=True, help="Estimator name.")
 @VEHICLE_OPTION
-@click.option("--backend", type=click.Choice(["c", "reference"]), default="c", show_default=True,
+@click.option("--backend", type=click.Choice(BACKENDS), default="c", show_default=True,
               help="Generated C (compiled for the log's sample time, cached) or the NumPy reference.")
 @click.option("--out", type=click.Path(path_type=Path), required=True,
               help="Estimates to write: CSV, MDF4 when the name ends in .mf4, Parquet in .parquet.")

@@ -33,6 +33,7 @@ from vsegen.harness.project.paths import project
 from vsegen.harness.project.results import Check, write_results
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.harness.target.emulator import BOARDS
 from vsegen.harness.verify import report as verify_report
 
 
@@ -40,7 +41,7 @@ from vsegen.harness.verify import report as verify_report
 @VEHICLE_OPTION
 @click.option("--estimator", "estimators", multiple=True,
               help="Estimator name (repeatable). Default: every estimator the vehicle file configures.")
-@click.option("--target", "targets", multiple=True, type=click.Choice(["m4f", "m7"]),
+@click.option("--target", "targets", multiple=True, type=click.Choice(tuple(BOARDS)),
               help="Cortex-M4F (float, QEMU mps2-an386) or Cortex-M7 (double, mps2-an500); repeatable. "
                    "Default: both.")
 @PARAMS_OPTION

@@ -23,6 +23,7 @@ from vsegen.harness.cli.common import (
 )
 from vsegen.harness.project.files import write_text_atomic
 from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.tune.search import OBJECTIVES
 
 
 @click.command()
@@ -34,7 +35,7 @@ from vsegen.harness.project.vehicles import load_vehicle
 @click.option("--holdout", "holdout_paths", multiple=True, type=click.Path(path_type=Path),
               help="Hold-out log CSV, scored but never searched on (repeatable).")
 @click.option("--trials", default=40, show_default=True, help="Candidates to evaluate.")
-@click.option("--objective", type=click.Choice(["rmse", "max", "mean"]), default="rmse", show_default=True,
+@click.option("--objective", type=click.Choice(OBJECTIVES), default="rmse", show_default=True,
               help="Per-log error statistic, averaged over the logs.")
 @click.option("--seed", default=1, show_default=True, help="Seed of the search.")
 @click.option("--batch", default=8, show_default=True,

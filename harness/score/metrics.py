@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.logs.stream import LogSource
 from vsegen.harness.logs.table import SPIN_SIDESLIP, Log, LogError, runs
 
@@ -177,11 +176,3 @@ class SilentStretch:
                 self.longest, self.start = length, self.open_since
         if not len(silent) or not silent[-1]:
             self.open_since = None
-
-
-def score_case(config, case, seed: int, names: tuple[str, ...]) -> tuple[dict, dict[str, list[Score]]]:
-    """(the run's notes, per estimator its scores against the truth) of scenario ``case``
-    (``harness.sim.scenarios.Case``) with sensor-noise ``seed``, each estimator's generated C run over
-    the log: one job of a Monte-Carlo sweep on the cluster (workers need only vsegen installed)."""
-    log = case.simulate(config, 1.0 / config.sample_time, seed)
-    return dict(log.notes), {name: score(log, run_estimator(config, name, log)) for name in names}
