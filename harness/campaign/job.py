@@ -11,9 +11,8 @@ from pathlib import Path
 
 from vsegen.harness.campaign.row import RowSums
 from vsegen.harness.host.run_log import EstimatorStream, run_estimator
-from vsegen.harness.logs.sources import open_log
+from vsegen.harness.logs.sources import open_checked_log
 from vsegen.harness.logs.table import LogError
-from vsegen.harness.logs.units import check_units_of_head
 from vsegen.harness.score.metrics import Score, score
 from vsegen.model.params import ParameterError, VehicleConfig
 
@@ -26,9 +25,9 @@ def log_job(log: str, channels: str | None, dbc: str | None,
     worker = f"{socket.gethostname()}:{os.getpid()}"
     try:
         first = runs[0][2]
-        with open_log(Path(log), Path(channels) if channels else None, first.sample_time,
-                      dbc=Path(dbc) if dbc else None) as source:
-            check_units_of_head(source, first.vehicle, first.driven_axle)
+        source, _ = open_checked_log(Path(log), Path(channels) if channels else None, first.sample_time,
+                                     dbc=Path(dbc) if dbc else None, config=first)
+        with source:
             streams = [EstimatorStream(config, name, source.sample_time) for name, _, config in runs]
             sums = [RowSums(source.sample_time) for _ in runs]
             for chunk in source.chunks():

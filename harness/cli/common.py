@@ -97,13 +97,8 @@ def read_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     grid (MDF4 channels: at ``sample_time``, a number or a function giving it, called only for
     MDF4) and where it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the
     signals' physics is checked for wrong units (``harness.logs.units``)."""
-    log = open_user_log(path, channels, sample_time, window, dbc=dbc).read()
+    log = open_user_log(path, channels, sample_time, window, unit_check, dbc).read()
     say_notes(path, log.notes)
-    if unit_check is not None:
-        from vsegen.harness.logs.units import check_units
-
-        notes: list[str] = []
-        _say_unchecked(path, check_units(log, unit_check.vehicle, unit_check.driven_axle, notes), notes)
     return log
 
 
@@ -114,14 +109,12 @@ def open_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     memory does not grow with its length (a raw CAN log, decoded with ``dbc``, is held decoded).
     The gaps of an MDF4 or CAN log are in the source's notes once it has been read
     (:func:`say_notes`). With ``unit_check``, the units are judged on the log's first ten minutes
-    (``harness.logs.units.check_units_of_head``)."""
-    from vsegen.harness.logs.sources import open_log
-    from vsegen.harness.logs.units import check_units_of_head
+    and what the check has to say is said on stderr (``harness.logs.sources.open_checked_log``)."""
+    from vsegen.harness.logs.sources import open_checked_log
 
-    source = open_log(path, channels, sample_time, window, dbc)
-    if unit_check is not None:
-        notes: list[str] = []
-        _say_unchecked(path, check_units_of_head(source, unit_check.vehicle, unit_check.driven_axle, notes), notes)
+    source, notes = open_checked_log(path, channels, sample_time, window, dbc, unit_check)
+    for note in notes:
+        click.echo(f"vsegen: {path}: {note}", err=True)
     return source
 
 
@@ -130,15 +123,6 @@ def say_notes(path: Path, notes: dict[str, str]) -> None:
     for key in ("resampled", "gaps"):
         if key in notes:
             click.echo(f"vsegen: {path}: {notes[key]}", err=True)
-
-
-def _say_unchecked(path: Path, unchecked: list[str], notes: list[str]) -> None:
-    """The unit check's notes (frozen stretches, a scaled yaw rate) and the columns it could not
-    judge, a line each on stderr."""
-    for note in notes:
-        click.echo(f"vsegen: {path}: {note}", err=True)
-    if unchecked:
-        click.echo(f"vsegen: {path}: units not checked: {', '.join(unchecked)}", err=True)
 
 
 def warn_underived(config: VehicleConfig, name: str) -> None:

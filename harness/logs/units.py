@@ -70,6 +70,8 @@ FROZEN_TIME = 0.5
 """s: an inertial column that repeats one value bit for bit this long is frozen there (sensor
 noise makes a live one change every sample; a steering angle or a speed may rightly stand still)."""
 FROZEN_CHECKED = ("ay", "r")
+FROZEN_SHARE = 0.5
+"""A column frozen over this share of the log or more is judged whole (a synthetic or standing log)."""
 MIN_YAW_RATE = 0.03
 """rad/s: yaw rates below this say little about a ratio."""
 MIN_LATERAL = 0.5
@@ -174,21 +176,26 @@ def _free_axle(log: Log, vehicle: Mapping[str, float], vx: np.ndarray, r: np.nda
 
 
 def _frozen(raw: np.ndarray, log: Log, name: str, notes: list[str]) -> np.ndarray:
-    """Where ``raw`` repeats one value bit for bit for FROZEN_TIME or longer (a note each stretch)."""
+    """Where ``raw`` repeats one value bit for bit for FROZEN_TIME or longer (a note each stretch),
+    when that is less than FROZEN_SHARE of the log: a log mostly constant (synthetic, or a car
+    standing) is judged whole, as before."""
     same = np.concatenate([[False], raw[1:] == raw[:-1]])
     frozen = np.zeros(len(raw), dtype=bool)
     minimum = max(2, round(FROZEN_TIME / log.sample_time))
-    start = None
+    t = np.asarray(log["t"], dtype=float)
+    said, start = [], None
     for k, repeated in enumerate([*same, False]):
         if repeated and start is None:
             start = k - 1
         elif not repeated and start is not None:
             if k - start >= minimum:
                 frozen[start:k] = True
-                t = np.asarray(log["t"], dtype=float)
-                notes.append(f"column '{name}' repeats one value for {(k - start) * log.sample_time:.2f} s from "
-                             f"t = {t[start]:.2f} s: a frozen sensor or CAN signal? (its unit was judged on the rest)")
+                said.append(f"column '{name}' repeats one value for {(k - start) * log.sample_time:.2f} s from "
+                            f"t = {t[start]:.2f} s: a frozen sensor or CAN signal? (its unit was judged on the rest)")
             start = None
+    if np.mean(frozen) >= FROZEN_SHARE:
+        return np.zeros(len(raw), dtype=bool)
+    notes += said
     return frozen
 
 
