@@ -113,3 +113,15 @@ def test_score_and_plot_read_every_format_run_writes(tmp_path, vsegen, dlc_csv):
     result = vsegen.process("score", "--log", str(dlc_csv), "--est", str(tmp_path / "bad.parquet"))
     assert result.exit_code == 2 and "bad.parquet: not a Parquet file" in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_a_run_builds_its_estimator_once(tmp_path, dlc_csv, vsegen, monkeypatch):
+    """Before, `run` built the estimator four times (its inputs, the stream, the C, the kit)."""
+    from vsegen.model import estimators
+
+    built = []
+    real_build = estimators._build
+    monkeypatch.setattr(estimators, "_build", lambda *args: built.append(args[:1] + args[2:]) or real_build(*args))
+    monkeypatch.setattr(estimators, "_built", type(estimators._built)())
+    assert vsegen("run", "--log", dlc_csv, "--estimator", "switching", "--out", tmp_path / "e.csv").exit_code == 0
+    assert built == [("switching", "baked")]

@@ -4,6 +4,7 @@ settings); adding an estimator adds its module here (CONTRIBUTING.md)."""
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from typing import TYPE_CHECKING
 
 from vsegen.model.calibration import calibratable, parameters
@@ -20,11 +21,28 @@ DEFINITIONS: dict[str, Definition] = {d.name: d for module in MODULES for d in m
 SCHEMAS: dict[str, EstimatorSchema] = {name: d.schema for name, d in DEFINITIONS.items()}
 
 
+BUILT_KEPT = 8
+"""Estimators kept built (the last ones asked for): one command asks for the same one several
+times (its inputs, its reference run, its C, its kit), and a build takes a good fraction of a second."""
+_built: OrderedDict[tuple[str, str, str], Estimator] = OrderedDict()
+
+
 def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
     """Build estimator ``name`` for ``config`` with parameters ``params`` ("baked" or
     "calibratable"); KeyError if no such estimator exists. A calibratable estimator's calibration
     holds only what its code reads at run time: values read only at generation (structural) or not
-    at all are baked and listed in ``parameters.fixed``."""
+    at all are baked and listed in ``parameters.fixed``. The last BUILT_KEPT are kept, by the
+    configuration's fingerprint (an Estimator is never changed once built)."""
+    key = (config.fingerprint(), name, params)
+    if key not in _built:
+        _built[key] = _build(name, config, params)
+        while len(_built) > BUILT_KEPT:
+            _built.popitem(last=False)
+    _built.move_to_end(key)
+    return _built[key]
+
+
+def _build(name: str, config: VehicleConfig, params: str) -> Estimator:
     definition = DEFINITIONS[name]
     estimator = definition.build(parameters(config, name, params))
     if params == "calibratable":
