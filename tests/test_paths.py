@@ -37,6 +37,6 @@ def test_every_repository_path_named_exists():
 
 
 def test_the_check_finds_a_path_that_moved():
+    moved = "harness" + "/compare.py"             # written in two parts, so that this file does not name it
     assert "harness/verify/compare.py" in named_paths()
-    assert not (REPO / "harness/compare.py").exists() and PATH.search("see harness/compare.py.").group(1) == \
-        "harness/compare.py"
+    assert not (REPO / moved).exists() and PATH.search(f"see {moved}.").group(1) == moved
