@@ -8,7 +8,7 @@ import subprocess
 
 from locations import REPO
 
-from vsegen.harness.project import reference_docs
+from vsegen.harness.starter import reference_docs
 
 README_LINES = 250
 TEXT_SUFFIXES = (".py", ".toml", ".md", ".j2", ".sh", ".c", ".h", ".txt")

@@ -14,8 +14,8 @@ from locations import REPO
 
 from vsegen.harness.logs.channels import read_channel_map
 from vsegen.harness.project.paths import Project, ProjectError, project
-from vsegen.harness.project.starter import MAPPED_BY_DEFAULT, StarterError, init_project
 from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.starter.files import MAPPED_BY_DEFAULT, StarterError, init_project
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +36,7 @@ def test_the_wheel_installs_everything_under_one_vsegen_namespace(wheel):
                    "vsegen/harness/host/runner.c.j2", "vsegen/harness/verify/fuzz.c.j2",
                    "vsegen/harness/campaign/report.html.j2",
                    "vsegen/harness/target/pil_main.c.j2", "vsegen/harness/target/boards/mps2.ld",
-                   "vsegen/harness/project/conventions.md",
+                   "vsegen/harness/starter/conventions.md",
                    "vsegen/vehicles/c_class.toml"):
         assert needed in names
 

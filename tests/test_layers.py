@@ -14,11 +14,11 @@ from locations import REPO
 
 LAYERS = ("model", "codegen", "harness", "bench")
 STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "campaign", "identify", "tune", "verify",
-          "target", "fmu", "cli")
+          "target", "fmu", "starter", "cli")
 """harness's stages in flow order: the NumPy reference first (it imports nothing of harness), then
 the project's files, job pools, logs, the truth simulation, the host build, scoring, campaigns of
-logs, identification, tuning, verification, the target stage, the FMU (software in the loop) and
-the command line on top."""
+logs, identification, tuning, verification, the target stage, the FMU (software in the loop), a
+new project's starter files and reference pages, and the command line on top."""
 REFERENCE = Path("harness") / "reference"
 NOT_IN_REFERENCE = ("casadi", "model", "codegen")
 

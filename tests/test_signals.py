@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from vsegen.harness.logs.table import LogError, read_log
-from vsegen.harness.project import reference_docs
+from vsegen.harness.starter import reference_docs
 from vsegen.model import signals, status
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.guard import LIMIT_KEYS

@@ -14,11 +14,11 @@ from vsegen.harness.cli.common import (
     display,
     user_errors,
 )
-from vsegen.harness.project import reference_docs
 from vsegen.harness.project.files import file_diff, write_text_atomic
 from vsegen.harness.project.paths import project, shipped_vehicle_names
 from vsegen.harness.sim import disturbances
 from vsegen.harness.sim.scenarios import SCENARIOS
+from vsegen.harness.starter import reference_docs
 from vsegen.model.estimators import DEFINITIONS
 
 
@@ -30,7 +30,7 @@ from vsegen.model.estimators import DEFINITIONS
 def init(folder: Path, like: str) -> None:
     """Start a project in FOLDER for your own car: vehicles/car.toml (commented, to edit),
     channels.toml (a channel-map example) and a README with the next commands."""
-    from vsegen.harness.project.starter import StarterError, init_project
+    from vsegen.harness.starter.files import StarterError, init_project
 
     try:
         written = init_project(folder, like)
