@@ -19,6 +19,25 @@ STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "campa
 the project's files, job pools, logs, the truth simulation, the host build, scoring, campaigns of
 logs, identification, tuning, verification, the target stage, the FMU (software in the loop), a
 new project's starter files and reference pages, and the command line on top."""
+NEEDS = {
+    "reference": (),
+    "project": (),
+    "jobs": (),
+    "logs": ("project",),
+    "sim": ("project", "jobs", "logs"),
+    "host": ("reference", "project", "jobs", "logs"),
+    "score": ("project", "logs"),
+    "campaign": ("project", "logs", "host", "score"),
+    "identify": ("project", "logs"),
+    "tune": ("project", "jobs", "logs", "host", "score"),
+    "verify": ("reference", "project", "jobs", "sim", "host"),
+    "target": ("jobs", "sim", "host", "verify"),
+    "fmu": ("project", "host"),
+    "starter": ("project",),
+    "cli": STAGES[1:-1],
+}
+"""The stages each stage imports, no more: a new import between stages is a decision, made here
+(the order alone would let score import the host build, or a stage import the command line's)."""
 REFERENCE = Path("harness") / "reference"
 NOT_IN_REFERENCE = ("casadi", "model", "codegen")
 
@@ -66,6 +85,16 @@ def test_a_stage_imports_only_itself_and_the_stages_before_it(name):
     offences = {str(path.relative_to(REPO)): sorted({stage(m) for m in imported_modules(path)} - allowed - {None})
                 for path in sources(f"harness/{name}")}
     assert {k: v for k, v in offences.items() if v} == {}
+
+
+@pytest.mark.parametrize("name", STAGES)
+def test_a_stage_imports_the_stages_it_declares_it_needs(name):
+    used = set()
+    for path in sources(f"harness/{name}"):
+        used |= {stage(m) for m in imported_modules(path)} - {None, name}
+    assert set(NEEDS[name]) <= set(STAGES[:STAGES.index(name)])          # declared in flow order
+    assert sorted(used - set(NEEDS[name])) == [], f"harness/{name} imports stages it does not declare"
+    assert sorted(set(NEEDS[name]) - used) == [], f"harness/{name} declares stages it does not import"
 
 
 def test_every_harness_module_belongs_to_a_stage():
