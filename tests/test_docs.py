@@ -68,3 +68,47 @@ def test_an_installed_vsegen_writes_every_page_a_user_needs(tmp_path, vsegen):
     written = {p.name for p in (tmp_path / "docs").iterdir()}
     assert written == {"conventions.md", "vehicle-file.md", "signals.md"}
     assert "## Log format" in (tmp_path / "docs" / "conventions.md").read_text()
+
+
+def _report_row(report: str, first_cells: tuple[str, ...]) -> list[str]:
+    """The cells of the row of ``report`` (a docs/ page a command writes) that starts with ``first_cells``."""
+    for line in (REPO / "docs" / report).read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if tuple(cells[:len(first_cells)]) == first_cells:
+            return cells
+    raise AssertionError(f"docs/{report}: no row {first_cells}")
+
+
+def test_the_figures_docs_estimators_copies_are_those_of_their_reports():
+    """docs/estimators.md repeats a few figures of the generated reports: instructions per step
+    (docs/benchmarks.md, double) and the β RMSE on the continuous DLC and the μ 1 DLCs
+    (docs/accuracy.md); each must be the report's, rounded as written."""
+    text = (REPO / "docs" / "estimators.md").read_text()
+    rows = {line.split("|")[1].strip(): line for line in text.splitlines() if line.startswith("| `")}
+    for name in ("kf2dof", "switching", "fusion"):
+        instructions = float(_report_row("benchmarks.md", (name, "double"))[2])
+        assert f"{instructions:.0f} instr/step" in rows[f"`{name}`"], name
+    fusion = rows["`fusion`"]
+    continuous = _report_row("accuracy.md", ("continuous_dlc", "yes", "no", "fusion"))
+    assert f"continuous DLC max {float(continuous[4]):.3f}°, RMSE {float(continuous[6]):.3f}°" in fusion
+    dlc = [float(_report_row("accuracy.md", (f"dlc(mu=1.0,speed_kmh={v})",) + cells + ("fusion",))[6])
+           for v, cells in (("80.0", ("yes", "no")), ("120.0", ("no", "no")))]
+    assert f"DLC 80 / 120 km/h μ 1 {dlc[0]:.3f}° / {dlc[1]:.3f}°" in fusion
+    kf2dof = _report_row("accuracy.md", ("continuous_dlc", "yes", "no", "kf2dof"))
+    assert f"continuous DLC {float(kf2dof[6]):.3f}°" in rows["`kf2dof`"]
+
+
+def test_the_readme_estimator_table_gives_the_figures_of_its_reports():
+    """The README's estimator table: the β RMSE on the continuous DLC is docs/accuracy.md's, the one on
+    the real lap (identified without the reference) docs/real.md's, each rounded as written."""
+    text = (REPO / "README.md").read_text()
+    table = text[text.index("## Estimators"):].split("\n\n")[1]
+    rows = {cells[0]: cells for cells in ([c.strip() for c in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
+                                          for line in table.splitlines() if line.startswith("| `"))}
+    for name in ("kf2dof", "switching", "fusion", "ekf_rls"):
+        continuous = float(_report_row("accuracy.md", ("continuous_dlc", "yes", "no", name))[6])
+        lap = float(_report_row("real.md", (name, "identified without the reference columns"))[2])
+        assert rows[f"`{name}`"][3] == f"{continuous:.3f}°", name
+        assert rows[f"`{name}`"][4].startswith(f"{lap:.2f}°"), name
+    ukf, aukf = (float(_report_row("accuracy.md", ("continuous_dlc", "yes", "no", n))[6]) for n in ("ukf", "aukf"))
+    assert rows["`ukf` / `aukf`"][3] == f"{ukf:.3f}° / {aukf:.3f}°"
