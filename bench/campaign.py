@@ -28,8 +28,8 @@ import numpy as np
 
 from bench import BENCHMARKS, DEFAULT_VEHICLE, REPO
 from bench.document import provenance, write_section
-from vsegen.harness.logs.estimates import EstimatesWriter
 from vsegen.harness.logs.table import Log
+from vsegen.harness.outputs.estimates import EstimatesWriter
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import Case
 

@@ -11,9 +11,9 @@ from asammdf import MDF, Signal
 from locations import VEHICLES
 
 from vsegen.harness.logs.channels import read_channel_map
-from vsegen.harness.logs.estimates import read_estimates
 from vsegen.harness.logs.mdf import read_mdf
 from vsegen.harness.logs.table import read_log, write_log
+from vsegen.harness.outputs.estimates import read_estimates
 from vsegen.harness.sim.scenarios import Case
 
 MAP = """[columns.delta]

@@ -214,7 +214,7 @@ def test_a_road_log_without_reference_is_plotted_with_the_status(tmp_path, vsege
 
 def test_a_time_window_runs_scores_and_plots_part_of_a_log(tmp_path, vsegen):
 
-    from vsegen.harness.logs.estimates import read_estimates
+    from vsegen.harness.outputs.estimates import read_estimates
 
     log, est = str(tmp_path / "dlc.csv"), str(tmp_path / "est.csv")
     assert vsegen("simulate", "dlc", "--out", log).exit_code == 0

@@ -13,10 +13,11 @@ import pytest
 from locations import REPO
 
 LAYERS = ("model", "codegen", "harness", "bench")
-STAGES = ("reference", "project", "jobs", "logs", "sim", "host", "score", "campaign", "identify", "tune", "verify",
-          "target", "fmu", "starter", "cli")
+STAGES = ("reference", "project", "jobs", "logs", "physics", "outputs", "sim", "host", "score", "campaign",
+          "identify", "tune", "verify", "target", "fmu", "starter", "cli")
 """harness's stages in flow order: the NumPy reference first (it imports nothing of harness), then
-the project's files, job pools, logs, the truth simulation, the host build, scoring, campaigns of
+the project's files, job pools, logs (readers), their physics checks, the estimates files, the truth
+simulation, the host build, scoring, campaigns of
 logs, identification, tuning, verification, the target stage, the FMU (software in the loop), a
 new project's starter files and reference pages, and the command line on top."""
 NEEDS = {
@@ -24,12 +25,14 @@ NEEDS = {
     "project": (),
     "jobs": (),
     "logs": ("project",),
+    "physics": ("logs",),
+    "outputs": ("project", "logs"),
     "sim": ("project", "jobs", "logs"),
     "host": ("reference", "project", "jobs", "logs"),
     "score": ("project", "logs"),
-    "campaign": ("project", "logs", "host", "score"),
-    "identify": ("project", "logs"),
-    "tune": ("project", "jobs", "logs", "host", "score"),
+    "campaign": ("project", "logs", "physics", "host", "score"),
+    "identify": ("project", "logs", "physics"),
+    "tune": ("project", "jobs", "logs", "physics", "host", "score"),
     "verify": ("reference", "project", "jobs", "sim", "host"),
     "target": ("jobs", "sim", "host", "verify"),
     "fmu": ("project", "host"),

@@ -9,8 +9,8 @@ import pytest
 from asammdf import MDF
 from locations import VEHICLES
 
-from vsegen.harness.logs.estimates import read_estimates
 from vsegen.harness.logs.table import write_log
+from vsegen.harness.outputs.estimates import read_estimates
 from vsegen.harness.score.plot import state_spans
 from vsegen.harness.sim.scenarios import Case
 

@@ -54,7 +54,7 @@ def test_the_shipped_lap_is_a_log_with_its_reference(revs_lap):
 def test_the_unit_check_accepts_the_real_lap_with_a_first_guess_file_that_oversteers(revs_lap, revs_car):
     """The base file's guessed stiffnesses (100 kN/rad each, a ahead of b) make the linear model
     oversteer and diverge above 48 m/s; the delta relation must not call that a unit error."""
-    from vsegen.harness.logs.units import check_units
+    from vsegen.harness.physics.units import check_units
     from vsegen.model.bicycle import stability_factor
 
     assert stability_factor(revs_car.vehicle) < 0

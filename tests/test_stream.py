@@ -16,10 +16,10 @@ from vsegen.harness.host.run_log import EstimatorStream, estimator_inputs
 from vsegen.harness.logs import mdf as mdf_module
 from vsegen.harness.logs import stream as stream_module
 from vsegen.harness.logs.channels import read_channel_map
-from vsegen.harness.logs.estimates import EstimatesWriter, open_estimates
 from vsegen.harness.logs.mdf import open_mdf_log
 from vsegen.harness.logs.stream import in_memory, open_csv_log
 from vsegen.harness.logs.table import LogError, read_log, write_log
+from vsegen.harness.outputs.estimates import EstimatesWriter, open_estimates
 from vsegen.harness.score.metrics import score, score_sources
 from vsegen.harness.sim.scenarios import Case
 

@@ -13,7 +13,7 @@ import pytest
 from locations import VEHICLES
 
 from vsegen.harness.logs.table import Log, LogError, write_log
-from vsegen.harness.logs.units import check_units
+from vsegen.harness.physics.units import check_units
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import SCENARIOS, Case
 

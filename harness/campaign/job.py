@@ -11,8 +11,8 @@ from pathlib import Path
 
 from vsegen.harness.campaign.row import RowSums
 from vsegen.harness.host.run_log import EstimatorStream, run_estimator
-from vsegen.harness.logs.sources import open_checked_log
 from vsegen.harness.logs.table import LogError
+from vsegen.harness.physics.checked_log import open_checked_log
 from vsegen.harness.score.metrics import Score, score
 from vsegen.model.params import ParameterError, VehicleConfig
 

@@ -96,7 +96,7 @@ def read_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     time ``window`` (s), in memory, saying on stderr (a line each) when it was put on a uniform
     grid (MDF4 channels: at ``sample_time``, a number or a function giving it, called only for
     MDF4) and where it has gaps the estimators hold across. With ``unit_check`` (a vehicle) the
-    signals' physics is checked for wrong units (``harness.logs.units``)."""
+    signals' physics is checked for wrong units (``harness.physics.units``)."""
     log = open_user_log(path, channels, sample_time, window, unit_check, dbc).read()
     say_notes(path, log.notes)
     return log
@@ -109,8 +109,8 @@ def open_user_log(path: Path, channels: Path | None, sample_time: float | Callab
     memory does not grow with its length (a raw CAN log, decoded with ``dbc``, is held decoded).
     The gaps of an MDF4 or CAN log are in the source's notes once it has been read
     (:func:`say_notes`). With ``unit_check``, the units are judged on the log's first ten minutes
-    and what the check has to say is said on stderr (``harness.logs.sources.open_checked_log``)."""
-    from vsegen.harness.logs.sources import open_checked_log
+    and what the check has to say is said on stderr (``harness.physics.checked_log.open_checked_log``)."""
+    from vsegen.harness.physics.checked_log import open_checked_log
 
     source, notes = open_checked_log(path, channels, sample_time, window, dbc, unit_check)
     for note in notes:

@@ -26,7 +26,7 @@ from vsegen.harness.cli.common import (
     window_options,
 )
 from vsegen.harness.host.run_log import BACKENDS
-from vsegen.harness.logs.estimates import EstimatesWriter
+from vsegen.harness.outputs.estimates import EstimatesWriter
 
 
 @click.command()

@@ -19,7 +19,7 @@ from vsegen.harness.cli.common import (
     user_errors,
     window_options,
 )
-from vsegen.harness.logs.estimates import open_estimates, read_estimates
+from vsegen.harness.outputs.estimates import open_estimates, read_estimates
 
 
 @click.command()

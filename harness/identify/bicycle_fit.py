@@ -31,8 +31,8 @@ from vsegen.harness.identify.estimates import (
     interval,
     select,
 )
-from vsegen.harness.logs import segments
 from vsegen.harness.logs.table import Log, runs
+from vsegen.harness.physics import segments
 from vsegen.model.bicycle import GRAVITY
 
 SETTLE = 1.0

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from vsegen.harness.logs import segments
 from vsegen.harness.logs.table import Log, runs
+from vsegen.harness.physics import segments
 from vsegen.model.bicycle import GRAVITY
 
 Z95 = 1.96

@@ -1,6 +1,6 @@
 """ASAM MDF4 logs (.mf4, .mdf) via asammdf: the mapped channels, each at its own rate, read in
 ranges of records and brought causally onto the estimator's sample grid (``harness.logs.grid``).
-Estimates are written as MDF4 by ``harness.logs.estimates.EstimatesWriter``."""
+Estimates are written as MDF4 by ``harness.outputs.estimates.EstimatesWriter``."""
 
 from __future__ import annotations
 

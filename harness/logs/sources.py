@@ -8,7 +8,6 @@ from pathlib import Path
 
 from vsegen.harness.logs.stream import LogSource
 from vsegen.harness.logs.table import LogError
-from vsegen.model.params import VehicleConfig
 
 LOG_SUFFIXES = (".csv", ".csv.gz", ".csv.bz2", ".csv.xz", ".mf4", ".mdf", ".blf", ".asc")
 """The file names a folder of logs is searched for."""
@@ -36,23 +35,3 @@ def open_log(path: Path, channels: Path | None, sample_time: float | Callable[[]
     if path.suffix.lower() in SUFFIXES:
         return open_mdf_log(path, mapping, sample_time() if callable(sample_time) else sample_time, window)
     return open_csv_log(path, {c.channel: (c.name, c.scale) for c in mapping.columns.values()}, window=window)
-
-
-def open_checked_log(path: Path, channels: Path | None, sample_time: float | Callable[[], float],
-                     window: tuple[float | None, float | None] = (None, None), dbc: Path | None = None,
-                     config: VehicleConfig | None = None) -> tuple[LogSource, list[str]]:
-    """:func:`open_log`, and with a vehicle ``config`` its units judged from physics on its first
-    ten minutes (``harness.logs.units``; LogError on a wrong one): (the source, the lines to say
-    about it: frozen stretches, a scaled yaw rate, the columns no relation could judge)."""
-    from vsegen.harness.logs.units import check_units_of_head
-
-    source = open_log(path, channels, sample_time, window, dbc)
-    notes: list[str] = []
-    if config is not None:
-        try:
-            unchecked = check_units_of_head(source, config.vehicle, config.driven_axle, notes)
-        except LogError:
-            source.close()
-            raise
-        notes += [f"units not checked: {', '.join(unchecked)}"] if unchecked else []
-    return source, notes

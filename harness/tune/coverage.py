@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vsegen.harness.logs import segments
 from vsegen.harness.logs.table import Log
+from vsegen.harness.physics import segments
 from vsegen.model.bicycle import GRAVITY, stability_factor
 from vsegen.model.estimator import BEYOND_LINEAR, EVERYWHERE, LOW_FRICTION, REGIMES
 from vsegen.model.params import VehicleConfig

@@ -35,8 +35,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from vsegen.harness.logs import segments
 from vsegen.harness.logs.table import Log, LogError
+from vsegen.harness.physics import segments
 
 SMOOTHING = 0.3
 """s: every signal is averaged over this before its ratios are taken (noise down about fivefold)."""
