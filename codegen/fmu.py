@@ -19,8 +19,9 @@ set at t; the outputs after it are those of the last step.
 from __future__ import annotations
 
 import hashlib
+import textwrap
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import casadi as ca
@@ -107,7 +108,7 @@ def render_fmu(config: VehicleConfig, name: str, real: str, params: str, fmi: in
         "parameters": [v for v in variables if v.causality == "parameter"],
         "variables": variables,
         "once_per_process": "false",
-        "banner": "/*\n" + "".join(f" * {line}\n" for line in _wrapped(comment)) + " */",
+        "banner": "/*\n" + "".join(f" * {line}\n" for line in textwrap.wrap(comment, 96)) + " */",
     }
     env = template_environment()
     files = {"modelDescription.xml": env.get_template(f"fmu/modelDescription{fmi}.xml.j2").render(context),
@@ -152,7 +153,7 @@ def _variables(estimator, real: str, prefix: str) -> list[Variable]:
                 max=None if upper is None else repr(float(upper)), literal=literal(value, real),
                 within=" && ".join(f"(v {b.op} {literal(b.value, real)})" for b in own) or "1",
                 bounds=", ".join(b.says for b in own)))
-    return [_with_index(v, i + 1) for i, v in enumerate(variables)]
+    return [replace(v, index2=i + 1) for i, v in enumerate(variables)]
 
 
 def _status_words(estimator) -> str:
@@ -161,10 +162,6 @@ def _status_words(estimator) -> str:
             *((status.INVALID_CALIBRATION,) if estimator.parameters.calibratable else ()))
     named = ", ".join(f"{bit.value} {bit.name}" for bit in status.described(bits))
     return f"status bits, OR-ed (0 = OK; LOW_SPEED until the first step): {named}"
-
-
-def _with_index(variable: Variable, index: int) -> Variable:
-    return Variable(**{**variable.__dict__, "index2": index})
 
 
 def _bounds(estimator) -> dict[str, list[Bound]]:
@@ -194,14 +191,3 @@ def _units(variables: list[Variable]) -> list[Unit]:
             units[v.unit] = Unit(v.unit, tuple(sorted(exponents.items())))
     return [units["s"] if "s" in units else Unit("s", (("s", 1),)),
             *(u for name, u in sorted(units.items()) if name != "s")]
-
-
-def _wrapped(text: str, width: int = 96) -> list[str]:
-    lines, line = [], ""
-    for word in text.split():
-        if line and len(line) + 1 + len(word) > width:
-            lines.append(line)
-            line = word
-        else:
-            line = f"{line} {word}".strip()
-    return [*lines, line]

@@ -76,9 +76,8 @@ def baseline_settings(table: Sequence[dict], labels: Sequence[str], path: Path) 
     """Which settings of an earlier campaign's ``table`` each new settings label is compared with:
     the one of the same name, else the table's only one; rows of the earlier campaign's own
     baseline do not count. LogError (one line) when that is ambiguous."""
-    old = sorted({row.get("settings", "") for row in table} - {""}
-                 - {label for label in {row.get("settings", "") for row in table} if label.startswith(BASELINE_PREFIX)})
-    old = old or [""]
+    labels_in_table = {row.get("settings", "") for row in table}
+    old = sorted(label for label in labels_in_table if label and not label.startswith(BASELINE_PREFIX)) or [""]
     chosen = {}
     for label in labels:
         if label in old or len(old) == 1:

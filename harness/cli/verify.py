@@ -97,8 +97,7 @@ def _coverage(config: VehicleConfig, forms: dict, out: Path, seed: int) -> None:
             mine = [form for form, estimators in forms.items() if name in estimators]
             results.append(coverage.measure(config, name, mine, cache_dir() / "coverage", seed=seed))
             progress.done(name, True)
-    write_text_atomic(out, coverage.markdown(results, provenance(project().root).replace("vsegen misra",
-                                                                                           "vsegen verify --coverage")))
+    write_text_atomic(out, coverage.markdown(results, provenance(project().root, "vsegen verify --coverage", "gcovr")))
     shares = coverage.totals(results)
     console.print(f"wrote {display(out)}: model decisions both ways or justified {shares['model']:.1f} % "
                   f"({shares['not_justified']:.0f} not justified), template statements {shares['statements']:.1f} %, "

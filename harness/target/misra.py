@@ -179,9 +179,9 @@ def regressions(per_rule: dict[str, int], baseline: dict[str, int]) -> list[str]
     return problems
 
 
-def provenance(project_root: Path) -> str:
-    """What wrote the report: the command, the project's git commit (when it is a checkout) and the
-    versions of vsegen, CasADi and cppcheck."""
+def provenance(project_root: Path, command: str = "vsegen misra", tool: str = "cppcheck") -> str:
+    """What wrote a report: ``command``, the project's git commit (when it is a checkout) and the
+    versions of vsegen, CasADi and ``tool`` (the checker the report rests on)."""
     def output(*command: str) -> str:
         try:
             done = subprocess.run(command, cwd=project_root, capture_output=True, text=True)
@@ -192,8 +192,8 @@ def provenance(project_root: Path) -> str:
     commit = output("git", "rev-parse", "--short=10", "HEAD")
     changed = commit and output("git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)docs")
     at = f" at commit {commit}{' plus uncommitted changes' if changed else ''}" if commit else ""
-    return (f"Written by `vsegen misra`{at} (vsegen {metadata.version('vsegen')}, CasADi {casadi.__version__}, "
-            f"{output('cppcheck', '--version') or 'cppcheck'})")
+    return (f"Written by `{command}`{at} (vsegen {metadata.version('vsegen')}, CasADi {casadi.__version__}, "
+            f"{output(tool, '--version').splitlines()[0] if output(tool, '--version') else tool})")
 
 
 def report(sections: list[tuple[str, Counter]], written_by: str) -> str:
