@@ -105,6 +105,12 @@ def plausibility(inputs: Mapping[str, ca.SX], limits: Mapping[str, float]) -> di
     return {name: ca.fabs(value) <= limits[LIMIT_KEYS[name]] for name, value in inputs.items()}
 
 
+def model_speed(vx: ca.SX, vx_min: float, vx_max: float) -> ca.SX:
+    """The forward speed a model sees (m/s): ``vx`` clamped to [vx_min, vx_max]. Its upper bound is
+    the v_x plausibility limit, so a held (plausible) speed never reaches past it."""
+    return ca.fmin(ca.fmax(vx, vx_min), vx_max)
+
+
 def hold(value: ca.SX, accept: ca.SX, previous: ca.SX) -> ca.SX:
     """``value`` where ``accept`` holds, else ``previous`` (never evaluates to the rejected value)."""
     return ca.if_else(accept, value, previous)

@@ -34,7 +34,7 @@ from vsegen.model.bicycle import bicycle_matrices
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import GYRO_VARIANCE, Definition, Estimator, SingleStep, Tunable, make_functions
 from vsegen.model.estimators.kf2dof import zoh_plan
-from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.guard import first_sample, hold, input_guard, model_speed
 from vsegen.model.layout import Layout
 from vsegen.model.schema import LOW_SPEED_FIELDS, LOW_SPEED_RULES, EstimatorSchema, choice, fraction, positive
 from vsegen.model.signals import Signal
@@ -227,7 +227,7 @@ def _initial_state(params: Parameters, states: Layout, theta_names: tuple[str, .
     settings = config.settings(NAME)
     vx_min = settings["vx_min"]
     first, holding = first_sample(u, config.limits, vx_min, settings["vx_resume"])
-    vx0 = ca.fmin(ca.fmax(first["vx"], vx_min), config.limits["vx_max"])
+    vx0 = model_speed(first["vx"], vx_min, config.limits["vx_max"])
     theta0 = prior(params, vx0)
     P0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["measurement_noise"])
     P_theta0_packed = kalman.pack_symmetric(parameter_covariances(params)[0])

@@ -38,7 +38,7 @@ from vsegen.model import consistency, input_monitors, kalman, signals, status, u
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
-from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.guard import first_sample, hold, input_guard, model_speed
 from vsegen.model.increments import Pair, lift
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import (
@@ -274,7 +274,7 @@ def _initial_state(sym: _Symbols) -> ca.SX:
     """The state at the first sample: [vx_0, 0, ...], P_0, q_0 = 0, Q_0, the monitor at rest."""
     config, settings = sym.params.config, sym.settings
     first, holding = first_sample(sym.u, config.limits, settings["vx_min"], settings["vx_resume"])
-    vx0 = ca.fmin(ca.fmax(first["vx"], settings["vx_min"]), config.limits["vx_max"])
+    vx0 = model_speed(first["vx"], settings["vx_min"], config.limits["vx_max"])
     Q0 = ca.vertcat(*settings["process_noise"])
     P0 = settings["initial_covariance"]
     return sym.states.pack({

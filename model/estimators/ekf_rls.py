@@ -53,7 +53,7 @@ from vsegen.model.estimator import (
     Tunable,
     make_guarded,
 )
-from vsegen.model.guard import first_sample, hold, input_guard, symbolic
+from vsegen.model.guard import first_sample, hold, input_guard, model_speed, symbolic
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import (
     LOW_SPEED_FIELDS,
@@ -331,7 +331,7 @@ def build(params: Parameters) -> Estimator:
     ok = guard.plausible
     delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
     vx_min = settings["vx_min"]
-    vx = ca.fmin(ca.fmax(hold(u["vx"], ok["vx"], vx_min), vx_min), config.limits["vx_max"])
+    vx = model_speed(hold(u["vx"], ok["vx"], vx_min), vx_min, config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
     monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
                                       INPUTS.names, config.vehicle)

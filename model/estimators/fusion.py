@@ -65,6 +65,12 @@ OUTPUTS = Layout((
 ))
 
 
+def kinematic_weight(ay_filtered: ca.SX, threshold: float) -> ca.SX:
+    """w = |a_y,f| / (2 threshold) (a_y in m/s^2), clamped to [0, 1]: 1/2 at the switching
+    threshold. The lower clamp never acts (w is never negative); it keeps the clamp's form."""
+    return ca.fmin(ca.fmax(ca.fabs(ay_filtered) / (2 * threshold), 0), 1)
+
+
 def build(params: Parameters) -> Estimator:
     """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
     numeric = params.numeric.settings(NAME)
@@ -77,7 +83,7 @@ def build(params: Parameters) -> Estimator:
     guard, decisions = symbolic(seed.guard(s, u))
     pre = seed.preprocess(s, u, guard)
     active = pre.guard.active
-    weight = ca.fmin(ca.fmax(ca.fabs(pre.ay_filtered) / (2 * seed.settings["threshold"]), 0), 1)
+    weight = kinematic_weight(pre.ay_filtered, seed.settings["threshold"])
 
     ok = pre.guard.plausible  # the KF runs every sample: feed it plausible values only
     offset, learned = ca.SX(0), {}

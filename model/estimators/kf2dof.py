@@ -33,7 +33,7 @@ from vsegen.model.estimator import (
     Tunable,
     make_guarded,
 )
-from vsegen.model.guard import first_sample, hold, input_guard, previous_inputs, symbolic
+from vsegen.model.guard import first_sample, hold, input_guard, model_speed, previous_inputs, symbolic
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
 from vsegen.model.signals import Signal
@@ -108,8 +108,8 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     delta_prev, vx_prev, delta, vx, ay, r_meas = (
         ca.SX.sym(n) for n in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"))
 
-    def model_speed(speed):
-        return ca.fmin(ca.fmax(speed, vx_min), vx_max)
+    def seen_speed(speed):
+        return model_speed(speed, vx_min, vx_max)
 
     P = kalman.unpack_symmetric(P_packed, 2)
     z = ca.vertcat(ay, r_meas)
@@ -117,23 +117,23 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
         # EKF: x- = x + Gamma_I f(x), the Jacobian's Phi and Gamma_I = int_0^T e^(A s) ds by the
         # configured method (exact for the linear model: Phi x + Gamma delta), P- = Phi P Phi' + Q_d
         friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], ay)
-        prior = tyres.saturating_bicycle(vehicle, friction, x, delta_prev, model_speed(vx_prev))
+        prior = tyres.saturating_bicycle(vehicle, friction, x, delta_prev, seen_speed(vx_prev))
         Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
         x_pred, P_pred = kalman.ekf_predict(x + ca.mtimes(Gamma, prior.f), P, Phi, Qd)
-        seen = tyres.saturating_bicycle(vehicle, friction, x_pred, delta, model_speed(vx))
+        seen = tyres.saturating_bicycle(vehicle, friction, x_pred, delta, seen_speed(vx))
         innovation = z - ca.vertcat(seen.ay, x_pred[1])
         x_new, P_new = kalman.correct(x_pred, P_pred, innovation, seen.H, R)
     else:
-        A, B, _, _ = bicycle_matrices(vehicle, model_speed(vx_prev))
+        A, B, _, _ = bicycle_matrices(vehicle, seen_speed(vx_prev))
         Phi, Gamma = discretize.discretise(settings["discretisation"], A, B, T, plan)
         x_pred, P_pred = kalman.predict(x, P, Phi, Gamma, delta_prev, Qd)
-        _, _, C, D = bicycle_matrices(vehicle, model_speed(vx))
+        _, _, C, D = bicycle_matrices(vehicle, seen_speed(vx))
         x_new, P_new, innovation = kalman.update_joseph(x_pred, P_pred, z, C, D, delta, R)
     names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
     return ca.Function(
         f"{table}_dynamic_update",
         [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
-        [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], model_speed(vx)), innovation],
+        [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], seen_speed(vx)), innovation],
         names + ["params"] * params.calibratable,
         ["x_next", "P_next", "beta", "innovation"],
     )

@@ -16,7 +16,7 @@ from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import BEYOND_LINEAR, Tunable
 from vsegen.model.estimators import kf2dof
-from vsegen.model.guard import Guard, first_sample, hold, input_guard, plausibility, previous_inputs
+from vsegen.model.guard import Guard, first_sample, hold, input_guard, model_speed, plausibility, previous_inputs
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
 from vsegen.model.sensors import roll_corrected
@@ -151,7 +151,7 @@ class KinematicDynamic:
 
     def speed(self, vx):
         """vx clamped to [vx_min, vx_max] (the model never sees a smaller or larger speed)."""
-        return ca.fmin(ca.fmax(vx, self.vx_min), self.vx_max)
+        return model_speed(vx, self.vx_min, self.vx_max)
 
     def guard(self, s: dict, u: dict) -> Guard:
         """The input guard of the sample (``model.guard.input_guard``)."""

@@ -37,7 +37,7 @@ import casadi as ca
 from vsegen.model import signals, status
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import INERTIAL_SIGMAS, RNG_WORDS, ROLL_GRADIENT, Definition, Estimator, Particles, Tunable
-from vsegen.model.guard import first_sample, hold, input_guard
+from vsegen.model.guard import first_sample, hold, input_guard, model_speed
 from vsegen.model.layout import Layout
 from vsegen.model.schema import (
     CAPS_ABOVE_FLOORS,
@@ -228,7 +228,7 @@ def _initial(params: Parameters, name: str, u) -> tuple[ca.SX, ca.SX]:
     config = params.config
     settings = config.settings(name)
     first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"])
-    vx0 = ca.fmin(ca.fmax(first["vx"], settings["vx_min"]), config.limits["vx_max"])
+    vx0 = model_speed(first["vx"], settings["vx_min"], config.limits["vx_max"])
     z = _measured(params, name, first)
     head = ca.vertcat(vx0, 0, z["ax"], z["ay"], z["r"], 2 * holding, initial_drift(settings))
     speed, accel = settings["speed_noise"], settings["process_noise"]
