@@ -14,7 +14,7 @@ from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time, worse_than_zero
-from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.sim.scenarios import SCORED_SET, Case
 from vsegen.model.estimators import DEFINITIONS
 
 CARS = ("c_class", "rwd_saloon")
@@ -38,7 +38,7 @@ def longest_silent(car: str, case: Case) -> dict[str, tuple[float, tuple[float, 
 
 
 def report(scheduler: str | None) -> list[str]:
-    jobs = [(car, case) for car in CARS for case in VERIFICATION_SET]
+    jobs = [(car, case) for car in CARS for case in SCORED_SET]
     with DaskPool(scheduler) as cluster:
         results = cluster.map(longest_silent, jobs)
     names = list(results[0])

@@ -9,6 +9,8 @@ import pytest
 from junitparser import JUnitXml, Properties
 from locations import DEFAULT_VEHICLE, REPO
 
+from vsegen.harness.sim.scenarios import VERIFICATION_SET
+
 
 @pytest.mark.slow
 def test_verify_default_vehicle_prints_table(vsegen):
@@ -50,7 +52,7 @@ def test_a_form_generated_once_is_declared_then_regenerated_checked_and_verified
     assert check.exit_code == 0 and "up to date  generated/c_class/kf2dof-float-baked" in check.stdout
     verified = vsegen.process("verify", "--estimator", "kf2dof", cwd=tmp_path)
     assert verified.exit_code == 0, verified.stderr
-    assert "verify passed: 28 runs in 2 form(s)" in verified.stdout
+    assert f"verify passed: {2 * len(VERIFICATION_SET)} runs in 2 form(s)" in verified.stdout
     vehicle.write_text(vehicle.read_text().replace("mass = 1412.0", "mass = 1500.0"))
     stale = vsegen.process("generate", "--check", "--estimator", "kf2dof", cwd=tmp_path)
     assert stale.exit_code == 1 and "generated/c_class/kf2dof-float-baked" in stale.stderr

@@ -14,7 +14,7 @@ from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.logs.table import Log
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time, worse_than_zero
-from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
+from vsegen.harness.sim.scenarios import SCORED_SET, Case
 from vsegen.model import consistency
 from vsegen.model.estimators import DEFINITIONS, build
 from vsegen.model.status import BEYOND_LINEAR_RANGE, DEAD_RECKONING, MODEL_INCONSISTENT
@@ -85,7 +85,7 @@ def test_never_silently_wrong(name, vehicle):
     """On every verification scenario, |beta error| > 2 deg lasts at most 0.5 s with status 0
     (samples after the car spins are not scored)."""
     config = load_vehicle(VEHICLES / f"{vehicle}.toml")
-    for case in VERIFICATION_SET:
+    for case in SCORED_SET:
         log = case.simulate(config, 1.0 / config.sample_time, 1)
         longest, start = silent_error_time(log, run_estimator(config, name, log))
         assert longest <= SILENT_DURATION, f"{case.label}: silently wrong for {longest:.2f} s from {start:.2f} s"

@@ -120,8 +120,8 @@ def test_a_run_builds_its_estimator_once(tmp_path, dlc_csv, vsegen, monkeypatch)
     from vsegen.model import estimators
 
     built = []
-    real_build = estimators._build
-    monkeypatch.setattr(estimators, "_build", lambda *args: built.append(args[:1] + args[2:]) or real_build(*args))
+    real_build = estimators.build_fresh
+    monkeypatch.setattr(estimators, "build_fresh", lambda *args: built.append(args[:1] + args[2:]) or real_build(*args))
     monkeypatch.setattr(estimators, "_built", type(estimators._built)())
     assert vsegen("run", "--log", dlc_csv, "--estimator", "switching", "--out", tmp_path / "e.csv").exit_code == 0
     assert built == [("switching", "baked")]

@@ -25,7 +25,7 @@ def test_every_scenario_gives_a_complete_log(config, name):
     for column in (*REQUIRED, *(c for c in TRUTH if c not in road)):
         assert column in log, column
     flat = name in ("dlc", "continuous_dlc", "step_steer", "sine_steer", "fishhook", "hil_sine",
-                    "low_speed", "invalid_inputs")
+                    "low_speed", "invalid_inputs", "input_extremes")
     assert all((c in log) != flat for c in road), sorted(log.columns)
     assert np.allclose(np.diff(log["t"]), 0.01)
     for column in ("beta_ref", "vx_ref", "vy_ref", "r_ref", "mu"):

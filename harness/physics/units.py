@@ -271,9 +271,11 @@ def _judge(log: Log, relation: str, signal: np.ndarray, predicted: np.ndarray, m
 
 
 def _cause(ratio: float, causes, invert: bool = False) -> str:
-    """The cause whose factor brings ``ratio`` nearest to 1 (on a log scale)."""
+    """The cause whose factor brings ``ratio`` nearest to 1 (on a log scale); none does for a ratio
+    of 0 (a signal that stays 0 where motion is predicted)."""
     def miss(factor: float) -> float:
-        return abs(math.log(abs(ratio) * (factor if invert else 1 / factor)))
+        scaled = abs(ratio) * (factor if invert else 1 / factor)
+        return abs(math.log(scaled)) if scaled > 0 else math.inf
     name, factor = min(causes, key=lambda cause: miss(cause[1]))
     return name if miss(factor) < 0.5 else "a unit or a sign is wrong"
 

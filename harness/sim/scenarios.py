@@ -2,7 +2,8 @@
 
 ``SCENARIOS[name]`` has a ``simulate(config, rate_hz, seed, **options)`` and the defaults of its
 options; the names are stable (scripts rely on them). ``VERIFICATION_SET`` is the list of
-(scenario, options) every estimator is checked on by ``vsegen verify``.
+(scenario, options) every estimator is checked on by ``vsegen verify``; ``SCORED_SET`` those of
+them with a vehicle's truth.
 """
 
 from __future__ import annotations
@@ -25,6 +26,8 @@ class Scenario:
     description: str
     simulate: Callable[..., Log]
     defaults: dict[str, Any] = field(default_factory=dict)
+    scored: bool = True
+    """False for a synthetic run whose truth columns are nominal (verified, never scored)."""
 
 
 _NOISE = {"bias": False, **DISTURBANCE_OPTIONS}
@@ -69,6 +72,9 @@ SCENARIOS: dict[str, Scenario] = {s.name: s for s in (
              manoeuvres.low_speed),
     Scenario("invalid_inputs", "80 km/h DLC with NaN, Inf and out-of-range samples in every input",
              manoeuvres.invalid_inputs),
+    Scenario("input_extremes", "synthetic, noise-free: inputs at the edges of every decision (no "
+             "excitation, wheel lift, a rejected yaw rate, a diverged speed, each input beyond its limit)",
+             manoeuvres.input_extremes, scored=False),
 )}
 
 
@@ -152,4 +158,7 @@ VERIFICATION_SET: tuple[Case, ...] = (
     Case.of("dlc", speed_kmh=80.0, freeze="r:3:1,ay:5:1,ax:7:1"),
     Case.of("low_speed"),
     Case.of("invalid_inputs"),
+    Case.of("input_extremes"),
 )
+SCORED_SET: tuple[Case, ...] = tuple(c for c in VERIFICATION_SET if SCENARIOS[c.scenario].scored)
+"""The verification cases with a vehicle's truth (the accuracy and silence checks run these)."""

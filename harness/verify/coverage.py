@@ -11,22 +11,75 @@ cannot or need not be (a decision that no plausible input reaches), else it is m
 from __future__ import annotations
 
 import re
+from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import casadi as ca
+import numpy as np
+
 from vsegen.harness.host.build import compile_estimator
 from vsegen.harness.sim.scenarios import VERIFICATION_SET, Case
-from vsegen.harness.verify import code_coverage, model_coverage
+from vsegen.harness.verify import code_coverage, decision_sites, model_coverage
 from vsegen.harness.verify.equivalence import case_inputs
 from vsegen.model.estimator import Particles
+from vsegen.model.estimators import build_fresh
 from vsegen.model.params import VehicleConfig
 
-JUSTIFIED: tuple[tuple[str, str, str], ...] = (
-    ("*", r"fmin\(fmax\(state_\d+,3\),90\)$|@1=90, @2=\(fabs\(input_1\)<=@1\), @3=3, fmin\(fmax\(.*,@3\),@1\)$",
-     "the speed clamp's upper bound: v_x is held at its last plausible value, and a plausible v_x is "
-     "at most vx_max (90 m/s), so the clamp never returns 90 from above"),
+
+@dataclass(frozen=True)
+class Justification:
+    """Why a decision is taken one way only: it cannot be taken the other way by any plausible
+    input, or need not be."""
+
+    estimator: str
+    """The estimator's name, or "*" for every estimator."""
+    site: str
+    """A regular expression on the decision's site (``decision_sites``: ``file.py:line function``)."""
+    kind: str
+    way: bool
+    """The way it is taken."""
+    why: str
+
+
+JUSTIFIED: tuple[Justification, ...] = (
+    Justification("*", r"^guard\.py:\d+ model_speed\b", "min", True,
+                  "the speed clamp's upper bound is the v_x plausibility limit (vx_max): the model sees "
+                  "a plausible (held) speed, so the clamp never returns vx_max from above; only a "
+                  "corrupted state reaches past it"),
+    Justification("fusion", r"^estimators/fusion\.py:\d+ kinematic_weight$", "max", True,
+                  "|a_y,f| / (2 threshold) is never negative, so the weight's lower clamp never acts"),
+    Justification("*", r"^increments\.py:\d+ sqrt <- three_dof\.py:\d+ adhesion$", "max", True,
+                  "the 0/0 guard of the pair's square roots: adhesion's root is of (mu F_z - G)^2 + W^2 "
+                  ">= W^2 (W = ADHESION_ROUNDING, 100 N), so the roots sum to at least 200 N, never "
+                  "below the guard's 1e-30"),
+    Justification("*", r"^increments\.py:\d+ sqrt <- three_dof\.py:\d+ tyre$", "max", True,
+                  "the 0/0 guard of the pair's square roots of a tyre's combined slip demand: they sum "
+                  "to less than 1e-30 only when the demand is exactly 0 at the mean and at both sigma "
+                  "points (a zero sigma spread and a slip that rounds to exactly 0); kept for that case"),
 )
-"""(estimator or "*", a regular expression on the decision's expression, why it is taken one way only)."""
+
+
+@dataclass
+class ModelCoverage:
+    """The decisions of one estimator's step and the ways they are taken."""
+
+    name: str
+    """The estimator's."""
+    scenarios: model_coverage.Counts
+    """Over the verification scenarios."""
+    with_faults: model_coverage.Counts
+    """Over the scenarios and the injected state faults (:data:`STATE_FAULTS`)."""
+
+    def one_way(self) -> list[tuple[model_coverage.Decision, bool, str | None]]:
+        """The decisions taken one way only even with the faults: (decision, way, justification)."""
+        return [(d, way, justification(d, way, self.name)) for d, way in self.with_faults.one_way()]
+
+    def by_faults_only(self) -> list[model_coverage.Decision]:
+        """The decisions that only an injected state fault takes both ways."""
+        left = {d.index for d, _ in self.with_faults.one_way()}
+        return [d for d, _ in self.scenarios.one_way() if d.index not in left]
 
 
 @dataclass
@@ -35,7 +88,7 @@ class EstimatorCoverage:
 
     vehicle: str
     name: str
-    model: model_coverage.Counts | None
+    model: ModelCoverage | None
     """None for a particle filter (its step is not one SX function)."""
     code: dict[str, list[code_coverage.FileCoverage]] = field(default_factory=dict)
     """By form ("double-baked")."""
@@ -43,19 +96,28 @@ class EstimatorCoverage:
     """The measured sources' lines, by form and file."""
 
 
+STATE_FAULTS: tuple[tuple[str, Callable[[np.ndarray], np.ndarray]], ...] = (
+    ("every entry negated", lambda state: -state),
+    ("every entry times 1e6", lambda state: 1e6 * state),
+)
+"""Injected faults of the state (a corrupted memory), applied to the state in the middle of the
+first scenario, which then runs on for FAULT_STEPS samples: variances below zero and a covariance
+no longer positive definite; variances, noise estimates and estimates far above any bound."""
+FAULT_STEPS = 20
+
+
 def measure(config: VehicleConfig, name: str, forms: list[tuple[str, str]], folder: Path,
             cases: tuple[Case, ...] = VERIFICATION_SET, seed: int = 1) -> EstimatorCoverage:
     """Model coverage of ``name`` and code coverage of each of its ``forms`` (real, params), built
     under ``folder``."""
     estimator, compiled = compile_estimator(config, name, "double", "baked")
-    model = None
+    result = EstimatorCoverage(config.name, name, None)
     if not isinstance(estimator.structure, Particles):
         runs = []
         for case in cases:
             inputs = case_inputs(config, estimator, case, seed, "double")
             runs.append((compiled.run(inputs)[1][:-1], inputs))
-        model = model_coverage.count(estimator.step, runs)
-    result = EstimatorCoverage(config.name, name, model)
+        result.model = model_of(config, name, runs)
     for real, params in forms:
         form = f"{real}-{params}"
         inputs = [case_inputs(config, estimator, case, seed, real) for case in cases]
@@ -65,25 +127,60 @@ def measure(config: VehicleConfig, name: str, forms: list[tuple[str, str]], fold
     return result
 
 
-def justification(name: str, decision: model_coverage.Decision) -> str | None:
-    """Why ``decision`` of estimator ``name`` is taken one way only, if :data:`JUSTIFIED` says."""
-    return next((why for who, pattern, why in JUSTIFIED
-                 if who in ("*", name) and re.search(pattern, decision.expression)), None)
+def model_of(config: VehicleConfig, name: str, runs: list[tuple[np.ndarray, np.ndarray]]) -> ModelCoverage:
+    """The model coverage of ``name`` over ``runs`` ((states, inputs) of its double baked C), and
+    with the state faults injected into the first; the step is built anew under
+    ``decision_sites.traced`` so that each decision has its site."""
+    with decision_sites.traced() as sites:
+        step = build_fresh(name, config, "baked").step
+    return ModelCoverage(name, model_coverage.count(step, runs, sites),
+                         model_coverage.count(step, [*runs, *state_faults(step, *runs[0])], sites))
+
+
+def state_faults(step: ca.Function, states: np.ndarray, inputs: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(states, inputs) of the CasADi ``step`` run from each of :data:`STATE_FAULTS` applied to
+    ``states``' middle entry, over the inputs that follow it."""
+    start = len(states) // 2
+    runs = []
+    for _, fault in STATE_FAULTS:
+        state, visited = fault(states[start]), []
+        for row in inputs[start:start + FAULT_STEPS]:
+            visited.append(state)
+            state = np.array(step.call([state, row])[0]).ravel()
+        runs.append((np.array(visited), inputs[start:start + FAULT_STEPS]))
+    return runs
+
+
+def justification(decision: model_coverage.Decision, way: bool, name: str = "*") -> str | None:
+    """Why ``decision`` of estimator ``name``, taken ``way`` only, may be, if :data:`JUSTIFIED` says."""
+    return next((j.why for j in JUSTIFIED
+                 if j.estimator in ("*", name) and j.kind == decision.kind and j.way == way
+                 and decision.site is not None and re.search(j.site, decision.site)), None)
 
 
 def markdown(results: list[EstimatorCoverage], written_by: str) -> str:
     """docs/coverage.md: a summary table, then per estimator what is not covered and why."""
+    faults = "; ".join(label for label, _ in STATE_FAULTS)
     lines = ["# Coverage of the models and of the generated C", "",
-             f"{written_by}. Over the {len(VERIFICATION_SET)} verification scenarios (seed 1); a calibratable "
-             "form also runs a few samples with each calibration entry a check reads set to NaN (and, for the "
-             "state-matrix norm, as an oversteering car and with a yaw inertia 1000 times too small). Model: "
-             "every decision of the CasADi step (comparisons, logic, min/max, if_else on a flag) counted true "
-             "and false, evaluated from the C's states. Code: gcc --coverage -O0 and gcovr; statements are "
-             "lines with code; the kernel is CasADi's straight-line output (its branches are the model's "
-             "decisions, compiled), the template vsegen's API and checks.", "",
-             "| vehicle | estimator | model decisions | both ways | one way (justified) | form | template statements "
-             "| template branches | kernel statements | kernel branches |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             f"{written_by}. Over the {len(VERIFICATION_SET)} verification runs (seed 1; the synthetic "
+             "`input_extremes` among them drives inputs to the edges of the decisions); a calibratable "
+             "form also runs a few samples with each calibration entry a check reads set to NaN (and, "
+             "for the state-matrix norm, as an oversteering car and with a yaw inertia 1000 times too "
+             "small).", "",
+             "Model: every decision of the CasADi step (comparisons, logic, min/max, if_else on a flag) "
+             "counted true and false, evaluated from the C's states, and named by the model line that "
+             "built it. Then with injected state faults (a corrupted memory: "
+             f"{faults}; from the middle of the first run, {FAULT_STEPS} samples on, stepped by the "
+             "CasADi function), which reach the defensive code no input reaches (a covariance that is "
+             "no longer positive definite). A decision still taken one way only is listed with the "
+             "reason it may be, or as **not justified**.", "",
+             "Code: gcc --coverage -O0 and gcovr; statements are lines with code; the kernel is "
+             "CasADi's straight-line output (its branches are the model's decisions, compiled), the "
+             "template vsegen's API and checks.", "",
+             "| vehicle | estimator | model decisions | both ways | with state faults | one way: justified "
+             "| not justified | form | template statements | template branches | kernel statements "
+             "| kernel branches |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         for form, files in r.code.items():
             template = [f for f in files if f.kind == "template"]
@@ -98,10 +195,11 @@ def markdown(results: list[EstimatorCoverage], written_by: str) -> str:
 
 def _model_cells(r: EstimatorCoverage) -> str:
     if r.model is None:
-        return "- | - | -"
+        return "- | - | - | - | -"
     one_way = r.model.one_way()
-    justified = sum(1 for d, _ in one_way if justification(r.name, d))
-    return f"{len(r.model.decisions)} | {r.model.both_ways} | {len(one_way)} ({justified})"
+    justified = sum(1 for *_, why in one_way if why)
+    return (f"{len(r.model.scenarios.decisions)} | {r.model.scenarios.both_ways} | {r.model.with_faults.both_ways} | "
+            f"{justified} | {len(one_way) - justified}")
 
 
 def _share(files: list[code_coverage.FileCoverage], what: str) -> str:
@@ -114,16 +212,28 @@ def _model_section(r: EstimatorCoverage) -> list[str]:
     if r.model is None:
         return ["Model: a particle filter's step is not one SX function (random numbers, resampling); its "
                 "decisions are in the C and counted by the code coverage below.", ""]
+    total = len(r.model.scenarios.decisions)
+    lines = _by_faults_only(r.model.by_faults_only())
     one_way = r.model.one_way()
     if not one_way:
-        return [f"Model: all {len(r.model.decisions)} decisions taken both ways.", ""]
-    lines = [f"Model: {len(one_way)} of {len(r.model.decisions)} decisions taken one way only:", "",
-             "| decision | kind | taken | why |", "|---|---|---|---|"]
-    for decision, way in one_way:
-        why = justification(r.name, decision) or "**not justified**"
-        lines.append(f"| `{_cell(decision.expression)}` | {decision.kind} | {'true' if way else 'false'} only | "
-                     f"{why} |")
+        return [f"Model: all {total} decisions taken both ways.", "", *lines]
+    rows: dict[tuple, list] = {}
+    for decision, way, why in one_way:
+        rows.setdefault((decision.site, decision.kind, way, why), []).append(decision)
+    lines += [f"Model: {len(one_way)} of {total} decisions taken one way only, by the model line that built "
+              "them:", "", "| where | kind | taken | decisions | e.g. | why |", "|---|---|---|---|---|---|"]
+    for (site, kind, way, why), decisions in rows.items():
+        lines.append(f"| `{site or 'not traced'}` | {kind} | {'true' if way else 'false'} only | {len(decisions)} | "
+                     f"`{_cell(decisions[0].expression)}` | {why or '**not justified**'} |")
     return [*lines, ""]
+
+
+def _by_faults_only(decisions: list[model_coverage.Decision]) -> list[str]:
+    if not decisions:
+        return []
+    counts = Counter((d.site, d.kind) for d in decisions)
+    return ["Taken both ways only with an injected state fault:", "",
+            *[f"- `{site or 'not traced'}`: {n} {kind}" for (site, kind), n in counts.items()], ""]
 
 
 def _code_section(r: EstimatorCoverage) -> list[str]:
@@ -146,15 +256,14 @@ def _cell(text: str) -> str:
 
 
 def totals(results: list[EstimatorCoverage]) -> dict[str, float]:
-    """Shares over every estimator and form: model decisions both ways or justified, template
-    statements and branches (for the CLI's last line)."""
-    decisions = [r.model for r in results if r.model is not None]
-    covered = sum(m.both_ways for m in decisions) + sum(
-        1 for r in results if r.model for d, _ in r.model.one_way() if justification(r.name, d))
+    """Shares over every estimator and form: model decisions both ways (with the state faults) or
+    justified, template statements and branches, and the count not justified (for the CLI's last
+    line)."""
+    models = [r.model for r in results if r.model is not None]
+    one_way = [why for m in models for *_, why in m.one_way()]
+    covered = sum(m.with_faults.both_ways for m in models) + sum(1 for why in one_way if why)
     files = [f for r in results for fs in r.code.values() for f in fs if f.kind == "template"]
-    return {"model": 100.0 * covered / max(1, sum(len(m.decisions) for m in decisions)),
+    return {"model": 100.0 * covered / max(1, sum(len(m.scenarios.decisions) for m in models)),
             "statements": 100.0 * sum(f.lines_run for f in files) / max(1, sum(f.lines for f in files)),
             "branches": 100.0 * sum(f.branches_taken for f in files) / max(1, sum(f.branches for f in files)),
-            "not_justified": float(sum(1 for r in results if r.model for d, _ in r.model.one_way()
-                                       if not justification(r.name, d)))}
-
+            "not_justified": float(sum(1 for why in one_way if not why))}

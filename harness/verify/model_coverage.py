@@ -7,16 +7,19 @@ that is not itself a decision), a min or a max (which operand it returns), and a
 condition is not itself a decision (e.g. a state flag). Each is evaluated, with CasADi, on every
 sample of every scenario from the state the generated C had before that sample, and counted true
 and false. A decision taken both ways is covered; one taken one way only is listed, with the way
-taken and the expression it decides on.
+taken, the expression it decides on and, when the step was built under
+``decision_sites.traced``, the model line that built it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
+
+from vsegen.harness.verify.decision_sites import Sites
 
 COMPARISONS = {ca.OP_LT: "<", ca.OP_LE: "<=", ca.OP_EQ: "==", ca.OP_NE: "!="}
 LOGICAL = {ca.OP_NOT: "!", ca.OP_AND: "&&", ca.OP_OR: "||"}
@@ -35,6 +38,8 @@ class Decision:
     kind: str
     expression: str
     condition: ca.SX
+    site: str | None = None
+    """The model line that built it (``decision_sites``), when known."""
 
 
 @dataclass
@@ -58,8 +63,9 @@ class Counts:
         return [d for i, d in enumerate(self.decisions) if self.true[i] == 0 and self.false[i] == 0]
 
 
-def decisions(step: ca.Function) -> list[Decision]:
-    """The decisions of the SX Function ``step``, in instruction order."""
+def decisions(step: ca.Function, sites: Sites | None = None) -> list[Decision]:
+    """The decisions of the SX Function ``step``, in instruction order, with their ``sites``
+    when given."""
     outputs = step.instructions_sx()
     inputs = step.sx_in()
     work: dict[int, ca.SX] = {}
@@ -77,7 +83,7 @@ def decisions(step: ca.Function) -> list[Decision]:
         work[out] = value
         decision = _decision(k, op, args, value)
         if decision is not None:
-            found.append(decision)
+            found.append(decision if sites is None else replace(decision, site=sites.of(value)))
     return found
 
 
@@ -104,10 +110,10 @@ def _shown(expression: ca.SX) -> str:
     return text if len(text) <= SHOWN else text[:SHOWN - 1] + "…"
 
 
-def count(step: ca.Function, runs: Iterable[tuple[np.ndarray, np.ndarray]]) -> Counts:
+def count(step: ca.Function, runs: Iterable[tuple[np.ndarray, np.ndarray]], sites: Sites | None = None) -> Counts:
     """True and false counts of every decision of ``step`` over ``runs``: (states n x nx, the state
-    before each sample; inputs n x nu)."""
-    found = decisions(step)
+    before each sample; inputs n x nu); ``sites`` as for :func:`decisions`."""
+    found = decisions(step, sites)
     evaluate = ca.Function("decisions", step.sx_in(), [ca.vertcat(*[d.condition for d in found])])
     true, false = np.zeros(len(found), dtype=int), np.zeros(len(found), dtype=int)
     for states, inputs in runs:

@@ -35,14 +35,16 @@ def build(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
     configuration's fingerprint (an Estimator is never changed once built)."""
     key = (config.fingerprint(), name, params)
     if key not in _built:
-        _built[key] = _build(name, config, params)
+        _built[key] = build_fresh(name, config, params)
         while len(_built) > BUILT_KEPT:
             _built.popitem(last=False)
     _built.move_to_end(key)
     return _built[key]
 
 
-def _build(name: str, config: VehicleConfig, params: str) -> Estimator:
+def build_fresh(name: str, config: VehicleConfig, params: str = "baked") -> Estimator:
+    """:func:`build`, built anew (not one kept): for a build that must run its model code, e.g.
+    under ``harness.verify.decision_sites.traced``."""
     definition = DEFINITIONS[name]
     estimator = definition.build(parameters(config, name, params))
     if params == "calibratable":
