@@ -9,7 +9,10 @@ import json
 import os
 import shutil
 
-from junitparser import Failure, JUnitXml, Properties
+import pytest
+import xmlschema
+from junit_reports import read_junit
+from junitparser import Failure, Properties
 from locations import DEFAULT_VEHICLE, REPO
 
 from vsegen.harness.logs.table import write_log
@@ -18,7 +21,7 @@ from vsegen.harness.sim.scenarios import Case
 
 
 def cases(path):
-    return {(suite.name, case.name): case for suite in JUnitXml.fromfile(str(path)) for case in suite}
+    return {(suite.name, case.name): case for suite in read_junit(path) for case in suite}
 
 
 def figures(case) -> dict[str, str]:
@@ -71,12 +74,23 @@ def test_a_failed_check_is_a_failure_and_the_document_validates(tmp_path):
     checks = [Check("s", "fine", {"x": 1.5, "nan": float("nan")}), Check("s", "broken", {}, "too big", "budget")]
     path = tmp_path / "r.xml"
     path.write_text(as_junit("t", checks))
-    xml = JUnitXml.fromfile(str(path))
+    xml = read_junit(path)
     assert (xml.tests, xml.failures) == (2, 1)
     broken = cases(path)[("s", "broken")]
     (failure,) = broken.result
     assert (failure.message, failure.type) == ("too big", "budget")
     assert figures(cases(path)[("s", "fine")]) == {"x": "1.5", "nan": "nan"}
+
+
+def test_the_schema_refuses_a_report_that_ci_readers_would_misread(tmp_path):
+    good = as_junit("t", [Check("s", "fine", {"x": 1.5}), Check("s", "broken", {}, "too big", "budget")])
+    for broken in (good.replace(' classname="s"', "", 1),             # a test case without its class
+                   good.replace('failures="1"', 'failures="one"', 1),  # a count that is no number
+                   good.replace("<properties>", "<properties>\n<oops/>", 1)):
+        path = tmp_path / "broken.xml"
+        path.write_text(broken)
+        with pytest.raises(xmlschema.XMLSchemaValidationError):
+            read_junit(path)
 
 
 def test_tables_honour_columns_and_never_cut_a_number(tmp_path, vsegen, config):

@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from junitparser import JUnitXml
+from junit_reports import read_junit
 from locations import DEFAULT_VEHICLE, REPO
 
 from vsegen.codegen.generate import render
@@ -106,7 +106,7 @@ def test_a_recorded_log_replays_on_the_target(tmp_path, vsegen):
                     "--junit", junit)
     assert result.exit_code == 0, result.output
     assert "drive.csv" in result.stdout and "PIL passed" in result.stdout
-    (suite,) = JUnitXml.fromfile(str(junit))
+    (suite,) = read_junit(junit)
     assert suite.name == "rwd_saloon.kf2dof.float-baked@m4f" and suite.failures == 0
     names = [case.name for case in suite]
     assert "drive.csv: beta" in names and "drive.csv: vs host build" in names and "cost on the target" in names

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import json
 
-from junitparser import Failure, JUnitXml, Properties
+from junit_reports import read_junit
+from junitparser import Failure, Properties
 from locations import DEFAULT_VEHICLE
 
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
@@ -23,7 +24,7 @@ def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, v
     assert f"verify passed: {len(VERIFICATION_SET)} runs" in result.stdout and "max rel diff" in result.stdout
     progress = [line.split(" (")[0] for line in result.stderr.splitlines()]
     assert progress == ["verifying kf2dof: ok", "coverage kf2dof: ok"]
-    suites = list(JUnitXml.fromfile(str(junit)))
+    suites = list(read_junit(junit))
     assert [s.name for s in suites] == ["c_class.kf2dof.double-baked"]
     cases = list(suites[0])
     signals = {"beta", "vy", "r", "status", "state (all entries)", "step from the C state"}
@@ -49,7 +50,7 @@ def test_a_signal_out_of_tolerance_is_a_failure_with_its_figures(tmp_path):
     run = report.Run("c_class", "double", "baked")
     path = tmp_path / "r.xml"
     path.write_text(report.as_junit(run, [result]))
-    cases = list(next(iter(JUnitXml.fromfile(str(path)))))
+    cases = list(next(iter(read_junit(path))))
     failed = [c for c in cases if not c.is_passed]
     assert [c.name for c in failed] == ["dlc(speed_kmh=80.0): vy"]
     (failure,) = failed[0].result
@@ -63,6 +64,6 @@ def test_a_stale_generated_folder_is_a_failing_case(tmp_path, vsegen):
     junit = tmp_path / "verify.xml"
     result = vsegen.process("verify", "--estimator", "kf2dof", "--junit", str(junit), cwd=tmp_path)
     assert result.exit_code == 1
-    (case,) = list(next(iter(JUnitXml.fromfile(str(junit)))))
+    (case,) = list(next(iter(read_junit(junit))))
     (failure,) = case.result
     assert "generated/c_class/kf2dof is missing" in failure.message and "vsegen generate" in failure.message
