@@ -45,6 +45,7 @@ DISTURBANCES: dict[str, dict] = {
     "r frozen 1.5 s from 3 s": {"freeze": f"r:{FAULT_AT}:1.5"},
     "a_y frozen 1.5 s from 3 s": {"freeze": f"ay:{FAULT_AT}:1.5"},
     "δ frozen 1.5 s from 3 s": {"freeze": f"delta:{FAULT_AT}:1.5"},
+    "δ frozen 2 s from 3 s": {"freeze": f"delta:{FAULT_AT}:2"},
     "every input lost 0.5 s from 3 s": {"dropout": f"all:{FAULT_AT}:0.5"},
     "+300 kg, 0.5 m behind the CG": {"mass_added": 300.0, "cg_shift": 0.5},
     "tyres −20 %": {"tyre_scale": 0.8},

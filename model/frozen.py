@@ -22,6 +22,8 @@ A logger that records a CAN signal at a multiple of its message rate repeats val
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
 from vsegen.model.schema import nonnegative
@@ -68,13 +70,28 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
             for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", ca.SX(0)))}
 
 
+def samples_limit(settings, sample_time: float):
+    """N = frozen_time / T, rounded to whole samples."""
+    return ca.floor(settings["frozen_time"] / sample_time + 0.5)
+
+
+def any_frozen(updates: dict, settings, sample_time: float, names: tuple[str, ...]) -> ca.SX:
+    """1 while one of the channels ``names`` is frozen, from the monitor's new entries ``updates``
+    (:func:`monitor`'s); 0 when the monitor is off or watches none of them."""
+    counts = [updates[f"frozen_{c}_repeats"] for c in names if f"frozen_{c}_repeats" in updates]
+    if not counts:
+        return ca.SX(0)
+    limit = samples_limit(settings, sample_time)
+    return functools.reduce(ca.logic_or, [count >= limit for count in counts])
+
+
 def monitor(s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
             inputs: tuple[str, ...]) -> tuple[dict, ca.SX]:
     """(new state entries, 1 while a channel is frozen) from the state entries ``s``, the raw
     inputs ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator
     holds the monitor too); call only when :func:`enabled`. Flags combine by arithmetic, so an
     active sample's kernel has no branch (model.guard)."""
-    limit = ca.floor(settings["frozen_time"] / sample_time + 0.5)     # whole samples, N
+    limit = samples_limit(settings, sample_time)
     updates, frozen = {}, ca.SX(0)
     for c in channels(inputs):
         value, count = s[f"frozen_{c}_value"], s[f"frozen_{c}_repeats"]

@@ -14,9 +14,15 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import crosscheck, frozen, status, wheel_yaw
+from vsegen.model.schema import nonnegative
 from vsegen.model.signals import Signal
 
-FIELDS = (frozen.FIELD, *crosscheck.FIELDS, *wheel_yaw.FIELDS)
+RECOVERY = nonnegative("frozen_recovery", "s", "beyond the papers: status INPUT_FROZEN stays raised this "
+                       "long after a frozen input (or steering angle) moves again, while the estimate "
+                       "recovers from what it was fed; 0 = off", default=0.0)
+RECOVERY_STATE = Signal("frozen_recovery_left", "-", "samples INPUT_FROZEN stays raised after a frozen input "
+                        "moved again (frozen_recovery)")
+FIELDS = (frozen.FIELD, RECOVERY, *crosscheck.FIELDS, *wheel_yaw.FIELDS)
 STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET)
 """The bits the monitors can raise in every estimator that has them; YAW_RATE_MISMATCH too where
 the estimator reads wheel speeds (:data:`WHEEL_STATUS_BITS`)."""
@@ -32,17 +38,27 @@ def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
             or wheel_yaw.enabled(numeric_settings, inputs))
 
 
+def recovers(numeric_settings, inputs: tuple[str, ...]) -> bool:
+    """Whether INPUT_FROZEN is held after a freeze (structural: ``frozen_recovery`` > 0 and a
+    monitor that raises it)."""
+    raises = frozen.enabled(numeric_settings) and frozen.channels(inputs) or (
+        crosscheck.enabled(numeric_settings, inputs) and numeric_settings["steer_check_limit"] > 0.0)
+    return numeric_settings["frozen_recovery"] > 0.0 and bool(raises)
+
+
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
     """The monitors' state entries (those that are on)."""
     return (*frozen.states(numeric_settings, inputs), *crosscheck.states(numeric_settings, inputs),
-            *wheel_yaw.states(numeric_settings, inputs))
+            *wheel_yaw.states(numeric_settings, inputs),
+            *((RECOVERY_STATE,) if recovers(numeric_settings, inputs) else ()))
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
     """The monitors' entries at init from the first sample ``first`` (neutralised inputs)."""
     return {**frozen.initial_entries(first, numeric_settings, inputs),
             **crosscheck.initial_entries(first, numeric_settings, inputs),
-            **{entry.name: ca.SX(0) for entry in wheel_yaw.states(numeric_settings, inputs)}}
+            **{entry.name: ca.SX(0) for entry in wheel_yaw.states(numeric_settings, inputs)},
+            **({RECOVERY_STATE.name: ca.SX(0)} if recovers(numeric_settings, inputs) else {})}
 
 
 def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_settings,
@@ -66,4 +82,15 @@ def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_setting
         checked, raised[status.YAW_RATE_MISMATCH] = wheel_yaw.monitor(s, u, active, settings, numeric_settings,
                                                                       sample_time, vehicle)
         updates |= checked
+    if recovers(numeric_settings, inputs):
+        updates[RECOVERY_STATE.name], raised[status.INPUT_FROZEN] = recovery(
+            s[RECOVERY_STATE.name], raised.get(status.INPUT_FROZEN, ca.SX(0)), active, settings, sample_time)
     return updates, sum((bit * flag for bit, flag in raised.items()), ca.SX(0))
+
+
+def recovery(left, frozen_now, active, settings, sample_time: float) -> tuple[ca.SX, ca.SX]:
+    """(samples left, INPUT_FROZEN): raised now, or within ``frozen_recovery`` of the last sample
+    it was (N = frozen_recovery / T whole samples, counted down on active samples)."""
+    samples = ca.floor(settings["frozen_recovery"] / sample_time + 0.5)
+    counted = frozen_now * samples + (1 - frozen_now) * ca.fmax(left - 1, 0)
+    return ca.if_else(active, counted, left), frozen_now + (1 - frozen_now) * active * (left > 0)

@@ -181,6 +181,13 @@ def frozen_initial(settings, inputs, first: Mapping[str, float]) -> dict:
             for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))}
 
 
+def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
+    """Whether one of the channels ``names`` is frozen, from the frozen-signal monitor's new
+    entries ``new`` (model.frozen.any_frozen); False when the monitor is off."""
+    limit = math.floor(settings["frozen_time"] / T + 0.5)
+    return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
+
+
 def frozen_monitor(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs):
     """(new entries, frozen) of the frozen-signal monitor (model.frozen): per channel, the samples
     its plausible value has repeated bit for bit, at most N = round(frozen_time / T); frozen while

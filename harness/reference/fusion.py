@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
-from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS
+from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS, KINEMATIC_INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
@@ -53,6 +53,8 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
+    if blocks.any_frozen(updates, s, T, KINEMATIC_INPUTS):    # its inputs frozen: the KF alone
+        vy_kin, w = xk[0], 0.0
     beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
     beta_kf = kinematic_dynamic.beta(config, TABLE, xk[0], u[1])
     beta = w * beta_kin + (1 - w) * beta_kf

@@ -13,6 +13,8 @@ from vsegen.harness.reference import bicycle_kf, blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
 DYN, KIN = 0, 1
+KINEMATIC_INPUTS = ("ay", "r")
+"""The kinematic integrator's inputs beside the speed (model: kinematic_dynamic.KINEMATIC_INPUTS)."""
 GRAVITY = blocks.GRAVITY
 
 

@@ -41,7 +41,8 @@ def states(settings, inputs) -> tuple[str, ...]:
         checks = ("steady_delta", "steady_samples",
                   *(name for key, names in CHECKS.items() if _on(settings, key) for name in names))
     wheels = ("wheel_yaw_residual",) if _wheel_checked(settings, inputs) else ()
-    return (*blocks.frozen_states(settings, inputs), *checks, *wheels)
+    recovery = ("frozen_recovery_left",) if _recovers(settings, inputs) else ()
+    return (*blocks.frozen_states(settings, inputs), *checks, *wheels, *recovery)
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -73,7 +74,18 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
             residual = blocks.low_pass(residual, u["r"] - wheel_yaw_rate, T, settings["wheel_check_time"])
         new["wheel_yaw_residual"] = residual
         code |= blocks.YAW_RATE_MISMATCH if abs(residual) > settings["wheel_check_limit"] else 0
+    if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
+        left, frozen = x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN)
+        samples = math.floor(settings["frozen_recovery"] / T + 0.5)
+        new["frozen_recovery_left"] = samples if frozen else max(left - 1, 0.0)
+        code |= blocks.INPUT_FROZEN if left > 0 else 0
     return new, code
+
+
+def _recovers(settings, inputs) -> bool:
+    raises = (settings["frozen_time"] > 0 and any(c in inputs for c in blocks.FROZEN_CHANNELS)) or (
+        _crosschecked(settings, inputs) and _on(settings, "steer_check_limit"))
+    return settings["frozen_recovery"] > 0 and raises
 
 
 def _crosschecks(x, u, settings, T: float, wheelbase: float) -> tuple[dict, int]:

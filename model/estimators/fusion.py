@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model import consistency, signals, status
+from vsegen.model import consistency, frozen, signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -101,6 +101,9 @@ def build(params: Parameters) -> Estimator:
     vy_kf = result["x_next"][0]
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"] - offset) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
+    if frozen.enabled(numeric):   # its inputs frozen: the KF alone, and the integrator follows it
+        vy_kin = ca.if_else(pre.kinematic_inputs_frozen, vy_kf, vy_kin)
+        weight = weight * ca.logic_not(pre.kinematic_inputs_frozen)
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta_kin = sideslip(vy_kin, vx)
     beta = weight * beta_kin + (1 - weight) * result["beta"]

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import filters, input_monitors, kalman, signals, status
+from vsegen.model import filters, frozen, input_monitors, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import BEYOND_LINEAR, Tunable
@@ -23,6 +23,8 @@ from vsegen.model.sensors import roll_corrected
 from vsegen.model.signals import Signal
 
 INPUTS = kf2dof.INPUTS
+KINEMATIC_INPUTS = ("ay", "r")
+"""The inputs the kinematic integrator v_y += T (a_y - r v_x - c) reads beside the speed."""
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 _KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
 DYN, KIN = 0, 1
@@ -125,6 +127,9 @@ class Preprocessed:
     status: ca.SX
     updates: dict[str, ca.SX]
     """New values of the pre-processing state entries (held while not active)."""
+    kinematic_inputs_frozen: ca.SX = ca.SX(0)
+    """1 while a_y or r, the kinematic integrator's inputs, is frozen (``model.frozen``): the
+    model-based scheme must carry the estimate then."""
 
 
 class KinematicDynamic:
@@ -201,7 +206,8 @@ class KinematicDynamic:
             "ay_rejections": keep("ay_rejections", ay_check.rejections),
             **monitor,
         }
-        return Preprocessed(guard, r_check.value, filters.median(history), code, updates)
+        frozen_inputs = frozen.any_frozen(monitor, settings, self.T, KINEMATIC_INPUTS)
+        return Preprocessed(guard, r_check.value, filters.median(history), code, updates, frozen_inputs)
 
     def held(self, m: dict, v: dict, plausible: dict | None = None) -> dict:
         """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last

@@ -23,7 +23,7 @@ from dataclasses import replace
 
 import casadi as ca
 
-from vsegen.model import signals, status
+from vsegen.model import frozen, signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -127,6 +127,15 @@ def switching_threshold(seed: KinematicDynamic, mode_prev, peak=None):
     return threshold + ca.if_else(mode_prev == KIN, -h, h)
 
 
+def wanted_scheme(seed: KinematicDynamic, pre, mode_prev, peak=None):
+    """KIN while |a_y,f| is above the threshold, else DYN; beyond the paper, DYN while a_y or r,
+    the integrator's inputs, is frozen (the KF only weighs them as measurements)."""
+    mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, mode_prev, peak), KIN, DYN)
+    if frozen.enabled(seed.params.numeric.settings(NAME)):
+        mode = ca.if_else(pre.kinematic_inputs_frozen, DYN, mode)
+    return mode
+
+
 def dwell_limited(seed: KinematicDynamic, candidate, samples):
     """(mode, new kin_samples, limited) of the kinematic dwell bound: the kinematic scheme may run
     for kinematic_max_dwell seconds while |a_y,f| stays above the threshold (``candidate`` KIN);
@@ -153,8 +162,7 @@ def build(params: Parameters) -> Estimator:
     if PEAK in seed.extra:
         peak = remembered_peak(seed, pre.ay_filtered, s["ay_peak"])
         extra["ay_peak"] = ca.if_else(active, peak, s["ay_peak"])
-    mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, s["mode"], peak),
-                      KIN, DYN)
+    mode = wanted_scheme(seed, pre, s["mode"], peak)
     status = pre.status
     if DWELL in seed.extra:
         mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
