@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import BENCHMARKS, DEFAULT_VEHICLE, feedback, options_cost, pil, seed003, versus_hand
+from bench import BENCHMARKS, DEFAULT_VEHICLE, campaign, feedback, options_cost, pil, seed003, versus_hand
 from bench.document import provenance, section_of, with_section
 from bench.measure import CC, FLAGS, LOG_CASE, generated_driver, write_inputs
 from vsegen.codegen.generate import render
@@ -53,6 +53,10 @@ def _python_step_us(step, state, inputs: np.ndarray, samples: int = 300) -> floa
         state = step(state, row)
         times.append(time.perf_counter() - start)
     return statistics.median(times) * 1e6
+
+
+KEPT_SECTIONS = (feedback.SECTION, pil.SECTION, campaign.STREAMING_SECTION, campaign.CAMPAIGN_SECTION)
+"""The sections of docs/benchmarks.md that other commands write: kept when the suite rewrites the rest."""
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -123,7 +127,7 @@ def main(argv: list[str] | None = None) -> None:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     text = "\n".join(lines)
     previous = args.out.read_text() if args.out.exists() else ""
-    for heading in (feedback.SECTION, pil.SECTION):     # sections other commands write
+    for heading in KEPT_SECTIONS:
         kept = section_of(previous, heading)
         text = with_section(text, kept) if kept else text
     args.out.write_text(text)

@@ -180,9 +180,13 @@ def timed(command: list[str]) -> tuple[float, float]:
     return float(wall), float(peak) / 1024
 
 
+STREAMING_SECTION = "## Streaming runs"
+CAMPAIGN_SECTION = "## Campaigns"
+
+
 def streaming_section(config, hours: tuple[float, ...]) -> list[str]:
     vsegen = [sys.executable, "-m", "vsegen.harness.cli"]
-    lines = ["## Streaming runs", "",
+    lines = [STREAMING_SECTION, "",
              f"{provenance('python -m bench.campaign')}: `vsegen run` and `vsegen score` on a CSV log at 100 Hz "
              "tiled from simulated manoeuvres (c_class), each a fresh process on this 2-core machine; wall time "
              "and peak resident memory (GNU time). The log is read, run and written in chunks of 65,536 "
@@ -259,7 +263,7 @@ def campaign_section(config, count: int, minutes: float) -> list[str]:
     folder = DATA / f"logs_{minutes:g}min"
     database(config, count + 10, minutes, folder)
     cores = os.cpu_count() or 1
-    lines = ["## Campaigns", "",
+    lines = [CAMPAIGN_SECTION, "",
              f"{provenance('python -m bench.campaign')}: {count} synthetic logs of {minutes:g} min at 100 Hz (c_class "
              "manoeuvres tiled in random orders; a third CSV, a third MDF4, a third raw-CAN MDF4 decoded with a "
              f"DBC) x {len(CAMPAIGN_ESTIMATORS)} estimators ({', '.join(CAMPAIGN_ESTIMATORS)}), each log read once "

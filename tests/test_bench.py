@@ -4,9 +4,11 @@ nothing), and the benchmark drivers measure what they claim. Timing itself is ne
 from __future__ import annotations
 
 import ctypes
+import re
 
 import numpy as np
 import pytest
+from locations import REPO
 
 from bench.document import section_of, with_section
 from bench.measure import HERE, hand_raw_parameters
@@ -55,6 +57,15 @@ def test_handwritten_baseline_equals_the_reference(vehicle_text, method):
         for i, name in enumerate(reference.OUTPUTS):
             assert difference(name, outputs[:, i], expected[:, i], TOLERANCES["double"],
                               integer=name == "status").ok, (case.label, name)
+
+
+def test_the_suite_keeps_every_section_another_command_writes():
+    """Before, `python -m bench` dropped bench.campaign's two sections from docs/benchmarks.md."""
+    from bench.__main__ import KEPT_SECTIONS
+    text = (REPO / "docs" / "benchmarks.md").read_text()
+    sections = re.findall(r"^(## .+)\n\n(Written by `python -m bench\.\w+`[^\n]*)", text, flags=re.M)
+    others = {heading for heading, said in sections if "also written by `python -m bench`" not in said}
+    assert others and others <= set(KEPT_SECTIONS), others - set(KEPT_SECTIONS)
 
 
 def test_feedback_section_is_replaced_in_place_and_kept_by_the_suite():
