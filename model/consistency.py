@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from vsegen.model.estimator import Derived
+from vsegen.model.filters import whole_samples
 from vsegen.model.schema import SMALLEST_SIGMA, Field, diagonal, nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -105,7 +106,7 @@ def monitor(s: dict, innovation, settings, sample_time: float) -> Monitored:
     ``innovation``; call only when :func:`enabled`."""
     mean = averaged(s["residual"], innovation, settings, sample_time)
     now, before = inconsistent(mean, settings), inconsistent(s["residual"], settings)
-    hold_samples = ca.floor(settings["residual_hold"] / sample_time + 0.5)
+    hold_samples = whole_samples(settings["residual_hold"], sample_time)
     left = ca.if_else(now, hold_samples, ca.fmax(s["residual_hold_left"] - 1, 0))
     return Monitored({"residual": mean, "residual_hold_left": left},
                      ca.logic_or(now, s["residual_hold_left"] > 0),

@@ -48,7 +48,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import low_pass
+from vsegen.model.filters import low_pass, whole_samples
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -132,7 +132,7 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
     ``u`` (plausible on an active sample) and the guard's ``active`` flag; call only when
     :func:`enabled`. Flags and selections are arithmetic, f a + (1 - f) b for a flag f (exact for
     f in {0, 1}), so an active guarded kernel has no branch (model.guard)."""
-    limit = ca.floor(settings["steady_time"] / sample_time + 0.5)
+    limit = whole_samples(settings["steady_time"], sample_time)
     moved = ca.fabs(u["delta"] - s["steady_delta"]) * u["vx"] * u["vx"] > settings["steady_band"] * wheelbase
     samples = (1 - moved) * ca.fmin(s["steady_samples"] + 1, limit)
     steady = samples >= limit

@@ -62,6 +62,11 @@ def biquad_step(f: Biquad, x: ca.SX, x1: ca.SX, x2: ca.SX, y1: ca.SX, y2: ca.SX)
     return f.n0 * x + f.n1 * x1 + f.n2 * x2 - f.d1 * y1 - f.d2 * y2
 
 
+def whole_samples(duration, T: float):
+    """A duration (s; a number or a calibration symbol) in whole samples of T: floor(d / T + 1/2)."""
+    return ca.floor(duration / T + 0.5)
+
+
 def low_pass(previous, value, time_constant, T: float, sampled=None):
     """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / time_constant)) (x_k -
     y_k-1); with a 0/1 flag ``sampled``, the step is taken only where it is 1 (held elsewhere;

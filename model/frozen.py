@@ -26,6 +26,7 @@ import functools
 
 import casadi as ca
 
+from vsegen.model.filters import whole_samples
 from vsegen.model.schema import nonnegative
 from vsegen.model.signals import INPUT, Signal
 
@@ -72,7 +73,7 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
 
 def samples_limit(settings, sample_time: float):
     """N = frozen_time / T, rounded to whole samples."""
-    return ca.floor(settings["frozen_time"] / sample_time + 0.5)
+    return whole_samples(settings["frozen_time"], sample_time)
 
 
 def any_frozen(updates: dict, settings, sample_time: float, names: tuple[str, ...]) -> ca.SX:

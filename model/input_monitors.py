@@ -14,6 +14,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import crosscheck, frozen, status, wheel_yaw
+from vsegen.model.filters import whole_samples
 from vsegen.model.schema import nonnegative
 from vsegen.model.signals import Signal
 
@@ -91,6 +92,6 @@ def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_setting
 def recovery(left, frozen_now, active, settings, sample_time: float) -> tuple[ca.SX, ca.SX]:
     """(samples left, INPUT_FROZEN): raised now, or within ``frozen_recovery`` of the last sample
     it was (N = frozen_recovery / T whole samples, counted down on active samples)."""
-    samples = ca.floor(settings["frozen_recovery"] / sample_time + 0.5)
+    samples = whole_samples(settings["frozen_recovery"], sample_time)
     counted = frozen_now * samples + (1 - frozen_now) * ca.fmax(left - 1, 0)
     return ca.if_else(active, counted, left), frozen_now + (1 - frozen_now) * active * (left > 0)

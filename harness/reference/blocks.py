@@ -82,6 +82,11 @@ def tustin(num: tuple[float, ...], den: tuple[float, ...], T: float) -> tuple[np
     return bz, az
 
 
+def whole_samples(duration: float, T: float) -> int:
+    """A duration (s) in whole samples of T (model.filters.whole_samples)."""
+    return math.floor(duration / T + 0.5)
+
+
 def low_pass(previous: float, value: float, T: float, time_constant: float) -> float:
     """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / tau)) (x_k - y_k-1)."""
     return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
@@ -154,7 +159,7 @@ def residual_monitor(x, innovation, settings, T):
     mean first exceeded the limit on this sample."""
     mean = residual_mean(x["residual"], innovation, settings, T)
     now, before = mean > settings["residual_limit"], x["residual"] > settings["residual_limit"]
-    hold = math.floor(settings["residual_hold"] / T + 0.5)
+    hold = whole_samples(settings["residual_hold"], T)
     left = hold if now else max(x["residual_hold_left"] - 1, 0)
     return ({"residual": mean, "residual_hold_left": float(left)},
             now or x["residual_hold_left"] > 0, now and not before)
@@ -184,7 +189,7 @@ def frozen_initial(settings, inputs, first: Mapping[str, float]) -> dict:
 def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
     """Whether one of the channels ``names`` is frozen, from the frozen-signal monitor's new
     entries ``new`` (model.frozen.any_frozen); False when the monitor is off."""
-    limit = math.floor(settings["frozen_time"] / T + 0.5)
+    limit = whole_samples(settings["frozen_time"], T)
     return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
 
 
@@ -193,7 +198,7 @@ def frozen_monitor(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, 
     its plausible value has repeated bit for bit, at most N = round(frozen_time / T); frozen while
     any count reaches N. Call only on an active sample (a holding estimator holds the monitor)
     and only when frozen_time > 0."""
-    limit = math.floor(settings["frozen_time"] / T + 0.5)
+    limit = whole_samples(settings["frozen_time"], T)
     new, frozen = {}, False
     for c in (c for c in FROZEN_CHANNELS if c in inputs):
         value, count = x[f"frozen_{c}_value"], x[f"frozen_{c}_repeats"]

@@ -76,7 +76,7 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
         code |= blocks.YAW_RATE_MISMATCH if abs(residual) > settings["wheel_check_limit"] else 0
     if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
         left, frozen = x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN)
-        samples = math.floor(settings["frozen_recovery"] / T + 0.5)
+        samples = blocks.whole_samples(settings["frozen_recovery"], T)
         new["frozen_recovery_left"] = samples if frozen else max(left - 1, 0.0)
         code |= blocks.INPUT_FROZEN if left > 0 else 0
     return new, code
@@ -91,7 +91,7 @@ def _recovers(settings, inputs) -> bool:
 def _crosschecks(x, u, settings, T: float, wheelbase: float) -> tuple[dict, int]:
     """(new entries, status bits) of the cross-checks that are on (model.crosscheck)."""
     new, code = {}, 0
-    steady_samples = math.floor(settings["steady_time"] / T + 0.5)
+    steady_samples = blocks.whole_samples(settings["steady_time"], T)
     if abs(u["delta"] - x["steady_delta"]) * u["vx"] ** 2 / wheelbase > settings["steady_band"]:
         new["steady_delta"], new["steady_samples"] = u["delta"], 0.0      # a new stretch starts
     else:
