@@ -42,6 +42,7 @@ DISTURBANCES: dict[str, dict] = {
     "latency δ 20 ms, a_y and r 40 ms": {"latency": "delta:0.02,ay:0.04,r:0.04"},
     "quantised δ, a_y, r": {"quantise": "delta:0.0002,ay:0.03,r:0.002"},
     "spikes r 3 × 0.5 rad/s": {"spikes": "r:3x0.5"},
+    "r factor × 1.3 (a DBC typo)": {"scale": "r:1.3"},
     "r frozen 1.5 s from 3 s": {"freeze": f"r:{FAULT_AT}:1.5"},
     "a_y frozen 1.5 s from 3 s": {"freeze": f"ay:{FAULT_AT}:1.5"},
     "δ frozen 1.5 s from 3 s": {"freeze": f"delta:{FAULT_AT}:1.5"},
@@ -67,8 +68,10 @@ COPING = [
     "(model/input_monitors.py): a_x, a_y or r repeated bit for bit and a steer angle that stands "
     "still while the car turns (2048 INPUT_FROZEN), a_y against r·v_x in quasi-steady driving "
     "(8192 LATERAL_INCONSISTENT: a bank or an offset), the steering-angle zero learned in straight "
-    "driving (16384 STEERING_OFFSET), and where it reads wheel speeds (ukf, aukf) the yaw rate "
-    "against the non-driven wheels (32768 YAW_RATE_MISMATCH); ekf_rls learns no stiffness while "
+    "driving (16384 STEERING_OFFSET), and where it reads wheel speeds (ukf, aukf) or is given them "
+    "for the check (switching, whose kinematic integrator trusts r most) the yaw rate against the "
+    "non-driven wheels (32768 YAW_RATE_MISMATCH: a gyro offset, drift or a yaw-rate scale typed "
+    "wrong in a DBC); ekf_rls learns no stiffness while "
     "any of them is raised;",
     "* switching and fusion learn the kinematic offset c of a bank or an accelerometer offset in "
     "near-straight driving, integrate a_y − r·v_x − c and let their KF take 0.4 c off its a_y "

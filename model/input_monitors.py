@@ -4,17 +4,18 @@ against each other (``model.crosscheck``, status LATERAL_INCONSISTENT, STEERING_
 INPUT_FROZEN) and the yaw rate against the non-driven wheels (``model.wheel_yaw``, status
 YAW_RATE_MISMATCH, where the estimator reads wheel speeds).
 
-An estimator lists :data:`FIELDS` in its schema, puts :func:`states` in its state layout and
-:func:`initial_entries` in its initial state, and adds the code :func:`monitor` returns to its
-status; each monitor that is off (its setting 0) has no state and no code.
+An estimator lists :data:`FIELDS` in its schema, takes its inputs from :func:`inputs`, puts
+:func:`states` in its state layout and :func:`initial_entries` in its initial state, and adds the
+code :func:`monitor` returns to its status; each monitor that is off (its setting 0) has no state and no code.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model import crosscheck, frozen, status, wheel_yaw
+from vsegen.model import crosscheck, frozen, signals, status, wheel_yaw
 from vsegen.model.filters import whole_samples
+from vsegen.model.layout import Layout
 from vsegen.model.schema import nonnegative
 from vsegen.model.signals import Signal
 
@@ -24,13 +25,20 @@ RECOVERY = nonnegative("frozen_recovery", "s", "beyond the papers: status INPUT_
 RECOVERY_STATE = Signal("frozen_recovery_left", "-", "samples INPUT_FROZEN stays raised after a frozen input "
                         "moved again (frozen_recovery)")
 FIELDS = (frozen.FIELD, RECOVERY, *crosscheck.FIELDS, *wheel_yaw.FIELDS)
-STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET)
-"""The bits the monitors can raise in every estimator that has them; YAW_RATE_MISMATCH too where
-the estimator reads wheel speeds (:data:`WHEEL_STATUS_BITS`)."""
-WHEEL_STATUS_BITS = (*STATUS_BITS, status.YAW_RATE_MISMATCH)
+STATUS_BITS = (status.INPUT_FROZEN, status.LATERAL_INCONSISTENT, status.STEERING_OFFSET, status.YAW_RATE_MISMATCH)
+"""The bits the monitors can raise in every estimator that has them (YAW_RATE_MISMATCH where the
+yaw-rate check is on: every such estimator can be given the wheel speeds, :func:`inputs`)."""
 OFF = {"frozen_time": 0.0, "lateral_check_limit": 0.0, "steering_offset_limit": 0.0, "steer_check_limit": 0.0,
        "wheel_check_limit": 0.0}
 """The settings that switch every monitor off (no state, no code)."""
+
+
+def inputs(method_inputs: tuple[str, ...], numeric_settings) -> Layout:
+    """The input layout of an estimator whose method reads ``method_inputs``, plus what the
+    monitors that are on read beside them (the yaw-rate check: a_x and its axle's wheel speeds),
+    in the catalogue's order (``model.signals.INPUTS``)."""
+    wanted = {*method_inputs, *wheel_yaw.reads(numeric_settings)}
+    return Layout(tuple(entry.signal for entry in signals.INPUTS if entry.name in wanted))
 
 
 def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:

@@ -85,6 +85,12 @@ class VehicleConfig:
         value = SAMPLING[0].check(sample_time)
         return replace(self, sample_time=value)
 
+    def with_settings(self, estimator: str, **changes: Any) -> VehicleConfig:
+        """The same vehicle with some of ``estimator``'s settings changed (values as the schema
+        holds them; not checked again)."""
+        settings = MappingProxyType({**self.settings(estimator), **changes})
+        return replace(self, estimators=MappingProxyType({**self.estimators, estimator: settings}))
+
     def canonical(self, estimator: str) -> dict[str, Any]:
         """Everything that determines ``estimator``'s generated code, as plain sorted data."""
         return {

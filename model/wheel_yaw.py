@@ -18,7 +18,10 @@ low-pass, held between samples,
 and |m| > ``wheel_check_limit`` raises status YAW_RATE_MISMATCH: a gyro offset or drift, a frozen
 or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. An estimator has
 the check when it reads that axle's wheel speeds (the UKFs in their "wheel_speeds" mode) and
-``wheel_check_limit`` > 0; a holding estimator holds it.
+``wheel_check_limit`` > 0; a holding estimator holds it. Every estimator with the input monitors can
+be given the wheel speeds: switching the check on adds a_x and that axle's wheel speeds to its inputs
+(``model.input_monitors.inputs``), so a yaw-rate scale typed wrong in a DBC (1.3 for 1.0) is flagged
+by the estimators that trust r most.
 """
 
 from __future__ import annotations
@@ -34,7 +37,8 @@ FIELDS = (
            "wheel speeds the yaw-rate check reads", default="rear"),
     nonnegative("wheel_check_limit", "rad/s", "beyond the papers: the mean of the yaw rate minus the "
                 "non-driven wheels' yaw rate beyond this raises status 32768 YAW_RATE_MISMATCH (a "
-                "gyro offset, drift or freeze); 0 = no check (also without wheel speeds)", default=0.0),
+                "gyro offset, drift or freeze, a yaw-rate scale typed wrong); above 0 the estimator "
+                "also reads a_x and that axle's wheel speeds; 0 = no check", default=0.0),
     positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean", default=0.2),
     positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
              "(no braking or drive torque to make the wheels slip)", default=1.0),
@@ -49,10 +53,16 @@ def wheels(numeric_settings) -> tuple[str, str]:
     return f"omega_{axle}l", f"omega_{axle}r"
 
 
+def reads(numeric_settings) -> tuple[str, ...]:
+    """The inputs the check reads when it is on (``wheel_check_limit`` > 0), else none: an
+    estimator is given them beside its method's own (``model.input_monitors.inputs``)."""
+    return ("delta", "ax", "r", *wheels(numeric_settings)) if numeric_settings["wheel_check_limit"] > 0.0 else ()
+
+
 def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
     """Whether an estimator reading ``inputs`` has the check (structural)."""
-    return numeric_settings["wheel_check_limit"] > 0.0 and all(
-        name in inputs for name in ("delta", "ax", "r", *wheels(numeric_settings)))
+    checked = reads(numeric_settings)
+    return bool(checked) and all(name in inputs for name in checked)
 
 
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:

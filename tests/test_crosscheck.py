@@ -7,13 +7,18 @@ both truth cars; a limit of 0 removes its check."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from types import MappingProxyType
 
 import numpy as np
 import pytest
 from locations import VEHICLES
 
 from vsegen.harness.host.run_log import run_estimator
+from vsegen.harness.logs.table import Log, write_log
+from vsegen.harness.outputs.estimates import read_estimates
 from vsegen.harness.project.vehicles import load_vehicle
+from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import build
 from vsegen.model.status import INPUT_FROZEN, LATERAL_INCONSISTENT, STEERING_OFFSET, YAW_RATE_MISMATCH
@@ -108,12 +113,14 @@ def test_ekf_rls_learns_no_stiffness_from_a_frozen_yaw_rate(config):
 
 @pytest.mark.parametrize("car", CARS)
 def test_the_yaw_rate_is_checked_against_the_non_driven_wheels(car):
-    """ukf and aukf read wheel speeds: every undisturbed drive (braking in a bend and the synthetic
-    low-speed log included) passes; a yaw rate frozen in the DLC or a 3.4 deg/s gyro offset raises
-    YAW_RATE_MISMATCH, a 0.3 deg/s offset with drift does not."""
+    """ukf and aukf read wheel speeds, switching is given them for the check: every undisturbed
+    drive (braking in a bend and the synthetic low-speed log included) passes; a yaw rate frozen in
+    the DLC or a 3.4 deg/s gyro offset raises YAW_RATE_MISMATCH, a 0.3 deg/s offset with drift
+    does not."""
     config = _car(car)
     for scenario in (*UNDISTURBED, "banked_curve", "low_speed"):
-        assert _raised(config, "ukf", Case.of(scenario), YAW_RATE_MISMATCH).size == 0, scenario
+        for name in ("ukf", "switching"):
+            assert _raised(config, name, Case.of(scenario), YAW_RATE_MISMATCH).size == 0, (name, scenario)
     frozen = _raised(config, "aukf", Case.of("dlc", freeze="r:3:1.5"), YAW_RATE_MISMATCH)
     assert frozen.size and 3.0 < frozen[0] <= 4.0
     assert _raised(config, "ukf", Case.of("dlc", gyro_bias=0.06), YAW_RATE_MISMATCH).size
@@ -121,6 +128,43 @@ def test_the_yaw_rate_is_checked_against_the_non_driven_wheels(car):
     assert _raised(config, "ukf", drift, YAW_RATE_MISMATCH).size == 0
 
 
-def test_without_wheel_speeds_there_is_no_yaw_rate_check(config):
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("factor", [1.3, 1 / 1.3])
+def test_a_yaw_rate_scale_typed_wrong_leaves_switching_silent_for_no_longer_than_allowed(car, factor):
+    """A DBC whose yaw-rate factor is 0.013 instead of 0.01 (or the reverse): the unit check only
+    notes it (tests/test_unit_sanity.py). Before the wheel check, switching's kinematic integrator was
+    3-4.7 deg off with status 0 for 0.60-0.91 s on the DLC (seeds 1-3, both cars)."""
+    config = _car(car)
+    for seed in (1, 2, 3):
+        log = Case.of("dlc").simulate(config, 1.0 / config.sample_time, seed)
+        typo = Log({**log.columns, "r": log["r"] * factor}, "typo.csv")
+        estimates = run_estimator(config, "switching", typo)
+        assert silent_error_time(typo, estimates)[0] <= SILENT_DURATION, seed
+        assert np.any(estimates["status"].astype(int) & YAW_RATE_MISMATCH), seed
+
+
+def test_the_yaw_rate_check_is_where_it_is_on_and_brings_its_inputs(config):
+    """An estimator has the check, and reads a_x and the checked axle's wheel speeds, exactly when
+    its wheel_check_limit is above 0 (the UKFs read every wheel for their model anyway)."""
     assert "wheel_yaw_residual" in build("ukf", config).states.names
     assert "wheel_yaw_residual" not in build("kf2dof", config).states.names
+    assert build("kf2dof", config).inputs.names == ("delta", "vx", "ay", "r")
+    switching = build("switching", config)
+    assert "wheel_yaw_residual" in switching.states.names
+    assert switching.inputs.names == ("delta", "vx", "ax", "ay", "r", "omega_rl", "omega_rr")
+    settings = MappingProxyType({**config.settings("switching"), "wheel_check_limit": 0.0})
+    off = replace(config, estimators=MappingProxyType({**config.estimators, "switching": settings}))
+    assert build("switching", off).inputs.names == ("delta", "vx", "ay", "r")
+
+
+def test_a_log_without_the_checked_wheel_speeds_runs_without_the_check(config, tmp_path, vsegen):
+    """A log of the five required columns only: switching (whose file switches its yaw-rate check
+    on) runs as with wheel_check_limit = 0 and says so, rather than refusing the log."""
+    log = Case.of("dlc").simulate(config, 1.0 / config.sample_time, 1)
+    bare = Log({name: log[name] for name in ("t", "delta", "vx", "ax", "ay", "r", "beta_ref")}, "bare.csv")
+    write_log(bare, tmp_path / "bare.csv")
+    result = vsegen("run", "--log", tmp_path / "bare.csv", "--estimator", "switching", "--out", tmp_path / "est.csv")
+    assert result.exit_code == 0, result.output
+    assert "switching runs without its yaw-rate check: the log has no omega_rl, omega_rr" in result.stderr
+    expected = run_estimator(config.with_settings("switching", wheel_check_limit=0.0), "switching", bare)
+    np.testing.assert_array_equal(read_estimates(tmp_path / "est.csv")["beta"], expected["beta"])

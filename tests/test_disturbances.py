@@ -44,6 +44,12 @@ def test_latency_delays_a_channel_and_quantisation_rounds_it(config):
     assert np.abs(disturbed["delta"] - clean["delta"]).max() <= 0.0005 + 1e-12
 
 
+def test_a_scale_typed_wrong_multiplies_its_channel_only(config):
+    clean, disturbed = _logs(config, scale="r:1.3")
+    np.testing.assert_allclose(disturbed["r"], 1.3 * clean["r"], rtol=1e-12)
+    np.testing.assert_array_equal(disturbed["ay"], clean["ay"])
+
+
 def test_frozen_dropped_and_spiking_signals(config):
     clean, disturbed = _logs(config, freeze="r:3:1", dropout="all:4:0.5")
     t = clean["t"]
@@ -81,6 +87,7 @@ def test_a_heavier_truth_car_changes_the_drive_not_the_estimators_file(config):
     ("freeze=q:1:2", "freeze entry 'q:1:2': expected channel:start:duration"),
     ("latency=ay", "latency entry 'ay': expected channel:seconds"),
     ("spikes=r:3", "spikes entry 'r:3': expected channel:countxsize"),
+    ("scale=r", "scale entry 'r': expected channel:factor"),
     ("tyre_scale=0", "tyre_scale = 0.0: expected a factor > 0"),
 ])
 def test_a_malformed_disturbance_is_one_line_naming_it(config, option, message):

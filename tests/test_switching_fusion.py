@@ -48,6 +48,11 @@ def test_gyro_outliers_are_rejected(config, estimator, compiled):
         assert states[k + 2][i["r_rejections"]] == 0                                # next accepted
 
 
+def constant_inputs(estimator, n: int, **values: float) -> np.ndarray:
+    """``n`` samples of the estimator's inputs: ``values`` by name, every other input 0."""
+    return np.tile([values.get(name, 0.0) for name in estimator.inputs.names], (n, 1))
+
+
 @pytest.fixture(scope="module")
 def paper(vehicle_text):
     """The paper's switching estimator: no learned offset, no bound on the kinematic dwell."""
@@ -70,11 +75,13 @@ def test_handoffs_both_ways_and_kf_frozen_in_kinematic_mode(paper):
     update = dynamic_update(baked(config), "switching")
     P0 = config.settings("switching")["initial_covariance"]
     roll_factor = 1 + 9.81 * config.settings("switching")["roll_gradient"]  # the KF sees a_y at the CG
+    column = {name: estimator.inputs.index(name) for name in ("delta", "vx", "ay")}
     for k in to_dyn:  # [E26]: the KF restarts from [vy_kin, r_k-1] with P = P_0
         before = states[k]
         result = update(x=[before[i["vy_kin"]], before[i["r_last"]]], P=[P0[0][0], P0[0][1], P0[1][1]],
                         delta_prev=before[i["delta_prev"]], vx_prev=before[i["vx_prev"]],
-                        delta=inputs[k, 0], vx=inputs[k, 1], ay=inputs[k, 2] / roll_factor,
+                        delta=inputs[k, column["delta"]], vx=inputs[k, column["vx"]],
+                        ay=inputs[k, column["ay"]] / roll_factor,
                         r_meas=outputs[k, 2])
         np.testing.assert_allclose(states[k + 1][[i["vy"], i["r"]]],
                                    np.array(result["x_next"]).ravel(), rtol=1e-12, atol=1e-15)
@@ -95,13 +102,13 @@ def test_only_the_active_scheme_is_compiled_into_the_step(config):
 
 def test_reference_time_out_and_low_speed(config, estimator, compiled):
     n = 100
-    steady = np.tile([0.0, 20.0, 0.0, 0.5], (n, 1))  # straight steer, yet a yaw rate of 0.5 rad/s
+    steady = constant_inputs(estimator, n, vx=20.0, r=0.5)  # straight steer, yet a yaw rate of 0.5 rad/s
     outputs, _ = compiled.run(steady)
     suspect = outputs[:, 4].astype(int) & status.REFERENCE_SUSPECT
     timeout = round(config.settings("switching")["reference_timeout"] / T)
     first = int(np.argmax(suspect > 0))
     assert first == timeout - 1 and outputs[first, 2] == 0.5
-    slow = np.tile([0.01, 2.0, 0.2, 0.01], (20, 1))
+    slow = constant_inputs(estimator, 20, delta=0.01, vx=2.0, ay=0.2, r=0.01)
     outputs, states = compiled.run(slow)
     assert np.all(outputs[:, 4].astype(int) == status.LOW_SPEED)
     assert np.all(outputs[:, 0] == 0.0) and np.all(outputs[:, 3] == DYN)

@@ -245,11 +245,16 @@ def test_low_speed_restarts_from_the_current_sample_and_invalid_input_holds(conf
 
 
 def test_wheel_speed_mode_tracks_speed_and_free_rolling_does_not_need_wheels(config, variant):
+    """Free rolling reads no wheel speed for its model; with the yaw-rate check on, only the
+    checked (rear) axle's."""
     log = Case.of("dlc", speed_kmh=120.0).simulate(config, 100.0)
     est, c = compile_estimator(config, "ukf")
     out, _ = c.run(log.matrix(est.inputs.names))
     assert np.abs(out[:, 1] - log["vx_ref"]).max() < 0.2
     free = variant("estimator.ukf", longitudinal_force="free_rolling")
+    assert [n for n in compile_estimator(free, "ukf")[0].inputs.names if n.startswith("omega")] == [
+        "omega_rl", "omega_rr"]
+    free = variant("estimator.ukf", longitudinal_force="free_rolling", wheel_check_limit=0.0)
     est, c = compile_estimator(free, "ukf")
     assert not any(n.startswith("omega") for n in est.inputs.names)
     out, states = c.run(log.matrix(est.inputs.names))

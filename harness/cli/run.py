@@ -76,5 +76,7 @@ def run(log_path: Path, estimator: str, vehicle: Path | None, backend: str, out:
                 writer.write(estimates)
                 flagged += int(np.count_nonzero(estimates["status"]))
     say_notes(log_path, log.notes)
+    for note in stream.notes:
+        click.echo(f"vsegen: {log_path}: {note}", err=True)
     console.print(f"wrote {out} ({log.samples} samples, T = {log.sample_time:.6g} s, {form}, "
                   f"{flagged} with status != 0)")

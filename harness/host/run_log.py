@@ -54,25 +54,42 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
     return EstimatorStream(config, name, log.sample_time, backend, real, params)(log)
 
 
+def without_unlogged_check(config: VehicleConfig, name: str, log: Log) -> VehicleConfig | None:
+    """``config`` with estimator ``name``'s yaw-rate check off (``wheel_check_limit`` = 0) when
+    ``log`` lacks only the wheel speeds that check reads beside the method's inputs; else None."""
+    if not config.settings(name).get("wheel_check_limit", 0.0) or not log.missing(inputs_of(config, name)):
+        return None
+    unchecked = config.with_settings(name, wheel_check_limit=0.0)
+    return None if log.missing(inputs_of(unchecked, name)) else unchecked
+
+
 class EstimatorStream:
     """An estimator fed a log chunk by chunk (:meth:`__call__` per chunk, in order), its state
     carried across the chunk boundaries: the estimates are bit-identical to one pass over the
     whole log, and memory does not grow with the log. ``real`` and ``params`` (C only: the form
-    that will be flashed) default to the vehicle file's [codegen]."""
+    that will be flashed) default to the vehicle file's [codegen]. A log without the wheel speeds
+    only the yaw-rate check reads runs without the check (:func:`without_unlogged_check`), said in
+    :attr:`notes`."""
 
     def __init__(self, config: VehicleConfig, name: str, sample_time: float, backend: str = "c",
                  real: str | None = None, params: str | None = None):
-        self.config = config_at(config, sample_time)
         self.name = name
-        self.estimator = build(name, self.config)
         self.backend = backend
-        if backend == "c":
-            params = params or self.config.codegen["params"]
-            real = real or self.config.codegen["real"]
-            self.compiled = COMPILED.get((self.config.parameter_hash(name), real, params),
-                                         lambda: load_estimator(build(name, self.config, params),
-                                                                render(self.config, name, real, params)))
+        self.real, self.params = real, params
+        self.notes: list[str] = []
+        """What was changed for this log, a line each."""
+        self._load(config_at(config, sample_time))
         self.state = None
+
+    def _load(self, config: VehicleConfig) -> None:
+        self.config = config
+        self.estimator = build(self.name, config)
+        if self.backend == "c":
+            params = self.params or config.codegen["params"]
+            real = self.real or config.codegen["real"]
+            self.compiled = COMPILED.get((config.parameter_hash(self.name), real, params),
+                                         lambda: load_estimator(build(self.name, config, params),
+                                                                render(config, self.name, real, params)))
 
     @property
     def output_names(self) -> tuple[str, ...]:
@@ -80,6 +97,11 @@ class EstimatorStream:
 
     def __call__(self, chunk: Log) -> Log:
         """The estimates (``t`` and the outputs) of the next chunk of the log."""
+        if self.state is None and (unchecked := without_unlogged_check(self.config, self.name, chunk)):
+            missing = chunk.missing(self.estimator.inputs.names)
+            self.notes.append(f"{self.name} runs without its yaw-rate check: the log has no {', '.join(missing)} "
+                              "(the flashed C reads them; set wheel_check_limit = 0 for a car without them)")
+            self._load(unchecked)
         inputs = estimator_inputs(self.estimator, chunk)
         if self.backend == "c":
             outputs, self.state = self.compiled.run_chunk(inputs, self.state)

@@ -15,6 +15,7 @@ from vsegen.harness.reference import blocks, monitors
 TABLE = "ekf_rls"
 GRAVITY = blocks.GRAVITY
 INPUTS = ("delta", "vx", "ax", "ay", "r")
+"""What the method reads; the input monitors may add theirs (:func:`input_names`)."""
 EKF_P = blocks.upper_names("P", ("beta", "r"))
 RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
 STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
@@ -25,8 +26,12 @@ KINEMATIC = ("beta_kin", "ax_f", "ay_f", "r_f", "delta_f", "beta_f")
 only while lambda = 0) and the low-passed a_x, a_y, r, delta and beta_kin."""
 
 
+def input_names(config) -> tuple[str, ...]:
+    return monitors.inputs(INPUTS, config.settings(TABLE))
+
+
 def names(config):
-    return INPUTS, states(config), OUTPUTS
+    return input_names(config), states(config), OUTPUTS
 
 
 def states(config) -> tuple[str, ...]:
@@ -34,7 +39,7 @@ def states(config) -> tuple[str, ...]:
     kinematic = s["stiffness_regressor"] == "kinematic_slip"
     monitor = s["residual_window"] > 0
     return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()),
-            *monitors.states(s, INPUTS))
+            *monitors.states(s, input_names(config)))
 
 
 def _loads(v, ax, ay):
@@ -86,7 +91,7 @@ def _integral(beta_prev, T, vx, ax, ay, r):
 
 def init(config, u0):
     s, v = config.settings(TABLE), config.vehicle
-    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
                                          s["vx_resume"])
     c0 = _c0_nominal(v)
     ay0 = blocks.roll_corrected(first["ay"], s["roll_gradient"])
@@ -99,7 +104,7 @@ def init(config, u0):
     kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                  "delta_f": first["delta"], "beta_f": 0.0}
     extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0),
-             **monitors.initial(s, INPUTS, first)}
+             **monitors.initial(s, input_names(config), first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
                      first["r"], 0.0, 0.0, 0.0, holding,
                      *(extra[k] for k in states(config)[len(STATES):])])
@@ -109,7 +114,7 @@ def step(config, state, u):
     s, v, T = config.settings(TABLE), config.vehicle, config.sample_time
     names = states(config)
     x = dict(zip(names, state))
-    inputs = dict(zip(INPUTS, u))
+    inputs = dict(zip(input_names(config), u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5)
     if not active:
@@ -130,7 +135,7 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
-    watched, flags = monitors.step(x, inputs, ok, s, T, INPUTS, config.vehicle)
+    watched, flags = monitors.step(x, inputs, ok, s, T, input_names(config), config.vehicle)
     new |= watched                          # the input monitors (beyond the paper)
     status |= flags
     X, P, cf, cr = _rls(s, v, T, x, y, A, loads, trusted=flags == 0)

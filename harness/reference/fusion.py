@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
-from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS, KINEMATIC_INPUTS
+from vsegen.harness.reference.kinematic_dynamic import DYN, KINEMATIC_INPUTS
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
@@ -23,7 +23,8 @@ def extra(config) -> tuple[str, ...]:
 
 
 def names(config):
-    return INPUTS, kinematic_dynamic.state_names(config, TABLE, extra(config)), OUTPUTS
+    return (kinematic_dynamic.input_names(config, TABLE), kinematic_dynamic.state_names(config, TABLE, extra(config)),
+            OUTPUTS)
 
 
 def init(config, u0):
@@ -42,7 +43,7 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     offset, learned = x.get("kin_offset", 0.0), {}     # beyond the paper: the kinematic offset
     if s["offset_memory"] > 0:
         learned["kin_offset"] = kinematic_dynamic.learned_offset(s, T, offset, ay_f, updates["ay_last"],
-                                                                 updates["r_last"], u[1])
+                                                                 updates["r_last"], u["vx"])
     xk, P, innovation = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
                                                  x["vx_prev"], u, r_k,
                                                  ay_offset=s["offset_sensor_share"] * offset)
@@ -55,13 +56,13 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
     if blocks.any_frozen(updates, s, T, KINEMATIC_INPUTS):    # its inputs frozen: the KF alone
         vy_kin, w = xk[0], 0.0
-    beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u[1])
-    beta_kf = kinematic_dynamic.beta(config, TABLE, xk[0], u[1])
+    beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u["vx"])
+    beta_kf = kinematic_dynamic.beta(config, TABLE, xk[0], u["vx"])
     beta = w * beta_kin + (1 - w) * beta_kf
     if s["disagreement_limit"] > 0 and w * abs(beta_kin - beta_kf) > s["disagreement_limit"]:
         status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
-    status |= blocks.beyond_linear_range(u[2], s)    # beyond the paper: the measured a_y
+    status |= blocks.beyond_linear_range(u["ay"], s)    # beyond the paper: the measured a_y
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
-           "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u[0], "vx_prev": u[1],
+           "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u["delta"], "vx_prev": u["vx"],
            "holding": 0.0, "mode": DYN, **monitor, **learned}
     return new, [beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]

@@ -12,7 +12,12 @@ import numpy as np
 from vsegen.harness.reference import bicycle_kf, blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
+"""What the KF reads; the input monitors may add theirs (:func:`input_names`)."""
 OUTPUTS = ("beta", "vy", "r", "status")
+
+
+def input_names(config) -> tuple[str, ...]:
+    return monitors.inputs(INPUTS, _settings(config))
 
 
 def _monitored(config) -> bool:
@@ -22,12 +27,12 @@ def _monitored(config) -> bool:
 def _monitor_states(config) -> tuple[str, ...]:
     """The consistency and input monitors' state entries (those that are on)."""
     return (*(blocks.MONITOR_STATES if _monitored(config) else ()),
-            *monitors.states(_settings(config), INPUTS))
+            *monitors.states(_settings(config), input_names(config)))
 
 
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
-    return (INPUTS, ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
+    return (input_names(config), ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
                      *_monitor_states(config), "holding"), OUTPUTS)
 
 
@@ -37,10 +42,10 @@ def _settings(config):
 
 def init(config, u0) -> np.ndarray:
     s = _settings(config)
-    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
                                          s["vx_resume"])
     P0 = np.array(s["initial_covariance"])
-    entries = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **monitors.initial(s, INPUTS, first)}
+    entries = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **monitors.initial(s, input_names(config), first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
                      *(entries[k] for k in _monitor_states(config)), holding])
 
@@ -49,7 +54,7 @@ def step(config, state, u):
     s = _settings(config)
     T = config.sample_time
     vx_max = config.limits["vx_max"]
-    inputs = dict(zip(INPUTS, u))
+    inputs = dict(zip(input_names(config), u))
     entries = dict(zip(_monitor_states(config), state[7:-1]))    # the monitors' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     holding = state[-1]
@@ -70,7 +75,7 @@ def step(config, state, u):
                                        np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
                                        inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
     status |= blocks.beyond_linear_range(inputs["ay"], s)
-    updates, flags = monitors.step(entries, inputs, ok, s, T, INPUTS, config.vehicle)
+    updates, flags = monitors.step(entries, inputs, ok, s, T, input_names(config), config.vehicle)
     entries.update(updates)
     status |= flags
     if _monitored(config):

@@ -12,10 +12,15 @@ import scipy.signal
 from vsegen.harness.reference import bicycle_kf, blocks, monitors
 
 INPUTS = ("delta", "vx", "ay", "r")
+"""What the schemes read; the input monitors may add theirs (:func:`input_names`)."""
 DYN, KIN = 0, 1
 KINEMATIC_INPUTS = ("ay", "r")
 """The kinematic integrator's inputs beside the speed (model: kinematic_dynamic.KINEMATIC_INPUTS)."""
 GRAVITY = blocks.GRAVITY
+
+
+def input_names(config, table) -> tuple[str, ...]:
+    return monitors.inputs(INPUTS, config.settings(table))
 
 
 def roll_corrected(config, table, ay_measured):
@@ -34,7 +39,7 @@ def state_names(config, table, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
             "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-            *monitors.states(config.settings(table), INPUTS), "holding", *extra)
+            *monitors.states(config.settings(table), input_names(config, table)), "holding", *extra)
 
 
 def prefilter(config, table):
@@ -75,7 +80,7 @@ def check(measured, reference, band, last, rejections, timeout):
 
 def init(config, table, u0, extra: tuple[str, ...] = ()):
     s = config.settings(table)
-    first, holding = blocks.first_sample(config.limits, dict(zip(INPUTS, u0)), s["vx_min"],
+    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config, table), u0)), s["vx_min"],
                                          s["vx_resume"])
     delta, vx, r = first["delta"], first["vx"], first["r"]
     ay = roll_corrected(config, table, first["ay"])
@@ -85,7 +90,7 @@ def init(config, table, u0, extra: tuple[str, ...] = ()):
     r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
-    monitor = monitors.initial(s, INPUTS, first)
+    monitor = monitors.initial(s, input_names(config, table), first)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
                      0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *monitor.values(), holding,
                      *([0.0] * len(extra))])
@@ -103,10 +108,10 @@ def held(config, table, x, inputs, ok):
 
 
 def preprocess(config, table, x, u):
-    """Prefilter, checks and median of an active sample: (new entries, r_k, a_y,f, suspect);
-    the checked a_y,k is the new ``ay_last``."""
+    """Prefilter, checks and median of an active sample (inputs ``u`` by name): (new entries, r_k,
+    a_y,f, suspect); the checked a_y,k is the new ``ay_last``."""
     s = config.settings(table)
-    delta, vx_raw, ay_raw, r_m = u
+    delta, vx_raw, ay_raw, r_m = u["delta"], u["vx"], u["ay"], u["r"]
     ay_m = roll_corrected(config, table, ay_raw)
     vx = clamp(config, table, vx_raw)
     b, a = prefilter(config, table)
@@ -143,9 +148,9 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
     """The 2-DOF KF (harness.reference.bicycle_kf): predict with the previous inputs, update with
     z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-))."""
-    z = np.array([roll_corrected(config, table, u[2]) - ay_offset, r_k])
+    z = np.array([roll_corrected(config, table, u["ay"]) - ay_offset, r_k])
     return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, np.array([vy, r]), P,
-                           delta_prev, clamp(config, table, vx_prev), u[0], clamp(config, table, u[1]), z)
+                           delta_prev, clamp(config, table, vx_prev), u["delta"], clamp(config, table, u["vx"]), z)
 
 
 def beta(config, table, vy, vx):
@@ -156,20 +161,20 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
     """One step of a seed-000 estimator: the hold rule; when active, the shared pre-processing
     (§2.2-2.4) and then ``scheme(x, updates, r_k, ay_f, status, u) -> (next state by name,
     output)``, with ``x`` the state by name, ``updates`` the pre-processing's new entries and
-    ``status`` including blocks.REFERENCE_SUSPECT. When not active: the held state and the output
-    [0, 0, r_last, DYN, status]."""
+    ``status`` including blocks.REFERENCE_SUSPECT, ``u`` the inputs by name. When not active: the
+    held state and the output [0, 0, r_last, DYN, status]."""
     s = config.settings(table)
     names = state_names(config, table, extra)
     x = dict(zip(names, state))
-    inputs = dict(zip(INPUTS, u))
+    inputs = dict(zip(input_names(config, table), u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5)
     if not active:
         new = held(config, table, x, inputs, ok)
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
-    updates, r_k, ay_f, suspect = preprocess(config, table, x, u)
-    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, INPUTS, config.vehicle)
+    updates, r_k, ay_f, suspect = preprocess(config, table, x, inputs)
+    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, input_names(config, table), config.vehicle)
     status += (blocks.REFERENCE_SUSPECT if suspect else 0) + flags
-    new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, u)
+    new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, inputs)
     return np.array([new[k] for k in names]), np.array(output)

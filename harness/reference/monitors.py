@@ -10,6 +10,8 @@ from collections.abc import Mapping
 
 from vsegen.harness.reference import blocks
 
+COLUMNS = ("delta", "vx", "ax", "ay", "r", "omega_fl", "omega_fr", "omega_rl", "omega_rr", "mz")
+"""The log format's input columns in their order (docs/conventions.md)."""
 CROSSCHECK_INPUTS = ("delta", "vx", "ay", "r")
 CHECKS = {"lateral_check_limit": ("lateral_residual",), "steering_offset_limit": ("steering_offset",),
           "steer_check_limit": ("curvature", "steady_curvature")}
@@ -31,6 +33,13 @@ def _wheel_axle(settings) -> tuple[str, str]:
 
 def _wheel_checked(settings, inputs) -> bool:
     return _on(settings, "wheel_check_limit") and all(n in inputs for n in ("delta", "ax", "r", *_wheel_axle(settings)))
+
+
+def inputs(method_inputs, settings) -> tuple[str, ...]:
+    """The inputs of an estimator whose method reads ``method_inputs``: with the yaw-rate check on,
+    also a_x and the checked axle's wheel speeds, in the log's column order."""
+    checked = ("delta", "ax", "r", *_wheel_axle(settings)) if _on(settings, "wheel_check_limit") else ()
+    return tuple(name for name in COLUMNS if name in {*method_inputs, *checked})
 
 
 def states(settings, inputs) -> tuple[str, ...]:

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
-from vsegen.harness.reference.kinematic_dynamic import DYN, INPUTS, KIN, KINEMATIC_INPUTS
+from vsegen.harness.reference.kinematic_dynamic import DYN, KIN, KINEMATIC_INPUTS
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
@@ -24,7 +24,8 @@ def extra(config) -> tuple[str, ...]:
 
 
 def names(config):
-    return INPUTS, kinematic_dynamic.state_names(config, TABLE, extra(config)), OUTPUTS
+    return (kinematic_dynamic.input_names(config, TABLE), kinematic_dynamic.state_names(config, TABLE, extra(config)),
+            OUTPUTS)
 
 
 def init(config, u0):
@@ -57,7 +58,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
     new["mode"] = mode
     if s["offset_memory"] > 0:               # beyond the paper: learned in near-straight dynamic driving
         new["kin_offset"] = kinematic_dynamic.learned_offset(s, config.sample_time, offset, ay_f, new["ay_last"],
-                                                             new["r_last"], u[1], allowed=mode == DYN)
+                                                             new["r_last"], u["vx"], allowed=mode == DYN)
     if mode == KIN:
         vy_kin = x["vy"] if x["mode"] == DYN else x["vy_kin"]                         # [E25]
         vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)  # [E14]
@@ -73,5 +74,5 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
                                             ay_offset=sensor)   # beyond the paper: the offset's sensor share
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]
-    new.update(delta_prev=u[0], vx_prev=u[1], holding=0.0)
-    return new, [kinematic_dynamic.beta(config, TABLE, vy, u[1]), vy, r_k, mode, status]
+    new.update(delta_prev=u["delta"], vx_prev=u["vx"], holding=0.0)
+    return new, [kinematic_dynamic.beta(config, TABLE, vy, u["vx"]), vy, r_k, mode, status]

@@ -45,7 +45,7 @@ class Variant:
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
         monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
-        inputs = ("delta", "vx", "ax", "ay", "r", *wheels)
+        inputs = monitors.inputs(("delta", "vx", "ax", "ay", "r", *wheels), s)
         return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *monitors.states(s, inputs),
                          "hold_reason"), OUTPUTS)
 

@@ -13,6 +13,8 @@ disturbance on never changes the sensor noise) and reproducible:
     (harness.sim.sensor_model applies it to the specific force and rates);
   - ``latency``: per channel, e.g. ``ay:0.02,r:0.04`` (s; CAN delay, linear interpolation);
   - ``quantise``: per channel LSB, e.g. ``delta:0.001,ay:0.01``;
+  - ``scale``: per channel factor, e.g. ``r:1.3`` (a DBC factor typed 0.013 for 0.01: the
+    decoded signal is that much too large);
   - ``spikes``: per channel ``count x size``, e.g. ``r:3x0.5`` (single samples at seeded times,
     of seeded sign);
   - ``freeze``: ``channel:start:duration`` (s), e.g. ``r:4:1.5``: the value at ``start`` repeats
@@ -43,7 +45,7 @@ OPTIONS: dict[str, Any] = {
     "ax_offset": 0.0, "ay_offset": 0.0, "offset_time": 0.0,
     "gyro_bias": 0.0, "gyro_drift": 0.0, "steer_offset": 0.0,
     "mount_roll": 0.0, "mount_pitch": 0.0, "mount_yaw": 0.0,
-    "latency": "", "quantise": "", "spikes": "", "freeze": "", "dropout": "",
+    "latency": "", "quantise": "", "scale": "", "spikes": "", "freeze": "", "dropout": "",
     "mass_added": 0.0, "cg_shift": 0.0, "tyre_scale": 1.0,
 }
 """The disturbance options and their neutral values (every plant scenario takes them)."""
@@ -52,9 +54,9 @@ UNITS: dict[str, str] = {
     "bank": "% cross slope, 3 % = 1.7 deg", "grade": "%", "ax_offset": "m/s^2", "ay_offset": "m/s^2",
     "offset_time": "s", "gyro_bias": "rad/s", "gyro_drift": "rad/s per sqrt(s)", "steer_offset": "rad",
     "mount_roll": "rad", "mount_pitch": "rad", "mount_yaw": "rad", "latency": "channel:s,...",
-    "quantise": "channel:LSB,...", "spikes": "channel:count x size,...", "freeze": "channel:start s:duration s",
-    "dropout": "channel:start s:duration s", "mass_added": "kg", "cg_shift": "m behind the CG",
-    "tyre_scale": "factor on the cornering stiffness",
+    "quantise": "channel:LSB,...", "scale": "channel:factor,...", "spikes": "channel:count x size,...",
+    "freeze": "channel:start s:duration s", "dropout": "channel:start s:duration s", "mass_added": "kg",
+    "cg_shift": "m behind the CG", "tyre_scale": "factor on the cornering stiffness",
 }
 """The unit or form of each option, as ``vsegen list`` shows it."""
 
@@ -72,7 +74,7 @@ class Disturbances:
     def of(**options: Any) -> Disturbances:
         chosen = {k: v for k, v in options.items() if k in OPTIONS and v != OPTIONS[k]}
         disturbances = Disturbances(tuple(sorted(chosen.items())))
-        for key in ("latency", "quantise", "spikes", "freeze", "dropout"):
+        for key in ("latency", "quantise", "scale", "spikes", "freeze", "dropout"):
             disturbances.entries(key)          # raises ValueError on a malformed entry
         if disturbances.get("tyre_scale") <= 0.0:
             raise ValueError(f"tyre_scale = {disturbances.get('tyre_scale')}: expected a factor > 0")
@@ -92,7 +94,7 @@ class Disturbances:
 
     def entries(self, key: str) -> list[tuple[str, tuple[float, ...]]]:
         """The per-channel entries of option ``key``: (channel, numbers)."""
-        shapes = {"latency": 1, "quantise": 1, "spikes": 2, "freeze": 2, "dropout": 2}
+        shapes = {"latency": 1, "quantise": 1, "scale": 1, "spikes": 2, "freeze": 2, "dropout": 2}
         found = []
         for entry in filter(None, str(self.get(key)).split(",")):
             channel, _, rest = entry.partition(":")
@@ -103,7 +105,7 @@ class Disturbances:
                 numbers = ()
             allowed = (*INPUT_CHANNELS, "all") if key == "dropout" else INPUT_CHANNELS
             if channel not in allowed or len(numbers) != shapes[key] or min(numbers) < 0.0:
-                form = {"latency": "channel:seconds", "quantise": "channel:lsb",
+                form = {"latency": "channel:seconds", "quantise": "channel:lsb", "scale": "channel:factor",
                         "spikes": "channel:countxsize", "freeze": "channel:start:duration",
                         "dropout": "channel:start:duration"}[key]
                 raise ValueError(f"{key} entry {entry!r}: expected {form} with a channel of "
@@ -145,6 +147,8 @@ class Disturbances:
         for channel, (lsb,) in self.entries("quantise"):
             if lsb > 0.0:
                 out[channel] = np.round(out[channel] / lsb) * lsb
+        for channel, (factor,) in self.entries("scale"):
+            out[channel] = out[channel] * factor
         for channel, (count, size) in self.entries("spikes"):
             at = rng.choice(len(t), size=int(count), replace=False)
             out[channel][at] += size * rng.choice((-1.0, 1.0), size=len(at))

@@ -131,7 +131,7 @@ def force_scales(vehicle) -> dict[str, float]:
 def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for the configured longitudinal force and variant."""
     wheels = settings["longitudinal_force"] == "wheel_speeds"
-    inputs = Layout(signals.inputs(*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ())))
+    inputs = input_monitors.inputs((*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ())), settings)
     scale = force_scales(vehicle)
     estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
     states = Layout((
@@ -436,7 +436,7 @@ def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
 _UKF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.COVARIANCE_REPAIRED, status.FILTER_RESTARTED,
-               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE, *input_monitors.WHEEL_STATUS_BITS)
+               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE, *input_monitors.STATUS_BITS)
 _UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
 DEFINITIONS = (
     Definition(name=PLAIN_NAME, build=build_plain, schema=UKF_SCHEMA, tunable=_UKF_TUNABLE,

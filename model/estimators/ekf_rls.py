@@ -118,7 +118,13 @@ REFERENCE_PERIOD = 0.001
 LOAD_FLOOR = 0.05
 """Smallest wheel load, as a share of a static corner load m g / 4 [23]."""
 
-INPUTS = Layout(signals.inputs("delta", "vx", "ax", "ay", "r"))
+METHOD_INPUTS = ("delta", "vx", "ax", "ay", "r")
+"""What the method reads; the input monitors may add theirs (:func:`input_layout`)."""
+
+
+def input_layout(settings) -> Layout:
+    """The input layout for the numeric ``settings``: the method's and the input monitors'."""
+    return input_monitors.inputs(METHOD_INPUTS, settings)
 _EKF = kalman.packed_names("P", ("beta", "r"))
 _RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
 _EKF_ESTIMATES = (Signal("beta_ekf", "rad", "EKF sideslip angle"),
@@ -203,7 +209,8 @@ def states(settings) -> Layout:
     consistency monitor its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
     monitor = consistency.STATES if consistency.enabled(settings) else ()
-    return Layout((*STATES.signals, *kinematic, *monitor, *input_monitors.states(settings, INPUTS.names)))
+    watched = input_monitors.states(settings, input_layout(settings).names)
+    return Layout((*STATES.signals, *kinematic, *monitor, *watched))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -325,7 +332,8 @@ def build(params: Parameters) -> Estimator:
     settings, choices = config.settings(NAME), params.numeric.settings(NAME)
     layout = states(choices)
     state, s = layout.symbols("state")
-    inputs, u = INPUTS.symbols("input")
+    in_layout = input_layout(choices)
+    inputs, u = in_layout.symbols("input")
     guard, decisions = symbolic(input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
                                             s["holding"]))
     ok = guard.plausible
@@ -334,17 +342,17 @@ def build(params: Parameters) -> Estimator:
     vx = model_speed(hold(u["vx"], ok["vx"], vx_min), vx_min, config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
     monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
-                                      INPUTS.names, config.vehicle)
+                                      in_layout.names, config.vehicle)
     stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=monitors[1] > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
     next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, monitors)
     init_state = _initial_state(config, settings, choices, layout, u, stiffness.kinematic)
-    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
+    init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
     per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",
-                     INPUTS, layout, OUTPUTS, init, structure, params,
+                     in_layout, layout, OUTPUTS, init, structure, params,
                      notes={"stiffness": choices["stiffness"], "weighting": choices["weighting"],
                             "stiffness_regressor": choices["stiffness_regressor"],
                             "forgetting_factor_per_sample": f"{per_sample:.6g}"},
@@ -495,7 +503,7 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
         **consistency.initial_entries(consistency.enabled(choices)),
-        **input_monitors.initial_entries(first, choices, INPUTS.names),
+        **input_monitors.initial_entries(first, choices, input_layout(choices).names),
     })
 
 

@@ -30,7 +30,6 @@ from vsegen.model.estimator import (
 from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
-    INPUTS,
     KINEMATIC_DYNAMIC_FIELDS,
     YAW_RATE_CHECK_TUNABLES,
     KinematicDynamic,
@@ -79,7 +78,7 @@ def build(params: Parameters) -> Estimator:
                                            *(consistency.STATES if monitored else ())))
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
-    inputs, u = INPUTS.symbols("input")
+    inputs, u = seed.inputs.symbols("input")
     guard, decisions = symbolic(seed.guard(s, u))
     pre = seed.preprocess(s, u, guard)
     active = pre.guard.active
@@ -131,10 +130,10 @@ def build(params: Parameters) -> Estimator:
         "weight": ca.if_else(active, weight, 0),
         "status": code,
     })
-    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state,
+    init, structure = make_guarded(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
                                    seed.initial_state(u), next_state, output, params, decisions)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
-                     "(seed 000's comparison method)", INPUTS, layout, OUTPUTS, init, structure, params,
+                     "(seed 000's comparison method)", seed.inputs, layout, OUTPUTS, init, structure, params,
                      seed.notes())
 
 

@@ -46,7 +46,13 @@ SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *consistency.fields(CHANNELS), cons
                                  *input_monitors.FIELDS),
                          rules=LOW_SPEED_RULES)
 
-INPUTS = Layout(signals.inputs("delta", "vx", "ay", "r"))
+METHOD_INPUTS = ("delta", "vx", "ay", "r")
+"""What the bicycle-model KF reads; the input monitors may add theirs (:func:`input_layout`)."""
+
+
+def input_layout(settings) -> Layout:
+    """The input layout for the numeric ``settings``: the KF's and the input monitors'."""
+    return input_monitors.inputs(METHOD_INPUTS, settings)
 
 _ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -58,7 +64,7 @@ def states(settings) -> Layout:
         Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
         *(consistency.STATES if consistency.enabled(settings) else ()),
-        *input_monitors.states(settings, INPUTS.names),
+        *input_monitors.states(settings, input_layout(settings).names),
         signals.HOLDING,
     ))
 
@@ -174,7 +180,8 @@ def build(params: Parameters) -> Estimator:
     layout = states(params.numeric.settings(NAME))
 
     state, s = layout.symbols("state")
-    inputs, u = INPUTS.symbols("input")
+    in_layout = input_layout(params.numeric.settings(NAME))
+    inputs, u = in_layout.symbols("input")
     guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"]))
     ok = guard.plausible
     result = update(
@@ -196,7 +203,7 @@ def build(params: Parameters) -> Estimator:
         ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
         status.BEYOND_LINEAR_RANGE, 0)
     monitor, flags = input_monitors.monitor(s, u, ok, active, settings, params.numeric.settings(NAME),
-                                            config.sample_time, INPUTS.names, config.vehicle)
+                                            config.sample_time, in_layout.names, config.vehicle)
     code = code + flags
     if monitored:
         check = consistency.monitor(s, result["innovation"], settings, config.sample_time)
@@ -225,13 +232,13 @@ def build(params: Parameters) -> Estimator:
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
         **consistency.initial_entries(monitored),
-        **input_monitors.initial_entries(first, params.numeric.settings(NAME), INPUTS.names),
+        **input_monitors.initial_entries(first, params.numeric.settings(NAME), in_layout.names),
         "holding": holding,
     })
-    init, structure = make_guarded(NAME, INPUTS, layout, OUTPUTS, inputs, state, init_state,
+    init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
     return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
-                     INPUTS, layout, OUTPUTS, init, structure, params, zoh_note(params))
+                     in_layout, layout, OUTPUTS, init, structure, params, zoh_note(params))
 
 
 DEFINITIONS = (Definition(

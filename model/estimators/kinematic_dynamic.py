@@ -22,7 +22,6 @@ from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
 from vsegen.model.sensors import roll_corrected
 from vsegen.model.signals import Signal
 
-INPUTS = kf2dof.INPUTS
 KINEMATIC_INPUTS = ("ay", "r")
 """The inputs the kinematic integrator v_y += T (a_y - r v_x - c) reads beside the speed."""
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -142,7 +141,9 @@ class KinematicDynamic:
         self.T = params.config.sample_time
         self.n_median = window(params, table)
         self.extra = extra
-        self.monitors = input_monitors.states(params.numeric.settings(table), INPUTS.names)
+        self.inputs = kf2dof.input_layout(params.numeric.settings(table))
+        """The input layout: the KF's inputs and what the input monitors read beside them."""
+        self.monitors = input_monitors.states(params.numeric.settings(table), self.inputs.names)
         self.layout = states(self.n_median, extra, self.monitors)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
@@ -190,7 +191,7 @@ class KinematicDynamic:
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
         monitor, flags = input_monitors.monitor(s, u, ok, active, settings,
                                                 self.params.numeric.settings(self.table), self.T,
-                                                INPUTS.names, self.params.config.vehicle)
+                                                self.inputs.names, self.params.config.vehicle)
         code = code + flags
 
         def keep(name, value):
@@ -245,7 +246,7 @@ class KinematicDynamic:
             "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0,
-            **input_monitors.initial_entries(first, self.params.numeric.settings(self.table), INPUTS.names),
+            **input_monitors.initial_entries(first, self.params.numeric.settings(self.table), self.inputs.names),
             "holding": holding,
             **{entry.name: ca.SX(0) for entry in self.extra},
         })

@@ -41,7 +41,6 @@ from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     DYN,
-    INPUTS,
     KIN,
     KINEMATIC_DYNAMIC_FIELDS,
     YAW_RATE_CHECK_TUNABLES,
@@ -154,7 +153,7 @@ def build(params: Parameters) -> Estimator:
 
     # ---- select: pre-processing and the choice of scheme ---------------------------------------
     state, s = layout.symbols("state")
-    inputs, u = INPUTS.symbols("input")
+    inputs, u = seed.inputs.symbols("input")
     pre = seed.preprocess(s, u)
     active = pre.guard.active
     extra = {}
@@ -183,7 +182,7 @@ def build(params: Parameters) -> Estimator:
     def scheme(label, body):
         mid_sym, m = layout.symbols("state_mid")
         scratch_sym, c = SCRATCH.symbols("scratch")
-        input_sym, v = INPUTS.symbols("input")
+        input_sym, v = seed.inputs.symbols("input")
         next_state, output = body(m, c, v)
         return label, mid_sym, scratch_sym, input_sym, layout.pack(next_state), output
 
@@ -221,10 +220,10 @@ def build(params: Parameters) -> Estimator:
         NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch,
         [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)],
         params)
-    init, step = make_functions(NAME, INPUTS, layout, OUTPUTS, inputs, state,
+    init, step = make_functions(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
-                     INPUTS, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
+                     seed.inputs, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
 
 
 DEFINITIONS = (Definition(
