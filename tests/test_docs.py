@@ -112,3 +112,18 @@ def test_the_readme_estimator_table_gives_the_figures_of_its_reports():
         assert rows[f"`{name}`"][4].startswith(f"{lap:.2f}°"), name
     ukf, aukf = (float(_report_row("accuracy.md", ("continuous_dlc", "yes", "no", n))[6]) for n in ("ukf", "aukf"))
     assert rows["`ukf` / `aukf`"][3] == f"{ukf:.3f}° / {aukf:.3f}°"
+
+
+def test_the_readmes_never_silent_claims_are_those_of_their_reports():
+    """The README says how many runs the disturbance matrix has and that none is silently wrong
+    (docs/robustness.md, "K of N runs have a silent stretch beyond 0.5 s"), and that no estimator is
+    silent over 0.5 s on the real lap (docs/real.md's summary line)."""
+    readme = (REPO / "README.md").read_text()
+    (claimed,) = re.findall(r"Across the (\d+) runs of the disturbance matrix \(both truth cars\) no estimator "
+                            r"is silently wrong", " ".join(readme.split()))
+    (silent, runs), = re.findall(r"^(\d+) of (\d+) runs have a silent stretch beyond 0\.5 s",
+                                 (REPO / "docs" / "robustness.md").read_text(), flags=re.MULTILINE)
+    assert (claimed, silent) == (runs, "0")
+    assert "No estimator is silently wrong for more than 0.5 s on it." in " ".join(readme.split())
+    assert "* Silent stretches over 0.5 s on the whole lap (|beta error| > 2 deg, status 0): none." in (
+        REPO / "docs" / "real.md").read_text()

@@ -19,8 +19,9 @@ from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.sim.scenarios import Case
 from vsegen.harness.tune.objective import combined
-from vsegen.harness.tune.search import Trial, TuneResult, dimensions, harm, tune
+from vsegen.harness.tune.search import MEASURED_SPAN, Trial, TuneResult, dimensions, harm, measured_settings, tune
 from vsegen.model.calibration import calibration_values
+from vsegen.model.estimators import DEFINITIONS
 from vsegen.model.params import parse_vehicle
 
 TRAINING = (Case.of("sine_steer"), Case.of("dlc", speed_kmh=60.0))
@@ -143,3 +144,21 @@ def test_a_real_scheduler_and_worker_give_the_serial_result(tmp_path: Path, logs
         for process in reversed(processes):
             process.terminate()
             process.wait(timeout=30)
+
+
+def test_a_measured_sensor_noise_is_searched_only_near_its_value(saloon):
+    """The a_y and gyro noise identify measured for this car (R of the KF): within MEASURED_SPAN of
+    the file's value, not over the whole declared range (a dry-track tune had moved the a_y noise
+    60x); in a file not derived for its car, the whole range."""
+    text, config = saloon
+    assert measured_settings(config, "switching") == ("measurement_noise",)
+    noise = config.settings("switching")["measurement_noise"]
+    ranges = {d.index: (d.range.low, d.range.high) for d in dimensions(config, "switching")
+              if d.key == "measurement_noise"}
+    variances = [row[i] if isinstance(row, tuple) else row for i, row in enumerate(noise)]
+    assert ranges == {i: (v / MEASURED_SPAN, v * MEASURED_SPAN) for i, v in enumerate(variances)}
+    copied = parse_vehicle(text.replace(f'derived_for = "{config.derived_for}"', 'derived_for = "00000000"'),
+                           "copied.toml", "rwd_saloon")
+    full = DEFINITIONS["switching"].tunable["measurement_noise"]
+    assert {(d.range.low, d.range.high) for d in dimensions(copied, "switching")
+            if d.key == "measurement_noise"} == {(full.low, full.high)}

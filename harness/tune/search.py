@@ -9,7 +9,8 @@ asking a fixed batch of candidates at a time, so the candidates and their scores
 whether the runs went serially, to a local cluster or to a remote scheduler
 (:mod:`harness.jobs.pool`). Around it:
 
-* only the settings whose regime the training logs cover are searched (:mod:`.coverage`);
+* only the settings whose regime the training logs cover are searched (:mod:`.coverage`), and a
+  sensor noise ``identify`` measured for this car only within MEASURED_SPAN of its value;
 * candidates are ranked by :mod:`.objective` (silent candidates rejected, mean and worst log, a
   prior towards the base settings);
 * leave-one-log-out cross-validation of the whole choice: for each training log, the candidate
@@ -22,7 +23,7 @@ whether the runs went serially, to a local cluster or to a remote scheduler
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -49,6 +50,11 @@ what a sideslip estimator is specified for, and a few seconds of it would decide
 DEGREES = 180.0 / np.pi
 HARM_MARGIN = 0.05
 """Worse than the base by more than this share is harm."""
+MEASURED_SPAN = 4.0
+"""A sensor-noise setting ``identify`` measured for this car (a ``Definition.derived`` setting of
+``*_noise`` quantities, in a file whose ``derived_for`` is its [vehicle]'s fingerprint) is searched
+only within this factor of its value (2x in sigma for a variance): a Kalman filter's R may absorb
+some model error, it may not replace a measurement (a dry-track tune had moved the a_y noise 60x)."""
 
 
 class TuneError(ValueError):
@@ -112,10 +118,19 @@ def prepare(config: VehicleConfig, name: str, logs: Sequence[Log]) -> list[Score
     return prepared
 
 
+def measured_settings(config: VehicleConfig, name: str) -> tuple[str, ...]:
+    """The settings of ``name`` that hold sensor noises ``identify`` measured for this car."""
+    if config.derived_for != config.vehicle_fingerprint():
+        return ()
+    return tuple(key for key, rule in DEFINITIONS[name].derived.items()
+                 if all(quantity.endswith("_noise") for quantity in rule.quantities))
+
+
 def dimensions(config: VehicleConfig, name: str, frozen: Sequence[str] = ()) -> list[Dimension]:
     """Every number ``tune`` searches for ``name``: its tunable settings (but ``frozen``), list
-    entries and matrix diagonals one by one."""
+    entries and matrix diagonals one by one; a measured noise within MEASURED_SPAN of its value."""
     settings = config.settings(name)
+    measured = measured_settings(config, name)
     dims = []
     for key, tunable in DEFINITIONS[name].tunable.items():
         if not tunable.applies(settings) or key in frozen:
@@ -125,7 +140,10 @@ def dimensions(config: VehicleConfig, name: str, frozen: Sequence[str] = ()) -> 
             dims += [Dimension(key, i, tunable) for i in range(len(value))]
         else:
             dims.append(Dimension(key, None, tunable))
-    return dims
+    base = base_point(config, name, dims)
+    return [replace(d, range=replace(d.range, low=max(d.range.low, base[d.label] / MEASURED_SPAN),
+                                     high=min(d.range.high, base[d.label] * MEASURED_SPAN)))
+            if d.key in measured else d for d in dims]
 
 
 def base_point(config: VehicleConfig, name: str, dims: Sequence[Dimension]) -> dict[str, float]:
