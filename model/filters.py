@@ -67,6 +67,15 @@ def whole_samples(duration, T: float):
     return ca.floor(duration / T + 0.5)
 
 
+def held_flag(left, raised, active, duration, T: float):
+    """(samples left, flag) of a 0/1 flag ``raised`` held for ``duration`` (s, a number or a
+    calibration symbol; N = :func:`whole_samples`) after it was last 1: the count restarts at N
+    while raised and counts down on ``active`` samples (a holding estimator holds it)."""
+    samples = whole_samples(duration, T)
+    counted = raised * samples + (1 - raised) * ca.fmax(left - 1, 0)
+    return ca.if_else(active, counted, left), raised + (1 - raised) * active * (left > 0)
+
+
 def low_pass(previous, value, time_constant, T: float, sampled=None):
     """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / time_constant)) (x_k -
     y_k-1); with a 0/1 flag ``sampled``, the step is taken only where it is 1 (held elsewhere;

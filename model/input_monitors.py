@@ -14,7 +14,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import crosscheck, frozen, signals, status, wheel_yaw
-from vsegen.model.filters import whole_samples
+from vsegen.model.filters import held_flag
 from vsegen.model.layout import Layout
 from vsegen.model.schema import nonnegative
 from vsegen.model.signals import Signal
@@ -92,14 +92,7 @@ def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_setting
                                                                       sample_time, vehicle)
         updates |= checked
     if recovers(numeric_settings, inputs):
-        updates[RECOVERY_STATE.name], raised[status.INPUT_FROZEN] = recovery(
-            s[RECOVERY_STATE.name], raised.get(status.INPUT_FROZEN, ca.SX(0)), active, settings, sample_time)
+        updates[RECOVERY_STATE.name], raised[status.INPUT_FROZEN] = held_flag(
+            s[RECOVERY_STATE.name], raised.get(status.INPUT_FROZEN, ca.SX(0)), active, settings["frozen_recovery"],
+            sample_time)
     return updates, sum((bit * flag for bit, flag in raised.items()), ca.SX(0))
-
-
-def recovery(left, frozen_now, active, settings, sample_time: float) -> tuple[ca.SX, ca.SX]:
-    """(samples left, INPUT_FROZEN): raised now, or within ``frozen_recovery`` of the last sample
-    it was (N = frozen_recovery / T whole samples, counted down on active samples)."""
-    samples = whole_samples(settings["frozen_recovery"], sample_time)
-    counted = frozen_now * samples + (1 - frozen_now) * ca.fmax(left - 1, 0)
-    return ca.if_else(active, counted, left), frozen_now + (1 - frozen_now) * active * (left > 0)

@@ -16,7 +16,13 @@ low-pass, held between samples,
     m_k = m_k-1 + (1 - exp(-T / wheel_check_time)) (r - r_w - m_k-1),
 
 and |m| > ``wheel_check_limit`` raises status YAW_RATE_MISMATCH: a gyro offset or drift, a frozen
-or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. An estimator has
+or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. A yaw-rate *scale*
+error (a DBC factor typed 0.013 for 0.01) makes m proportional to r, small where the car yaws
+little; so, with ``wheel_check_scale`` > 0, the mean wheel yaw rate n (|r_w| low-passed alike) is
+kept too, and |m| > wheel_check_scale n also raises the bit where n >= ``wheel_check_scale_rate``
+(a steered front axle over-reads r by up to 10 % at 4 m/s^2, a gyro on a pitching body under-reads
+it over a crest: 0.2 of n stays clear of both). The bit stays raised ``wheel_check_hold`` s after
+it fell (m passes 0 whenever r does, while an estimate that integrated the wrong r recovers). An estimator has
 the check when it reads that axle's wheel speeds (the UKFs in their "wheel_speeds" mode) and
 ``wheel_check_limit`` > 0; a holding estimator holds it. Every estimator with the input monitors can
 be given the wheel speeds: switching the check on adds a_x and that axle's wheel speeds to its inputs
@@ -28,7 +34,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model.filters import low_pass
+from vsegen.model.filters import held_flag, low_pass
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -42,9 +48,20 @@ FIELDS = (
     positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean", default=0.2),
     positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
              "(no braking or drive torque to make the wheels slip)", default=1.0),
+    nonnegative("wheel_check_scale", "-", "beyond the papers: the yaw-rate check's mean beyond this "
+                "share of the mean |wheel yaw rate| also raises YAW_RATE_MISMATCH (a yaw-rate scale "
+                "typed wrong); 0 = off", default=0.0),
+    positive("wheel_check_scale_rate", "rad/s", "the share test (wheel_check_scale) judges only where "
+             "the mean |wheel yaw rate| is at least this", default=0.1),
+    nonnegative("wheel_check_hold", "s", "YAW_RATE_MISMATCH stays raised this long after the yaw-rate "
+                "check's means agree again, while the estimate recovers from the wrong yaw rate; "
+                "0 = off", default=0.0),
 )
 STATE = Signal("wheel_yaw_residual", "rad/s", "yaw-rate check: mean of r minus the non-driven wheels' "
                                               "yaw rate")
+RATE = Signal("wheel_yaw_rate", "rad/s", "yaw-rate check: mean |non-driven wheels' yaw rate| "
+                                         "(wheel_check_scale)")
+HOLD = Signal("wheel_yaw_hold_left", "-", "samples YAW_RATE_MISMATCH stays raised (wheel_check_hold)")
 
 
 def wheels(numeric_settings) -> tuple[str, str]:
@@ -66,8 +83,11 @@ def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
 
 
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
-    """The check's state entry (0 at init), none when it is off."""
-    return (STATE,) if enabled(numeric_settings, inputs) else ()
+    """The check's state entries (0 at init), none when it is off."""
+    if not enabled(numeric_settings, inputs):
+        return ()
+    return (STATE, *((RATE,) if numeric_settings["wheel_check_scale"] > 0.0 else ()),
+            *((HOLD,) if numeric_settings["wheel_check_hold"] > 0.0 else ()))
 
 
 def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float, vehicle) -> tuple[dict, ca.SX]:
@@ -77,5 +97,17 @@ def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: f
     wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
     rolling = ca.fabs(u["ax"]) <= settings["wheel_check_ax"]
     residual = low_pass(s[STATE.name], u["r"] - wheel_yaw_rate, settings["wheel_check_time"], sample_time, rolling)
-    return ({STATE.name: ca.if_else(active, residual, s[STATE.name])},
-            active * (ca.fabs(residual) > settings["wheel_check_limit"]))
+    updates = {STATE.name: residual}
+    raised = ca.fabs(residual) > settings["wheel_check_limit"]
+    if numeric_settings["wheel_check_scale"] > 0.0:      # a scale error: m grows with the yaw rate
+        rate = low_pass(s[RATE.name], ca.fabs(wheel_yaw_rate), settings["wheel_check_time"], sample_time, rolling)
+        updates[RATE.name] = rate
+        yawing = rate >= settings["wheel_check_scale_rate"]
+        scaled = yawing * (ca.fabs(residual) > settings["wheel_check_scale"] * rate)
+        raised = raised + scaled - raised * scaled
+    updates = {name: ca.if_else(active, value, s[name]) for name, value in updates.items()}
+    if numeric_settings["wheel_check_hold"] > 0.0:
+        updates[HOLD.name], flag = held_flag(s[HOLD.name], active * raised, active, settings["wheel_check_hold"],
+                                             sample_time)
+        return updates, flag
+    return updates, active * raised

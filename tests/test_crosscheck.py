@@ -119,7 +119,7 @@ def test_the_yaw_rate_is_checked_against_the_non_driven_wheels(car):
     does not."""
     config = _car(car)
     for scenario in (*UNDISTURBED, "banked_curve", "low_speed"):
-        for name in ("ukf", "switching"):
+        for name in ("ukf", "switching", "ekf_rls"):
             assert _raised(config, name, Case.of(scenario), YAW_RATE_MISMATCH).size == 0, (name, scenario)
     frozen = _raised(config, "aukf", Case.of("dlc", freeze="r:3:1.5"), YAW_RATE_MISMATCH)
     assert frozen.size and 3.0 < frozen[0] <= 4.0
@@ -130,17 +130,20 @@ def test_the_yaw_rate_is_checked_against_the_non_driven_wheels(car):
 
 @pytest.mark.parametrize("car", CARS)
 @pytest.mark.parametrize("factor", [1.3, 1 / 1.3])
-def test_a_yaw_rate_scale_typed_wrong_leaves_switching_silent_for_no_longer_than_allowed(car, factor):
+@pytest.mark.parametrize("name", ["switching", "ekf_rls"])
+def test_a_yaw_rate_scale_typed_wrong_is_never_silent_for_longer_than_allowed(car, factor, name):
     """A DBC whose yaw-rate factor is 0.013 instead of 0.01 (or the reverse): the unit check only
     notes it (tests/test_unit_sanity.py). Before the wheel check, switching's kinematic integrator was
-    3-4.7 deg off with status 0 for 0.60-0.91 s on the DLC (seeds 1-3, both cars)."""
+    3-4.7 deg off with status 0 for 0.60-0.91 s on the DLC (seeds 1-3, both cars), ekf_rls for up to
+    0.47 s there and 4.5 s on the step steer; both now flag YAW_RATE_MISMATCH (the share test)."""
     config = _car(car)
-    for seed in (1, 2, 3):
-        log = Case.of("dlc").simulate(config, 1.0 / config.sample_time, seed)
-        typo = Log({**log.columns, "r": log["r"] * factor}, "typo.csv")
-        estimates = run_estimator(config, "switching", typo)
-        assert silent_error_time(typo, estimates)[0] <= SILENT_DURATION, seed
-        assert np.any(estimates["status"].astype(int) & YAW_RATE_MISMATCH), seed
+    for case in (Case.of("dlc"), Case.of("step_steer")):
+        for seed in (1, 2, 3):
+            log = case.simulate(config, 1.0 / config.sample_time, seed)
+            typo = Log({**log.columns, "r": log["r"] * factor}, "typo.csv")
+            estimates = run_estimator(config, name, typo)
+            assert silent_error_time(typo, estimates)[0] <= SILENT_DURATION, (case, seed)
+            assert np.any(estimates["status"].astype(int) & YAW_RATE_MISMATCH), (case, seed)
 
 
 def test_the_yaw_rate_check_is_where_it_is_on_and_brings_its_inputs(config):
@@ -149,6 +152,7 @@ def test_the_yaw_rate_check_is_where_it_is_on_and_brings_its_inputs(config):
     assert "wheel_yaw_residual" in build("ukf", config).states.names
     assert "wheel_yaw_residual" not in build("kf2dof", config).states.names
     assert build("kf2dof", config).inputs.names == ("delta", "vx", "ay", "r")
+    assert build("ekf_rls", config).inputs.names == ("delta", "vx", "ax", "ay", "r", "omega_rl", "omega_rr")
     switching = build("switching", config)
     assert "wheel_yaw_residual" in switching.states.names
     assert switching.inputs.names == ("delta", "vx", "ax", "ay", "r", "omega_rl", "omega_rr")

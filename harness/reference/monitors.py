@@ -49,7 +49,10 @@ def states(settings, inputs) -> tuple[str, ...]:
     if _crosschecked(settings, inputs):
         checks = ("steady_delta", "steady_samples",
                   *(name for key, names in CHECKS.items() if _on(settings, key) for name in names))
-    wheels = ("wheel_yaw_residual",) if _wheel_checked(settings, inputs) else ()
+    wheels = ()
+    if _wheel_checked(settings, inputs):
+        wheels = ("wheel_yaw_residual", *(("wheel_yaw_rate",) if _on(settings, "wheel_check_scale") else ()),
+                  *(("wheel_yaw_hold_left",) if _on(settings, "wheel_check_hold") else ()))
     recovery = ("frozen_recovery_left",) if _recovers(settings, inputs) else ()
     return (*blocks.frozen_states(settings, inputs), *checks, *wheels, *recovery)
 
@@ -75,20 +78,44 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
         checked, flags = _crosschecks(x, u, settings, T, vehicle["wheelbase"])
         new, code = new | checked, code | flags
     if _wheel_checked(settings, inputs):        # r against the free-rolling axle's speed difference
-        left, right = _wheel_axle(settings)
-        steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
-        wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
-        residual = x["wheel_yaw_residual"]
-        if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
-            residual = blocks.low_pass(residual, u["r"] - wheel_yaw_rate, T, settings["wheel_check_time"])
-        new["wheel_yaw_residual"] = residual
-        code |= blocks.YAW_RATE_MISMATCH if abs(residual) > settings["wheel_check_limit"] else 0
+        checked, mismatch = _wheel_check(x, u, settings, T, vehicle)
+        new, code = new | checked, code | (blocks.YAW_RATE_MISMATCH if mismatch else 0)
     if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
-        left, frozen = x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN)
-        samples = blocks.whole_samples(settings["frozen_recovery"], T)
-        new["frozen_recovery_left"] = samples if frozen else max(left - 1, 0.0)
-        code |= blocks.INPUT_FROZEN if left > 0 else 0
+        new["frozen_recovery_left"], frozen = _held(x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN),
+                                                    settings["frozen_recovery"], T)
+        code |= blocks.INPUT_FROZEN if frozen else 0
     return new, code
+
+
+def _held(left: float, raised: bool, duration: float, T: float) -> tuple[float, bool]:
+    """(samples left, flag): a flag held ``duration`` s after it was last raised."""
+    return (blocks.whole_samples(duration, T) if raised else max(left - 1, 0.0)), raised or left > 0
+
+
+def _wheel_check(x, u, settings, T: float, vehicle) -> tuple[dict, bool]:
+    """(new entries, YAW_RATE_MISMATCH) of the yaw rate against the non-driven axle's wheel yaw rate
+    r_w (model.wheel_yaw): the mean of r - r_w beyond the limit, or beyond a share of the mean
+    |r_w| where that is large enough, held a while after."""
+    left, right = _wheel_axle(settings)
+    steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
+    wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
+    new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
+    if _on(settings, "wheel_check_scale"):
+        new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
+    if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+        new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
+                                                    settings["wheel_check_time"])
+        if _on(settings, "wheel_check_scale"):
+            new["wheel_yaw_rate"] = blocks.low_pass(new["wheel_yaw_rate"], abs(wheel_yaw_rate), T,
+                                                    settings["wheel_check_time"])
+    residual = abs(new["wheel_yaw_residual"])
+    mismatch = residual > settings["wheel_check_limit"]
+    if _on(settings, "wheel_check_scale") and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]:
+        mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
+    if _on(settings, "wheel_check_hold"):
+        new["wheel_yaw_hold_left"], mismatch = _held(x["wheel_yaw_hold_left"], mismatch,
+                                                     settings["wheel_check_hold"], T)
+    return new, mismatch
 
 
 def _recovers(settings, inputs) -> bool:
