@@ -69,9 +69,9 @@ COPING = [
     "still while the car turns (2048 INPUT_FROZEN), a_y against r·v_x in quasi-steady driving "
     "(8192 LATERAL_INCONSISTENT: a bank or an offset), the steering-angle zero learned in straight "
     "driving (16384 STEERING_OFFSET), and where it reads wheel speeds (ukf, aukf) or is given them "
-    "for the check (switching, whose kinematic integrator trusts r most) the yaw rate against the "
-    "non-driven wheels (32768 YAW_RATE_MISMATCH: a gyro offset, drift or a yaw-rate scale typed "
-    "wrong in a DBC); ekf_rls learns no stiffness while "
+    "for the check (switching and ekf_rls, which integrate r) the yaw rate against the non-driven "
+    "wheels (32768 YAW_RATE_MISMATCH: a gyro offset, drift or a yaw-rate scale typed wrong in a "
+    "DBC); ekf_rls learns no stiffness while "
     "any of them is raised;",
     "* switching and fusion learn the kinematic offset c of a bank or an accelerometer offset in "
     "near-straight driving, integrate a_y − r·v_x − c and let their KF take 0.4 c off its a_y "

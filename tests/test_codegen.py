@@ -14,7 +14,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 import pytest
-from locations import GENERATED
+from locations import GENERATED, REPO
 
 from vsegen.codegen.generate import render
 from vsegen.codegen.kernel import function_span, kernel_options
@@ -134,6 +134,35 @@ def test_cross_builds_within_budget(config, target, name):
     text, stack = BUDGETS.get(name, (16384, 1024))
     assert 0 < report.text < text and report.data == 0 and report.bss == 0
     assert 0 < report.stack_step < stack and 0 < report.stack_init < 1024
+    _assert_documented(name, target, "baked", report)
+
+
+def _documented_sizes() -> dict[tuple[str, str, str, str], list[str]]:
+    """docs/integration.md's size table (`vsegen size` of the default car): by (estimator, target,
+    real, params), the cells .text, .data, .bss, stack init, stack step, libm calls."""
+    rows = {}
+    for line in (REPO / "docs" / "integration.md").read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 10 and cells[1].startswith("cortex-"):
+            rows[tuple(cells[:4])] = cells[4:]
+    return rows
+
+
+def _assert_documented(name: str, target, params: str, report) -> None:
+    """The size table of docs/integration.md gives this build's figures, if it lists it."""
+    row = _documented_sizes().get((name, target.name, target.real, params))
+    measured = [str(v) for v in (report.text, report.data, report.bss, report.stack_init, report.stack_step)]
+    assert row is None or row == [*measured, ", ".join(report.library_calls)], (
+        f"docs/integration.md's size row of {name} {target.name} {params} is stale: measured {measured}")
+
+
+@pytest.mark.parametrize("name", ["kf2dof", "switching"])
+@pytest.mark.parametrize("target", TARGETS, ids=[t.name for t in TARGETS])
+def test_the_documented_calibratable_sizes_are_measured(config, target, name):
+    if not available(target):
+        _require(target.compiler)
+    report = build_for_target(render(config, name, target.real, "calibratable"), name, target)
+    _assert_documented(name, target, "calibratable", report)
 
 
 def test_memory_discipline_violations_are_caught(config):
