@@ -66,7 +66,7 @@ def test_switching_continuous_dlc_stays_within_1_5_times_its_undisturbed_rmse(ca
 @pytest.mark.slow
 def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
     """Every disturbance x core manoeuvre and road scenario x sideslip estimator x both cars (the
-    matrix of bench.robustness, 944 runs): no stretch over SILENT_DURATION with |beta error| > 2 deg
+    matrix of bench.robustness, 992 runs): no stretch over SILENT_DURATION with |beta error| > 2 deg
     and status 0 before a spin."""
     runs = matrix()
     with DaskPool(None) as cluster:
