@@ -34,10 +34,13 @@ class Guard:
     active: ca.SX
     status: ca.SX
     low_speed: ca.SX
+    monitored: tuple[str, ...] = ()
+    """Inputs only an input monitor reads: judged, but they do not decide whether the estimator
+    holds."""
 
 
 def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
-                vx_resume: float, held_before: ca.SX) -> Guard:
+                vx_resume: float, held_before: ca.SX, monitored: tuple[str, ...] = ()) -> Guard:
     """Plausibility of every input, activity and status bits for one sample.
 
     Args:
@@ -46,13 +49,16 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
         vx_min, vx_resume: low-speed limit and resume speed (m/s).
         held_before: non-zero if the estimator held at the previous sample (its ``holding``,
             ``hold_reason`` or ``low_speed_hold`` state entry), else 0.
+        monitored: inputs only an input monitor reads (the yaw-rate check's wheel speeds): an
+            implausible one neither holds the estimator nor raises INVALID_INPUT; the monitor
+            skips the sample (``model.wheel_yaw``).
     """
     plausible = plausibility(inputs, limits)
-    all_plausible = _all(plausible.values())
+    all_plausible = _all(flag for name, flag in plausible.items() if name not in monitored)
     vx = inputs["vx"]
     low_speed = plausible["vx"] * _either(vx < vx_min, (held_before > 0) * (vx < vx_resume))
     active = all_plausible * (1 - low_speed)
-    return Guard(plausible, active, _status(all_plausible, low_speed), low_speed)
+    return Guard(plausible, active, _status(all_plausible, low_speed), low_speed, monitored)
 
 
 def _status(all_plausible: ca.SX, low_speed: ca.SX) -> ca.SX:
@@ -92,12 +98,14 @@ class Decisions:
 def symbolic(guard: Guard) -> tuple[Guard, Decisions]:
     """``guard`` with its decisions replaced by symbols (its status written with them), and the
     :class:`Decisions` that give them their values."""
-    plausible = {name: ca.SX.sym(f"plausible_{name}") for name in guard.plausible}
+    decisive = [name for name in guard.plausible if name not in guard.monitored]
+    symbols = {name: ca.SX.sym(f"plausible_{name}") for name in decisive}
     low_speed, active = ca.SX.sym("low_speed"), ca.SX.sym("active")
-    code = _status(_all(plausible.values()), low_speed)
-    return (Guard(plausible, active, code, low_speed),
-            Decisions(ca.vertcat(*plausible.values(), low_speed, active),
-                      ca.vertcat(*guard.plausible.values(), guard.low_speed, guard.active)))
+    code = _status(_all(symbols.values()), low_speed)
+    plausible = {name: symbols.get(name, flag) for name, flag in guard.plausible.items()}
+    return (Guard(plausible, active, code, low_speed, guard.monitored),
+            Decisions(ca.vertcat(*symbols.values(), low_speed, active),
+                      ca.vertcat(*(guard.plausible[name] for name in decisive), guard.low_speed, guard.active)))
 
 
 def plausibility(inputs: Mapping[str, ca.SX], limits: Mapping[str, float]) -> dict[str, ca.SX]:
@@ -125,11 +133,12 @@ def _all(flags) -> ca.SX:
 
 
 def first_sample(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min: float,
-                 vx_resume: float) -> tuple[dict[str, ca.SX], ca.SX]:
+                 vx_resume: float, monitored: tuple[str, ...] = ()) -> tuple[dict[str, ca.SX], ca.SX]:
     """Sample 0 for an estimator's ``init``: every implausible input replaced by a neutral value
-    (vx by vx_min), and the initial ``holding`` flag: 0 only if every input is plausible and
-    vx >= vx_resume (an estimator starts only above the resume speed)."""
-    guard = input_guard(inputs, limits, vx_resume, vx_resume, ca.SX(1))
+    (vx by vx_min), and the initial ``holding`` flag: 0 only if every input (but the ``monitored``
+    ones, :func:`input_guard`) is plausible and vx >= vx_resume (an estimator starts only above the
+    resume speed)."""
+    guard = input_guard(inputs, limits, vx_resume, vx_resume, ca.SX(1), monitored)
     values = {name: hold(value, guard.plausible[name], neutral(name, vx_min))
               for name, value in inputs.items()}
     return values, ca.if_else(guard.active, 0, 1)

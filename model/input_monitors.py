@@ -41,6 +41,12 @@ def inputs(method_inputs: tuple[str, ...], numeric_settings) -> Layout:
     return Layout(tuple(entry.signal for entry in signals.INPUTS if entry.name in wanted))
 
 
+def monitored_only(method_inputs: tuple[str, ...], numeric_settings) -> tuple[str, ...]:
+    """The inputs only the monitors read (``model.guard.input_guard``'s ``monitored``): an
+    implausible one does not hold the estimator."""
+    return tuple(name for name in inputs(method_inputs, numeric_settings).names if name not in method_inputs)
+
+
 def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
     """Whether an estimator reading ``inputs`` has any input monitor (structural)."""
     return (frozen.enabled(numeric_settings) or crosscheck.enabled(numeric_settings, inputs)
@@ -70,13 +76,14 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
             **({RECOVERY_STATE.name: ca.SX(0)} if recovers(numeric_settings, inputs) else {})}
 
 
-def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_settings,
-            sample_time: float, inputs: tuple[str, ...], vehicle) -> tuple[dict, ca.SX]:
+def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_settings, sample_time: float,
+            inputs: tuple[str, ...], vehicle, monitored: tuple[str, ...] = ()) -> tuple[dict, ca.SX]:
     """(new state entries, status code) of the monitors that are on, from the state entries
     ``s`` as they came in, the raw inputs ``u``, their plausibility flags and the guard's
     ``active`` flag (a holding estimator holds its monitors); ``settings`` the estimator's
     (numbers or calibration symbols), ``numeric_settings`` their numbers (which monitors exist),
-    ``vehicle`` the [vehicle] table (numbers or symbols)."""
+    ``vehicle`` the [vehicle] table (numbers or symbols), ``monitored`` the inputs the guard does
+    not decide on (:func:`monitored_only`: they may be implausible on an active sample)."""
     updates, raised = {}, {}
     if frozen.enabled(numeric_settings):
         updates, raised[status.INPUT_FROZEN] = frozen.monitor(s, u, plausible, active, settings,
@@ -88,8 +95,9 @@ def monitor(s: dict, u: dict, plausible: dict, active, settings, numeric_setting
         for bit, flag in flags.items():     # a bit two monitors raise counts once
             raised[bit] = flag + raised[bit] - flag * raised[bit] if bit in raised else flag
     if wheel_yaw.enabled(numeric_settings, inputs):
-        checked, raised[status.YAW_RATE_MISMATCH] = wheel_yaw.monitor(s, u, active, settings, numeric_settings,
-                                                                      sample_time, vehicle)
+        readable = {name: plausible[name] for name in monitored}
+        checked, raised[status.YAW_RATE_MISMATCH] = wheel_yaw.monitor(s, u, readable, active, settings,
+                                                                      numeric_settings, sample_time, vehicle)
         updates |= checked
     if recovers(numeric_settings, inputs):
         updates[RECOVERY_STATE.name], raised[status.INPUT_FROZEN] = held_flag(

@@ -35,6 +35,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model.filters import held_flag, low_pass
+from vsegen.model.guard import hold
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -90,12 +91,21 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
             *((HOLD,) if numeric_settings["wheel_check_hold"] > 0.0 else ()))
 
 
-def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float, vehicle) -> tuple[dict, ca.SX]:
-    """(new state entries, 1 while the yaw rates disagree); call only when :func:`enabled`."""
+def monitor(s: dict, u: dict, readable: dict, active, settings, numeric_settings, sample_time: float,
+            vehicle) -> tuple[dict, ca.SX]:
+    """(new state entries, 1 while the yaw rates disagree); call only when :func:`enabled`.
+    ``readable``: the plausibility flags of the inputs the estimator's guard does not decide on
+    (it does not hold for an input only this check reads); a sample where one of them is
+    implausible is skipped. The others are plausible on every active sample."""
     left, right = wheels(numeric_settings)
+    read = ("ax", left, right)
+    ok = {name: readable.get(name, 1) for name in read}
+    v = {name: hold(u[name], ok[name], 0) if name in readable else u[name] for name in read}
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
-    wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
-    rolling = ca.fabs(u["ax"]) <= settings["wheel_check_ax"]
+    wheel_yaw_rate = vehicle["wheel_radius"] * (v[right] - v[left]) / (vehicle["track_width"] * steer)
+    rolling = ca.fabs(v["ax"]) <= settings["wheel_check_ax"]
+    for name in readable:
+        rolling = rolling * ok[name]
     residual = low_pass(s[STATE.name], u["r"] - wheel_yaw_rate, settings["wheel_check_time"], sample_time, rolling)
     updates = {STATE.name: residual}
     raised = ca.fabs(residual) > settings["wheel_check_limit"]

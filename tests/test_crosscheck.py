@@ -21,7 +21,7 @@ from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import build
-from vsegen.model.status import INPUT_FROZEN, LATERAL_INCONSISTENT, STEERING_OFFSET, YAW_RATE_MISMATCH
+from vsegen.model.status import INPUT_FROZEN, INVALID_INPUT, LATERAL_INCONSISTENT, STEERING_OFFSET, YAW_RATE_MISMATCH
 
 CARS = ("c_class", "rwd_saloon")
 CHECKED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
@@ -172,3 +172,17 @@ def test_a_log_without_the_checked_wheel_speeds_runs_without_the_check(config, t
     assert "switching runs without its yaw-rate check: the log has no omega_rl, omega_rr" in result.stderr
     expected = run_estimator(config.with_settings("switching", wheel_check_limit=0.0), "switching", bare)
     np.testing.assert_array_equal(read_estimates(tmp_path / "est.csv")["beta"], expected["beta"])
+
+
+@pytest.mark.parametrize("name", ["switching", "ekf_rls"])
+def test_a_bad_wheel_speed_only_the_check_reads_never_holds_the_estimator(name):
+    """The saloon's invalid_inputs run (its front wheel speeds NaN at 6 s, 1e4 rad/s at 7 s): the
+    estimate is that of the same estimator without the check, sample for sample (the check only
+    adds status bits), and no wheel-speed fault raises INVALID_INPUT or holds it."""
+    config = _car("rwd_saloon")
+    log = Case.of("invalid_inputs").simulate(config, 1.0 / config.sample_time, 1)
+    checked = run_estimator(config, name, log)
+    unchecked = run_estimator(config.with_settings(name, wheel_check_limit=0.0), name, log)
+    np.testing.assert_array_equal(checked["beta"], unchecked["beta"])
+    wheel_faults = (np.abs(log["t"] - 6.0) < 1e-9) | (np.abs(log["t"] - 7.0) < 1e-9)
+    assert np.all(checked["status"][wheel_faults].astype(int) & INVALID_INPUT == 0)

@@ -220,19 +220,24 @@ def plausible(limits: Mapping[str, float], name: str, value: float) -> bool:
     return math.isfinite(value) and abs(value) <= limits[LIMIT_OF[name]]
 
 
-def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float, held_before: bool):
-    """(active, status, plausible-by-name) per the project's low-speed / invalid-input rule."""
+def hold_rule(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float, held_before: bool,
+              monitored: tuple[str, ...] = ()):
+    """(active, status, plausible-by-name) per the project's low-speed / invalid-input rule; the
+    ``monitored`` inputs (read only by an input monitor) are judged but do not hold."""
     ok = {name: plausible(limits, name, value) for name, value in inputs.items()}
+    valid = all(flag for name, flag in ok.items() if name not in monitored)
     vx = inputs["vx"]
     low = ok["vx"] and (vx < vx_min or (held_before and vx < vx_resume))
-    status = (0 if all(ok.values()) else INVALID_INPUT) | (LOW_SPEED if low else 0)
-    return all(ok.values()) and not low, status, ok
+    status = (0 if valid else INVALID_INPUT) | (LOW_SPEED if low else 0)
+    return valid and not low, status, ok
 
 
-def first_sample(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float):
+def first_sample(limits, inputs: Mapping[str, float], vx_min: float, vx_resume: float,
+                 monitored: tuple[str, ...] = ()):
     """(inputs with each implausible one replaced by 0, or vx by vx_min; initial holding flag):
-    an estimator starts active only if every input is plausible and vx >= vx_resume."""
-    active, _, ok = hold_rule(limits, inputs, vx_resume, vx_resume, True)
+    an estimator starts active only if every input (but the ``monitored``) is plausible and
+    vx >= vx_resume."""
+    active, _, ok = hold_rule(limits, inputs, vx_resume, vx_resume, True, monitored)
     values = {n: v if ok[n] else (vx_min if n == "vx" else 0.0) for n, v in inputs.items()}
     return values, 0.0 if active else 1.0
 

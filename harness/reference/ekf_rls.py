@@ -92,7 +92,7 @@ def _integral(beta_prev, T, vx, ax, ay, r):
 def init(config, u0):
     s, v = config.settings(TABLE), config.vehicle
     first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
-                                         s["vx_resume"])
+                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
     c0 = _c0_nominal(v)
     ay0 = blocks.roll_corrected(first["ay"], s["roll_gradient"])
     if s["stiffness"] == "rls":
@@ -116,7 +116,7 @@ def step(config, state, u):
     x = dict(zip(names, state))
     inputs = dict(zip(input_names(config), u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                          x["holding"] > 0.5)
+                                          x["holding"] > 0.5, monitors.monitored_only(INPUTS, s))
     if not active:
         held = dict(x, holding=1.0)
         return (np.array([held[k] for k in names]),

@@ -43,7 +43,7 @@ def _settings(config):
 def init(config, u0) -> np.ndarray:
     s = _settings(config)
     first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
-                                         s["vx_resume"])
+                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
     P0 = np.array(s["initial_covariance"])
     entries = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **monitors.initial(s, input_names(config), first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
@@ -59,7 +59,7 @@ def step(config, state, u):
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                         holding > 0.5)
+                                         holding > 0.5, monitors.monitored_only(INPUTS, s))
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])

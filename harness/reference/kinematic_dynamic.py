@@ -81,7 +81,7 @@ def check(measured, reference, band, last, rejections, timeout):
 def init(config, table, u0, extra: tuple[str, ...] = ()):
     s = config.settings(table)
     first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config, table), u0)), s["vx_min"],
-                                         s["vx_resume"])
+                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
     delta, vx, r = first["delta"], first["vx"], first["r"]
     ay = roll_corrected(config, table, first["ay"])
     b, a = prefilter(config, table)
@@ -168,7 +168,7 @@ def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
     x = dict(zip(names, state))
     inputs = dict(zip(input_names(config, table), u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                          x["holding"] > 0.5)
+                                          x["holding"] > 0.5, monitors.monitored_only(INPUTS, s))
     if not active:
         new = held(config, table, x, inputs, ok)
         return (np.array([new[k] for k in names]),

@@ -42,6 +42,11 @@ def inputs(method_inputs, settings) -> tuple[str, ...]:
     return tuple(name for name in COLUMNS if name in {*method_inputs, *checked})
 
 
+def monitored_only(method_inputs, settings) -> tuple[str, ...]:
+    """The inputs only the monitors read: an implausible one does not hold the estimator."""
+    return tuple(name for name in inputs(method_inputs, settings) if name not in method_inputs)
+
+
 def states(settings, inputs) -> tuple[str, ...]:
     """The state entries of the monitors that are on: the frozen-signal monitor's, then the
     cross-checks' (quasi-steady detector, then each check's that is on), the yaw-rate check's."""
@@ -78,7 +83,7 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
         checked, flags = _crosschecks(x, u, settings, T, vehicle["wheelbase"])
         new, code = new | checked, code | flags
     if _wheel_checked(settings, inputs):        # r against the free-rolling axle's speed difference
-        checked, mismatch = _wheel_check(x, u, settings, T, vehicle)
+        checked, mismatch = _wheel_check(x, u, ok, settings, T, vehicle)
         new, code = new | checked, code | (blocks.YAW_RATE_MISMATCH if mismatch else 0)
     if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
         new["frozen_recovery_left"], frozen = _held(x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN),
@@ -92,17 +97,19 @@ def _held(left: float, raised: bool, duration: float, T: float) -> tuple[float, 
     return (blocks.whole_samples(duration, T) if raised else max(left - 1, 0.0)), raised or left > 0
 
 
-def _wheel_check(x, u, settings, T: float, vehicle) -> tuple[dict, bool]:
+def _wheel_check(x, u, ok, settings, T: float, vehicle) -> tuple[dict, bool]:
     """(new entries, YAW_RATE_MISMATCH) of the yaw rate against the non-driven axle's wheel yaw rate
     r_w (model.wheel_yaw): the mean of r - r_w beyond the limit, or beyond a share of the mean
-    |r_w| where that is large enough, held a while after."""
+    |r_w| where that is large enough, held a while after; a sample with an implausible a_x or
+    wheel speed is skipped."""
     left, right = _wheel_axle(settings)
-    steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
-    wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
     new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
     if _on(settings, "wheel_check_scale"):
         new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
-    if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+    readable = ok["ax"] and ok[left] and ok[right]
+    if readable and abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+        steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
+        wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
         new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
                                                     settings["wheel_check_time"])
         if _on(settings, "wheel_check_scale"):

@@ -39,20 +39,25 @@ class Variant:
     table: str
     adaptive: bool
 
+    def method_inputs(self, config) -> tuple[str, ...]:
+        """What the model reads (every wheel speed in the wheel-speed mode)."""
+        wheels = WHEEL_SPEEDS if config.settings(self.table)["longitudinal_force"] == "wheel_speeds" else ()
+        return ("delta", "vx", "ax", "ay", "r", *wheels)
+
     def names(self, config):
         s = config.settings(self.table)
-        wheels = WHEEL_SPEEDS if s["longitudinal_force"] == "wheel_speeds" else ()
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
         monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
-        inputs = monitors.inputs(("delta", "vx", "ax", "ay", "r", *wheels), s)
+        inputs = monitors.inputs(self.method_inputs(config), s)
         return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *monitors.states(s, inputs),
                          "hold_reason"), OUTPUTS)
 
     def init(self, config, u0):
         s = config.settings(self.table)
         inputs = dict(zip(self.names(config)[0], u0))
-        first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"])
+        first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"],
+                                             monitors.monitored_only(self.method_inputs(config), s))
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
                  if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
@@ -67,7 +72,8 @@ class Variant:
         x = dict(zip(state_names, state))
         inputs = dict(zip(input_names, u))
         active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                              x["hold_reason"] > 0.5)
+                                              x["hold_reason"] > 0.5,
+                                              monitors.monitored_only(self.method_inputs(config), s))
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
             held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
             return (np.array([held[k] for k in state_names]),

@@ -128,10 +128,15 @@ def force_scales(vehicle) -> dict[str, float]:
     return scales
 
 
+def method_inputs(settings) -> tuple[str, ...]:
+    """What the model reads: with ``longitudinal_force = "wheel_speeds"`` also every wheel speed."""
+    wheels = settings["longitudinal_force"] == "wheel_speeds"
+    return (*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ()))
+
+
 def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for the configured longitudinal force and variant."""
-    wheels = settings["longitudinal_force"] == "wheel_speeds"
-    inputs = input_monitors.inputs((*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ())), settings)
+    inputs = input_monitors.inputs(method_inputs(settings), settings)
     scale = force_scales(vehicle)
     estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
     states = Layout((
@@ -259,12 +264,15 @@ class _Filter:
 def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     config = params.config
     settings = config.settings(name)
-    inputs_layout, states, outputs = layouts(params.numeric.settings(name), adaptive, params.numeric.vehicle)
+    numeric = params.numeric.settings(name)
+    inputs_layout, states, outputs = layouts(numeric, adaptive, params.numeric.vehicle)
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
+    monitored = input_monitors.monitored_only(method_inputs(numeric), numeric)
     sym = _Symbols(params, name, adaptive, settings, inputs_layout, states, outputs, state, kept, inputs, u,
-                   input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["hold_reason"]),
-                   consistency.enabled(params.numeric.settings(name)))
+                   input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["hold_reason"],
+                               monitored),
+                   consistency.enabled(numeric))
     init_state = _initial_state(sym)
     start = _restarted_after_low_speed(sym, init_state)
     return _step(sym, init_state, start)
@@ -273,7 +281,8 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
 def _initial_state(sym: _Symbols) -> ca.SX:
     """The state at the first sample: [vx_0, 0, ...], P_0, q_0 = 0, Q_0, the monitor at rest."""
     config, settings = sym.params.config, sym.settings
-    first, holding = first_sample(sym.u, config.limits, settings["vx_min"], settings["vx_resume"])
+    first, holding = first_sample(sym.u, config.limits, settings["vx_min"], settings["vx_resume"],
+                                  sym.guard.monitored)
     vx0 = model_speed(first["vx"], settings["vx_min"], config.limits["vx_max"])
     Q0 = ca.vertcat(*settings["process_noise"])
     P0 = settings["initial_covariance"]
@@ -392,7 +401,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
         extra = {**extra, **check.updates}
     stuck, flags = input_monitors.monitor(kept, u, guard.plausible, active, settings,    # from the state as it came in
                                           sym.params.numeric.settings(sym.name), sym.params.config.sample_time,
-                                          sym.inputs_layout.names, sym.params.config.vehicle)
+                                          sym.inputs_layout.names, sym.params.config.vehicle, guard.monitored)
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, **stuck, "hold_reason": ca.SX(0)})

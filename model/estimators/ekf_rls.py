@@ -335,14 +335,14 @@ def build(params: Parameters) -> Estimator:
     in_layout = input_layout(choices)
     inputs, u = in_layout.symbols("input")
     guard, decisions = symbolic(input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
-                                            s["holding"]))
+                                            s["holding"], input_monitors.monitored_only(METHOD_INPUTS, choices)))
     ok = guard.plausible
     delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
     vx_min = settings["vx_min"]
     vx = model_speed(hold(u["vx"], ok["vx"], vx_min), vx_min, config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
     monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
-                                      in_layout.names, config.vehicle)
+                                      in_layout.names, config.vehicle, guard.monitored)
     stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=monitors[1] > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
     next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, monitors)
@@ -484,7 +484,8 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
     stiffness, the filters at sample 0."""
     vehicle = config.vehicle
     c0_nom = nominal_c0(vehicle)
-    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"])
+    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"],
+                                  input_monitors.monitored_only(METHOD_INPUTS, choices))
     ay0 = roll_corrected(first["ay"], settings["roll_gradient"])
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])

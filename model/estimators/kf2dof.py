@@ -182,7 +182,8 @@ def build(params: Parameters) -> Estimator:
     state, s = layout.symbols("state")
     in_layout = input_layout(params.numeric.settings(NAME))
     inputs, u = in_layout.symbols("input")
-    guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"]))
+    monitor_only = input_monitors.monitored_only(METHOD_INPUTS, params.numeric.settings(NAME))
+    guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"], monitor_only))
     ok = guard.plausible
     result = update(
         x=ca.vertcat(s["vy"], s["r"]),
@@ -203,7 +204,7 @@ def build(params: Parameters) -> Estimator:
         ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
         status.BEYOND_LINEAR_RANGE, 0)
     monitor, flags = input_monitors.monitor(s, u, ok, active, settings, params.numeric.settings(NAME),
-                                            config.sample_time, in_layout.names, config.vehicle)
+                                            config.sample_time, in_layout.names, config.vehicle, monitor_only)
     code = code + flags
     if monitored:
         check = consistency.monitor(s, result["innovation"], settings, config.sample_time)
@@ -224,7 +225,7 @@ def build(params: Parameters) -> Estimator:
         "status": code,
     })
 
-    first, holding = first_sample(u, limits, vx_min, vx_resume)
+    first, holding = first_sample(u, limits, vx_min, vx_resume, monitor_only)
     init_state = layout.pack({
         "vy": ca.SX(0),
         "r": first["r"],

@@ -142,6 +142,7 @@ class KinematicDynamic:
         self.n_median = window(params, table)
         self.extra = extra
         self.inputs = kf2dof.input_layout(params.numeric.settings(table))
+        self.monitored = input_monitors.monitored_only(kf2dof.METHOD_INPUTS, params.numeric.settings(table))
         """The input layout: the KF's inputs and what the input monitors read beside them."""
         self.monitors = input_monitors.states(params.numeric.settings(table), self.inputs.names)
         self.layout = states(self.n_median, extra, self.monitors)
@@ -161,7 +162,7 @@ class KinematicDynamic:
 
     def guard(self, s: dict, u: dict) -> Guard:
         """The input guard of the sample (``model.guard.input_guard``)."""
-        return input_guard(u, self.params.config.limits, self.vx_min, self.vx_resume, s["holding"])
+        return input_guard(u, self.params.config.limits, self.vx_min, self.vx_resume, s["holding"], self.monitored)
 
     def preprocess(self, s: dict, u: dict, guard: Guard | None = None) -> Preprocessed:
         """Filters and reliability checks of the sample, under ``guard`` (default: its
@@ -191,7 +192,7 @@ class KinematicDynamic:
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
         monitor, flags = input_monitors.monitor(s, u, ok, active, settings,
                                                 self.params.numeric.settings(self.table), self.T,
-                                                self.inputs.names, self.params.config.vehicle)
+                                                self.inputs.names, self.params.config.vehicle, self.monitored)
         code = code + flags
 
         def keep(name, value):
@@ -232,7 +233,7 @@ class KinematicDynamic:
     def initial_state(self, u: dict) -> ca.SX:
         """§2.9: filters at their DC steady state for sample 0, r_last = r_0 if inside the band of
         r_ref,0 else r_ref,0, KF at [0, r_0] with P_0, previous inputs = sample 0."""
-        first, holding = first_sample(u, self.params.config.limits, self.vx_min, self.vx_resume)
+        first, holding = first_sample(u, self.params.config.limits, self.vx_min, self.vx_resume, self.monitored)
         ay0, r0, delta0, vx0 = self.roll_corrected(first["ay"]), first["r"], first["delta"], first["vx"]
         r_ref0 = reference_yaw_rate(self.params, delta0, self.speed(vx0))
         r_last0 = ca.if_else(ca.fabs(r0 - r_ref0) <= self.settings["yaw_rate_band"], r0, r_ref0)

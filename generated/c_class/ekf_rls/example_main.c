@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 674c006b0aaecce2bf4cc6bf3ee4bf6212fec1d76e27bdb2b32fb5de229c1912
- * Operations: step 649, init 126 (CasADi SX instructions).
+ * Operations: step 647, init 117 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 674c006b0aaecce2bf4cc6bf3ee4bf6212fec1d76e27bdb2b32fb5de229c1912
- * Operations: step 649, init 126 (CasADi SX instructions).
+ * Operations: step 647, init 117 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -43,7 +43,7 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
 {
     casadi_real u[7];
     casadi_real y[8];
-    casadi_real decisions[9];
+    casadi_real decisions[7];
     casadi_int iw = 0;    /* the SX kernel uses no work vectors; valid pointers, never read */
     casadi_real w = 0.0;
     const casadi_real *arg[3];
@@ -64,14 +64,14 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
      * it writes any of it (codegen.kernel): they step the caller's state in place. The guard
      * writes every decision; the one this function reads is set first for static analysers
      * (cppcheck uninitvar) */
-    decisions[8] = 0.0;
+    decisions[6] = 0.0;
     arg[0] = state->x;
     arg[1] = u;
     res[0] = decisions;
     (void)vse_ekf_rls_kernel_guard(arg, res, &iw, &w, 0);
     res[0] = state->x;
     res[1] = y;
-    if (decisions[8] > 0.0) {
+    if (decisions[6] > 0.0) {
         (void)vse_ekf_rls_kernel_active(arg, res, &iw, &w, 0);
     } else {
         arg[2] = decisions;

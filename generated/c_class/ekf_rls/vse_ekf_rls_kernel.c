@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 674c006b0aaecce2bf4cc6bf3ee4bf6212fec1d76e27bdb2b32fb5de229c1912
- * Operations: step 649, init 126 (CasADi SX instructions).
+ * Operations: step 647, init 117 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -172,15 +172,6 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=(a08*a06);
   a08=(a08*a11);
   a08=(a08*a02);
-  a02=arg[0][5];
-  a02=casadi_fabs(a02);
-  a12=400.;
-  a02=(casadi_real)(a02<=a12);
-  a08=(a08*a02);
-  a02=arg[0][6];
-  a02=casadi_fabs(a02);
-  a02=(casadi_real)(a02<=a12);
-  a08=(a08*a02);
   a02=3.5000000000000000e+00;
   a13=(casadi_real)(a13<a02);
   a02=(2.*a13);
@@ -225,7 +216,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_init: 126 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_init: 117 operations (CasADi SX instructions)
  * arg[0] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
  * res[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
@@ -238,69 +229,58 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_init(const casadi_real** arg, casadi
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_guard:(state[40],input[7])->(decisions[9]) */
+/* vse_ekf_rls_kernel_guard:(state[40],input[7])->(decisions[7]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  a00=arg[1][0];
-  a00=casadi_fabs(a00);
-  a01=1.;
-  a00=(casadi_real)(a00<=a01);
-  res[0][0]=a00;
-  a02=arg[1][1];
-  a03=casadi_fabs(a02);
-  a04=90.;
-  a03=(casadi_real)(a03<=a04);
-  res[0][1]=a03;
-  a04=arg[1][2];
-  a04=casadi_fabs(a04);
-  a05=30.;
-  a04=(casadi_real)(a04<=a05);
-  res[0][2]=a04;
-  a06=arg[1][3];
-  a06=casadi_fabs(a06);
-  a06=(casadi_real)(a06<=a05);
-  res[0][3]=a06;
-  a05=arg[1][4];
-  a05=casadi_fabs(a05);
-  a07=3.;
-  a05=(casadi_real)(a05<=a07);
-  res[0][4]=a05;
-  a08=arg[1][5];
-  a08=casadi_fabs(a08);
-  a09=400.;
-  a08=(casadi_real)(a08<=a09);
-  res[0][5]=a08;
-  a10=arg[1][6];
-  a10=casadi_fabs(a10);
-  a10=(casadi_real)(a10<=a09);
-  res[0][6]=a10;
-  a07=(casadi_real)(a02<a07);
-  a09=0.;
-  a11=arg[0][16];
-  a09=(casadi_real)(a09<a11);
-  a11=3.5000000000000000e+00;
-  a02=(casadi_real)(a02<a11);
-  a09=(a09*a02);
-  a02=(a07+a09);
-  a07=(a07*a09);
-  a02=(a02-a07);
-  a02=(a03*a02);
-  res[0][7]=a02;
-  a00=(a00*a03);
-  a00=(a00*a04);
-  a00=(a00*a06);
-  a00=(a00*a05);
-  a00=(a00*a08);
-  a00=(a00*a10);
-  a01=(a01-a02);
-  a00=(a00*a01);
-  res[0][8]=a00;
+  casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
+  a0=arg[1][0];
+  a0=casadi_fabs(a0);
+  a1=1.;
+  a0=(casadi_real)(a0<=a1);
+  res[0][0]=a0;
+  a2=arg[1][1];
+  a3=casadi_fabs(a2);
+  a4=90.;
+  a3=(casadi_real)(a3<=a4);
+  res[0][1]=a3;
+  a4=arg[1][2];
+  a4=casadi_fabs(a4);
+  a5=30.;
+  a4=(casadi_real)(a4<=a5);
+  res[0][2]=a4;
+  a6=arg[1][3];
+  a6=casadi_fabs(a6);
+  a6=(casadi_real)(a6<=a5);
+  res[0][3]=a6;
+  a5=arg[1][4];
+  a5=casadi_fabs(a5);
+  a7=3.;
+  a5=(casadi_real)(a5<=a7);
+  res[0][4]=a5;
+  a7=(casadi_real)(a2<a7);
+  a8=0.;
+  a9=arg[0][16];
+  a8=(casadi_real)(a8<a9);
+  a9=3.5000000000000000e+00;
+  a2=(casadi_real)(a2<a9);
+  a8=(a8*a2);
+  a2=(a7+a8);
+  a7=(a7*a8);
+  a2=(a2-a7);
+  a2=(a3*a2);
+  res[0][5]=a2;
+  a0=(a0*a3);
+  a0=(a0*a4);
+  a0=(a0*a6);
+  a0=(a0*a5);
+  a1=(a1-a2);
+  a0=(a0*a1);
+  res[0][6]=a0;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_guard: 54 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_guard: 43 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -308,8 +288,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,
  *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
- * res[0] decisions[9]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
- *     plausible_omega_rl, plausible_omega_rr, low_speed, active
+ * res[0] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
+ *     low_speed, active
  */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_guard(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
@@ -648,55 +628,64 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a46=4.8770575499285984e-02;
   a08=casadi_fabs(a26);
   a08=(casadi_real)(a08<=a13);
+  a36=arg[1][5];
+  a47=casadi_fabs(a36);
+  a48=400.;
+  a47=(casadi_real)(a47<=a48);
+  a08=(a08*a47);
+  a49=arg[1][6];
+  a50=casadi_fabs(a49);
+  a50=(casadi_real)(a50<=a48);
+  a08=(a08*a50);
   a08=(a46*a08);
-  a36=3.2500000000000001e-01;
-  a47=arg[1][6];
-  a48=arg[1][5];
-  a47=(a47-a48);
-  a36=(a36*a47);
-  a47=1.5500000000000000e+00;
-  a36=(a36/a47);
-  a47=(a19-a36);
-  a47=(a47-a45);
-  a47=(a08*a47);
-  a45=(a45+a47);
-  a47=casadi_fabs(a45);
-  a37=(casadi_real)(a37<a47);
-  a48=1.0000000000000001e-01;
-  a49=state_38;
-  a36=casadi_fabs(a36);
-  a36=(a36-a49);
-  a08=(a08*a36);
-  a49=(a49+a08);
-  a48=(casadi_real)(a48<=a49);
+  a48=3.2500000000000001e-01;
+  a50=((a50!=0.)?a49:0.);
+  a47=((a47!=0.)?a36:0.);
+  a50=(a50-a47);
+  a48=(a48*a50);
+  a50=1.5500000000000000e+00;
+  a48=(a48/a50);
+  a50=(a19-a48);
+  a50=(a50-a45);
+  a50=(a08*a50);
+  a45=(a45+a50);
+  a50=casadi_fabs(a45);
+  a37=(casadi_real)(a37<a50);
+  a47=1.0000000000000001e-01;
+  a36=state_38;
+  a48=casadi_fabs(a48);
+  a48=(a48-a36);
+  a08=(a08*a48);
+  a36=(a36+a08);
+  a47=(casadi_real)(a47<=a36);
   a08=2.0000000000000001e-01;
-  a08=(a08*a49);
-  a08=(casadi_real)(a08<a47);
-  a48=(a48*a08);
-  a08=(a37+a48);
-  a37=(a37*a48);
+  a08=(a08*a36);
+  a08=(casadi_real)(a08<a50);
+  a47=(a47*a08);
+  a08=(a37+a47);
+  a37=(a37*a47);
   a08=(a08-a37);
   a37=(a13-a08);
-  a48=state_39;
-  a47=(casadi_real)(a05<a48);
-  a47=(a37*a47);
-  a47=(a08+a47);
-  a44=(a44*a47);
+  a47=state_39;
+  a50=(casadi_real)(a05<a47);
+  a50=(a37*a50);
+  a50=(a08+a50);
+  a44=(a44*a50);
   a28=(a28+a44);
   a44=(casadi_real)(a05<a28);
   a44=(casadi_real)(a44==0.);
   a07=(casadi_real)((a07!=0.)&&(a44!=0.));
   a44=state_5;
-  a47=state_7;
-  a36=(a47*a25);
-  a50=9.0438207500880441e-01;
+  a50=state_7;
+  a48=(a50*a25);
+  a49=9.0438207500880441e-01;
   a51=state_9;
   a52=(a11*a51);
   a52=(a52*a11);
-  a52=(a50+a52);
-  a53=(a25*a47);
+  a52=(a49+a52);
+  a53=(a25*a50);
   a53=(a53*a25);
-  a53=(a50+a53);
+  a53=(a49+a53);
   a54=(a53*a52);
   a55=state_8;
   a56=(a25*a55);
@@ -706,7 +695,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a58=(a56*a57);
   a54=(a54-a58);
   a52=(a52/a54);
-  a58=(a36*a52);
+  a58=(a48*a52);
   a59=(a55*a11);
   a57=(a57/a54);
   a60=(a59*a57);
@@ -750,12 +739,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a53=(a53/a54);
   a59=(a59*a53);
   a56=(a56/a54);
-  a36=(a36*a56);
-  a59=(a59-a36);
-  a36=1.4331799999999998e+03;
-  a36=(a36*a61);
-  a36=(a36-a12);
-  a36=(a36/a35);
+  a48=(a48*a56);
+  a59=(a59-a48);
+  a48=1.4331799999999998e+03;
+  a48=(a48*a61);
+  a48=(a48-a12);
+  a48=(a48/a35);
   a35=2.4157209278350515e+03;
   a35=(a35+a62);
   a62=7.7391719999999998e+02;
@@ -766,11 +755,11 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a35=(a35+a62);
   a35=casadi_fmax(a35,a67);
   a65=(a65+a35);
-  a36=(a36/a65);
+  a48=(a48/a65);
   a35=state_6;
   a67=(a11*a35);
-  a36=(a36-a67);
-  a67=(a59*a36);
+  a48=(a48-a67);
+  a67=(a59*a48);
   a27=(a27+a67);
   a27=(a44+a27);
   a27=((a07!=0.)?a27:0.);
@@ -791,8 +780,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a54=(a54*a53);
   a12=(a12*a56);
   a54=(a54-a12);
-  a36=(a54*a36);
-  a60=(a60+a36);
+  a48=(a54*a48);
+  a60=(a60+a48);
   a60=(a35+a60);
   a60=((a07!=0.)?a60:0.);
   a35=((a67!=0.)?a35:0.);
@@ -802,11 +791,11 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][6]=a60;
   a58=(a58*a25);
   a58=(a13-a58);
-  a62=(a58*a47);
+  a62=(a58*a50);
   a59=(a59*a11);
   a44=(a59*a55);
   a62=(a62-a44);
-  a62=(a62/a50);
+  a62=(a62/a49);
   a44=10000.;
   a54=(a54*a11);
   a54=(a13-a54);
@@ -814,19 +803,19 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a52=(a52*a25);
   a52=(a52*a55);
   a54=(a54-a52);
-  a54=(a54/a50);
+  a54=(a54/a49);
   a52=(a62+a54);
   a44=(a44/a52);
   a44=casadi_fmin(a13,a44);
   a62=(a62*a44);
   a62=((a07!=0.)?a62:0.);
-  a47=((a67!=0.)?a47:0.);
-  a62=(a62+a47);
+  a50=((a67!=0.)?a50:0.);
+  a62=(a62+a50);
   res[0][7]=a62;
   a58=(a58*a55);
   a59=(a59*a51);
   a58=(a58-a59);
-  a58=(a58/a50);
+  a58=(a58/a49);
   a58=(a58*a44);
   a58=((a07!=0.)?a58:0.);
   a55=((a67!=0.)?a55:0.);
@@ -927,14 +916,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][35]=a39;
   res[0][36]=a29;
   res[0][37]=a45;
-  res[0][38]=a49;
-  a49=50.;
-  a49=(a49*a08);
-  a48=(a48-a13);
-  a48=casadi_fmax(a48,a05);
-  a37=(a37*a48);
-  a49=(a49+a37);
-  res[0][39]=a49;
+  res[0][38]=a36;
+  a36=50.;
+  a36=(a36*a08);
+  a47=(a47-a13);
+  a47=casadi_fmax(a47,a05);
+  a37=(a37*a47);
+  a36=(a36+a37);
+  res[0][39]=a36;
   res[1][0]=a38;
   res[1][1]=a00;
   res[1][2]=a22;
@@ -955,7 +944,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_active: 595 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_active: 604 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -975,7 +964,7 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_active(const casadi_real** arg, casa
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_held:(state[40],input[7],decisions[9])->(state_next[40],output[8]) */
+/* vse_ekf_rls_kernel_held:(state[40],input[7],decisions[7])->(state_next[40],output[8]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4;
@@ -1114,20 +1103,16 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a2=(a2*a1);
   a1=arg[2][4];
   a2=(a2*a1);
-  a1=arg[2][5];
-  a2=(a2*a1);
-  a1=arg[2][6];
-  a2=(a2*a1);
   a3=(a3-a2);
   a3=(2.*a3);
-  a2=arg[2][7];
+  a2=arg[2][5];
   a3=(a3+a2);
   res[1][7]=a3;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_held: 106 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_held: 102 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -1135,8 +1120,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,
  *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
- * arg[2] decisions[9]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
- *     plausible_omega_rl, plausible_omega_rr, low_speed, active
+ * arg[2] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
+ *     low_speed, active
  * res[0] state_next[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2,
  *     Prls_c0_1_c0_1, Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator,
  *     beta, holding, beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left,

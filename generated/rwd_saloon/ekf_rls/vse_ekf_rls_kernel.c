@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: a8b616181c5c6aabb6f569c018a7f526b7cb33dedfa7c42a338566cfd28e9a13
- * Operations: step 650, init 126 (CasADi SX instructions).
+ * Operations: step 648, init 117 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -172,15 +172,6 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=(a08*a06);
   a08=(a08*a11);
   a08=(a08*a02);
-  a02=arg[0][5];
-  a02=casadi_fabs(a02);
-  a12=400.;
-  a02=(casadi_real)(a02<=a12);
-  a08=(a08*a02);
-  a02=arg[0][6];
-  a02=casadi_fabs(a02);
-  a02=(casadi_real)(a02<=a12);
-  a08=(a08*a02);
   a02=3.5000000000000000e+00;
   a13=(casadi_real)(a13<a02);
   a02=(2.*a13);
@@ -225,7 +216,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_init: 126 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_init: 117 operations (CasADi SX instructions)
  * arg[0] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr
  * res[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
@@ -238,69 +229,58 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_init(const casadi_real** arg, casadi
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_guard:(state[40],input[7])->(decisions[9]) */
+/* vse_ekf_rls_kernel_guard:(state[40],input[7])->(decisions[7]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  a00=arg[1][0];
-  a00=casadi_fabs(a00);
-  a01=1.;
-  a00=(casadi_real)(a00<=a01);
-  res[0][0]=a00;
-  a02=arg[1][1];
-  a03=casadi_fabs(a02);
-  a04=90.;
-  a03=(casadi_real)(a03<=a04);
-  res[0][1]=a03;
-  a04=arg[1][2];
-  a04=casadi_fabs(a04);
-  a05=30.;
-  a04=(casadi_real)(a04<=a05);
-  res[0][2]=a04;
-  a06=arg[1][3];
-  a06=casadi_fabs(a06);
-  a06=(casadi_real)(a06<=a05);
-  res[0][3]=a06;
-  a05=arg[1][4];
-  a05=casadi_fabs(a05);
-  a07=3.;
-  a05=(casadi_real)(a05<=a07);
-  res[0][4]=a05;
-  a08=arg[1][5];
-  a08=casadi_fabs(a08);
-  a09=400.;
-  a08=(casadi_real)(a08<=a09);
-  res[0][5]=a08;
-  a10=arg[1][6];
-  a10=casadi_fabs(a10);
-  a10=(casadi_real)(a10<=a09);
-  res[0][6]=a10;
-  a07=(casadi_real)(a02<a07);
-  a09=0.;
-  a11=arg[0][16];
-  a09=(casadi_real)(a09<a11);
-  a11=3.5000000000000000e+00;
-  a02=(casadi_real)(a02<a11);
-  a09=(a09*a02);
-  a02=(a07+a09);
-  a07=(a07*a09);
-  a02=(a02-a07);
-  a02=(a03*a02);
-  res[0][7]=a02;
-  a00=(a00*a03);
-  a00=(a00*a04);
-  a00=(a00*a06);
-  a00=(a00*a05);
-  a00=(a00*a08);
-  a00=(a00*a10);
-  a01=(a01-a02);
-  a00=(a00*a01);
-  res[0][8]=a00;
+  casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
+  a0=arg[1][0];
+  a0=casadi_fabs(a0);
+  a1=1.;
+  a0=(casadi_real)(a0<=a1);
+  res[0][0]=a0;
+  a2=arg[1][1];
+  a3=casadi_fabs(a2);
+  a4=90.;
+  a3=(casadi_real)(a3<=a4);
+  res[0][1]=a3;
+  a4=arg[1][2];
+  a4=casadi_fabs(a4);
+  a5=30.;
+  a4=(casadi_real)(a4<=a5);
+  res[0][2]=a4;
+  a6=arg[1][3];
+  a6=casadi_fabs(a6);
+  a6=(casadi_real)(a6<=a5);
+  res[0][3]=a6;
+  a5=arg[1][4];
+  a5=casadi_fabs(a5);
+  a7=3.;
+  a5=(casadi_real)(a5<=a7);
+  res[0][4]=a5;
+  a7=(casadi_real)(a2<a7);
+  a8=0.;
+  a9=arg[0][16];
+  a8=(casadi_real)(a8<a9);
+  a9=3.5000000000000000e+00;
+  a2=(casadi_real)(a2<a9);
+  a8=(a8*a2);
+  a2=(a7+a8);
+  a7=(a7*a8);
+  a2=(a2-a7);
+  a2=(a3*a2);
+  res[0][5]=a2;
+  a0=(a0*a3);
+  a0=(a0*a4);
+  a0=(a0*a6);
+  a0=(a0*a5);
+  a1=(a1-a2);
+  a0=(a0*a1);
+  res[0][6]=a0;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_guard: 54 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_guard: 43 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -308,8 +288,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,
  *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr
- * res[0] decisions[9]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
- *     plausible_omega_fl, plausible_omega_fr, low_speed, active
+ * res[0] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
+ *     low_speed, active
  */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_guard(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
@@ -648,56 +628,65 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a47=4.8770575499285984e-02;
   a08=casadi_fabs(a27);
   a08=(casadi_real)(a08<=a13);
+  a37=arg[1][5];
+  a48=casadi_fabs(a37);
+  a49=400.;
+  a48=(casadi_real)(a48<=a49);
+  a08=(a08*a48);
+  a50=arg[1][6];
+  a51=casadi_fabs(a50);
+  a51=(casadi_real)(a51<=a49);
+  a08=(a08*a51);
   a08=(a47*a08);
-  a37=3.3500000000000002e-01;
-  a48=arg[1][6];
-  a49=arg[1][5];
-  a48=(a48-a49);
-  a37=(a37*a48);
-  a48=1.6000000000000001e+00;
-  a48=(a48*a07);
-  a37=(a37/a48);
-  a48=(a19-a37);
-  a48=(a48-a46);
-  a48=(a08*a48);
-  a46=(a46+a48);
-  a48=casadi_fabs(a46);
-  a38=(casadi_real)(a38<a48);
+  a49=3.3500000000000002e-01;
+  a51=((a51!=0.)?a50:0.);
+  a48=((a48!=0.)?a37:0.);
+  a51=(a51-a48);
+  a49=(a49*a51);
+  a51=1.6000000000000001e+00;
+  a51=(a51*a07);
+  a49=(a49/a51);
+  a51=(a19-a49);
+  a51=(a51-a46);
+  a51=(a08*a51);
+  a46=(a46+a51);
+  a51=casadi_fabs(a46);
+  a38=(casadi_real)(a38<a51);
   a07=1.0000000000000001e-01;
-  a49=state_38;
-  a37=casadi_fabs(a37);
-  a37=(a37-a49);
-  a08=(a08*a37);
-  a49=(a49+a08);
-  a07=(casadi_real)(a07<=a49);
-  a08=2.0000000000000001e-01;
+  a48=state_38;
+  a49=casadi_fabs(a49);
+  a49=(a49-a48);
   a08=(a08*a49);
-  a08=(casadi_real)(a08<a48);
+  a48=(a48+a08);
+  a07=(casadi_real)(a07<=a48);
+  a08=2.0000000000000001e-01;
+  a08=(a08*a48);
+  a08=(casadi_real)(a08<a51);
   a07=(a07*a08);
   a08=(a38+a07);
   a38=(a38*a07);
   a08=(a08-a38);
   a38=(a13-a08);
   a07=state_39;
-  a48=(casadi_real)(a05<a07);
-  a48=(a38*a48);
-  a48=(a08+a48);
-  a45=(a45*a48);
+  a51=(casadi_real)(a05<a07);
+  a51=(a38*a51);
+  a51=(a08+a51);
+  a45=(a45*a51);
   a29=(a29+a45);
   a45=(casadi_real)(a05<a29);
   a45=(casadi_real)(a45==0.);
   a20=(casadi_real)((a20!=0.)&&(a45!=0.));
   a45=state_5;
-  a48=state_7;
-  a37=(a48*a26);
-  a50=9.0438207500880441e-01;
-  a51=state_9;
-  a52=(a11*a51);
+  a51=state_7;
+  a49=(a51*a26);
+  a37=9.0438207500880441e-01;
+  a50=state_9;
+  a52=(a11*a50);
   a52=(a52*a11);
-  a52=(a50+a52);
-  a53=(a26*a48);
+  a52=(a37+a52);
+  a53=(a26*a51);
   a53=(a53*a26);
-  a53=(a50+a53);
+  a53=(a37+a53);
   a54=(a53*a52);
   a55=state_8;
   a56=(a26*a55);
@@ -707,7 +696,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a58=(a56*a57);
   a54=(a54-a58);
   a52=(a52/a54);
-  a58=(a37*a52);
+  a58=(a49*a52);
   a59=(a55*a11);
   a57=(a57/a54);
   a60=(a59*a57);
@@ -751,12 +740,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a53=(a53/a54);
   a59=(a59*a53);
   a56=(a56/a54);
-  a37=(a37*a56);
-  a59=(a59-a37);
-  a37=2314.;
-  a37=(a37*a61);
-  a37=(a37-a12);
-  a37=(a37/a36);
+  a49=(a49*a56);
+  a59=(a59-a49);
+  a49=2314.;
+  a49=(a49*a61);
+  a49=(a49-a12);
+  a49=(a49/a36);
   a36=3.8475152542372880e+03;
   a36=(a36+a62);
   a62=1.2958400000000001e+03;
@@ -767,11 +756,11 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a36=(a36+a62);
   a36=casadi_fmax(a36,a67);
   a65=(a65+a36);
-  a37=(a37/a65);
+  a49=(a49/a65);
   a36=state_6;
   a67=(a11*a36);
-  a37=(a37-a67);
-  a67=(a59*a37);
+  a49=(a49-a67);
+  a67=(a59*a49);
   a28=(a28+a67);
   a28=(a45+a28);
   a28=((a20!=0.)?a28:0.);
@@ -785,15 +774,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][5]=a28;
   a12=(a55*a26);
   a52=(a12*a52);
-  a54=(a51*a11);
+  a54=(a50*a11);
   a57=(a54*a57);
   a52=(a52-a57);
   a60=(a52*a60);
   a54=(a54*a53);
   a12=(a12*a56);
   a54=(a54-a12);
-  a37=(a54*a37);
-  a60=(a60+a37);
+  a49=(a54*a49);
+  a60=(a60+a49);
   a60=(a36+a60);
   a60=((a20!=0.)?a60:0.);
   a36=((a67!=0.)?a36:0.);
@@ -803,31 +792,31 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][6]=a60;
   a58=(a58*a26);
   a58=(a13-a58);
-  a62=(a58*a48);
+  a62=(a58*a51);
   a59=(a59*a11);
   a45=(a59*a55);
   a62=(a62-a45);
-  a62=(a62/a50);
+  a62=(a62/a37);
   a45=10000.;
   a54=(a54*a11);
   a54=(a13-a54);
-  a54=(a54*a51);
+  a54=(a54*a50);
   a52=(a52*a26);
   a52=(a52*a55);
   a54=(a54-a52);
-  a54=(a54/a50);
+  a54=(a54/a37);
   a52=(a62+a54);
   a45=(a45/a52);
   a45=casadi_fmin(a13,a45);
   a62=(a62*a45);
   a62=((a20!=0.)?a62:0.);
-  a48=((a67!=0.)?a48:0.);
-  a62=(a62+a48);
+  a51=((a67!=0.)?a51:0.);
+  a62=(a62+a51);
   res[0][7]=a62;
   a58=(a58*a55);
-  a59=(a59*a51);
+  a59=(a59*a50);
   a58=(a58-a59);
-  a58=(a58/a50);
+  a58=(a58/a37);
   a58=(a58*a45);
   a58=((a20!=0.)?a58:0.);
   a55=((a67!=0.)?a55:0.);
@@ -835,7 +824,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][8]=a58;
   a54=(a54*a45);
   a20=((a20!=0.)?a54:0.);
-  a67=((a67!=0.)?a51:0.);
+  a67=((a67!=0.)?a50:0.);
   a20=(a20+a67);
   res[0][9]=a20;
   a28=(a28*a66);
@@ -928,14 +917,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][35]=a40;
   res[0][36]=a30;
   res[0][37]=a46;
-  res[0][38]=a49;
-  a49=50.;
-  a49=(a49*a08);
+  res[0][38]=a48;
+  a48=50.;
+  a48=(a48*a08);
   a07=(a07-a13);
   a07=casadi_fmax(a07,a05);
   a38=(a38*a07);
-  a49=(a49+a38);
-  res[0][39]=a49;
+  a48=(a48+a38);
+  res[0][39]=a48;
   res[1][0]=a39;
   res[1][1]=a00;
   res[1][2]=a23;
@@ -956,7 +945,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_active: 596 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_active: 605 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -976,7 +965,7 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_active(const casadi_real** arg, casa
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_held:(state[40],input[7],decisions[9])->(state_next[40],output[8]) */
+/* vse_ekf_rls_kernel_held:(state[40],input[7],decisions[7])->(state_next[40],output[8]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4;
@@ -1115,20 +1104,16 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a2=(a2*a1);
   a1=arg[2][4];
   a2=(a2*a1);
-  a1=arg[2][5];
-  a2=(a2*a1);
-  a1=arg[2][6];
-  a2=(a2*a1);
   a3=(a3-a2);
   a3=(2.*a3);
-  a2=arg[2][7];
+  a2=arg[2][5];
   a3=(a3+a2);
   res[1][7]=a3;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_held: 106 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_held: 102 operations (CasADi SX instructions)
  * arg[0] state[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
@@ -1136,8 +1121,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_delta, steady_samples, lateral_residual, steering_offset, curvature,
  *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr
- * arg[2] decisions[9]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
- *     plausible_omega_fl, plausible_omega_fr, low_speed, active
+ * arg[2] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
+ *     low_speed, active
  * res[0] state_next[40]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2,
  *     Prls_c0_1_c0_1, Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator,
  *     beta, holding, beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left,

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: a8b616181c5c6aabb6f569c018a7f526b7cb33dedfa7c42a338566cfd28e9a13
- * Operations: step 650, init 126 (CasADi SX instructions).
+ * Operations: step 648, init 117 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
