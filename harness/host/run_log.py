@@ -7,7 +7,7 @@ from vsegen.codegen.generate import render
 from vsegen.harness.host.build import load_estimator
 from vsegen.harness.jobs.memo import Memo
 from vsegen.harness.logs.table import Log, LogError
-from vsegen.model.estimators import build
+from vsegen.model.estimators import build, monitor_only_inputs
 from vsegen.model.params import VehicleConfig
 from vsegen.model.signals import WHEEL_SPEEDS
 
@@ -56,11 +56,12 @@ def run_estimator(config: VehicleConfig, name: str, log: Log, backend: str = "c"
 
 def without_unlogged_check(config: VehicleConfig, name: str, log: Log) -> VehicleConfig | None:
     """``config`` with estimator ``name``'s yaw-rate check off (``wheel_check_limit`` = 0) when
-    ``log`` lacks only the wheel speeds that check reads beside the method's inputs; else None."""
-    if not config.settings(name).get("wheel_check_limit", 0.0) or not log.missing(inputs_of(config, name)):
+    ``log`` lacks only inputs that check reads beside the method's (``monitor_only_inputs``);
+    else None."""
+    missing = log.missing(inputs_of(config, name))
+    if not missing or not set(missing) <= set(monitor_only_inputs(config, name)):
         return None
-    unchecked = config.with_settings(name, wheel_check_limit=0.0)
-    return None if log.missing(inputs_of(unchecked, name)) else unchecked
+    return config.with_settings(name, wheel_check_limit=0.0)
 
 
 class EstimatorStream:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from vsegen.codegen.generate import library_sources, render, template_environment
 from vsegen.model import signals
-from vsegen.model.estimators import build
+from vsegen.model.estimators import build, monitor_only_inputs
 from vsegen.model.guard import LIMIT_KEYS
 from vsegen.model.params import VehicleConfig
 
@@ -48,6 +48,7 @@ def fuzz_source(config: VehicleConfig, name: str, real: str, params: str = "bake
         limits_now=[f"(double)fuzz_calibration.{LIMIT_KEYS[s]}" if LIMIT_KEYS[s] in estimator.parameters.names
                     else repr(config.limits[LIMIT_KEYS[s]]) for s in estimator.inputs.names],
         typical=[repr(signals.INPUT[s].typical) for s in estimator.inputs.names],
+        decides=[0 if s in monitor_only_inputs(config, name) else 1 for s in estimator.inputs.names],
         vx_index=estimator.inputs.index("vx"),
         calibration=[repr(float(v)) for v in estimator.parameters.values])
 
