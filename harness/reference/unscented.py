@@ -44,6 +44,10 @@ class Variant:
         wheels = WHEEL_SPEEDS if config.settings(self.table)["longitudinal_force"] == "wheel_speeds" else ()
         return ("delta", "vx", "ax", "ay", "r", *wheels)
 
+    def monitored(self, config) -> tuple[str, ...]:
+        """The inputs only the input monitors read (they do not hold the filter)."""
+        return monitors.monitored_only(self.method_inputs(config), config.settings(self.table))
+
     def names(self, config):
         s = config.settings(self.table)
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
@@ -57,7 +61,7 @@ class Variant:
         s = config.settings(self.table)
         inputs = dict(zip(self.names(config)[0], u0))
         first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                             monitors.monitored_only(self.method_inputs(config), s))
+                                             self.monitored(config))
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
         extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
                  if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
@@ -72,8 +76,7 @@ class Variant:
         x = dict(zip(state_names, state))
         inputs = dict(zip(input_names, u))
         active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                              x["hold_reason"] > 0.5,
-                                              monitors.monitored_only(self.method_inputs(config), s))
+                                              x["hold_reason"] > 0.5, self.monitored(config))
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
             held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
             return (np.array([held[k] for k in state_names]),
