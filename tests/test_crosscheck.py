@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from locations import VEHICLES
 
-from vsegen.harness.host.run_log import run_estimator
-from vsegen.harness.logs.table import Log, write_log
+from vsegen.harness.host.run_log import estimator_inputs, run_estimator
+from vsegen.harness.logs.table import Log, LogError, write_log
 from vsegen.harness.outputs.estimates import read_estimates
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
@@ -186,3 +186,15 @@ def test_a_bad_wheel_speed_only_the_check_reads_never_holds_the_estimator(name):
     np.testing.assert_array_equal(checked["beta"], unchecked["beta"])
     wheel_faults = (np.abs(log["t"] - 6.0) < 1e-9) | (np.abs(log["t"] - 7.0) < 1e-9)
     assert np.all(checked["status"][wheel_faults].astype(int) & INVALID_INPUT == 0)
+
+
+def test_where_a_log_without_the_checked_wheel_speeds_cannot_run_the_message_names_the_setting(config):
+    """tune and identify read the log whole through ``estimator_inputs``: one line naming the
+    check and the setting, not the UKFs' reason for needing every wheel speed."""
+    log = Case.of("dlc").simulate(config, 1.0 / config.sample_time, 1)
+    bare = Log({name: log[name] for name in ("t", "delta", "vx", "ax", "ay", "r")}, "bare.csv")
+    with pytest.raises(LogError) as error:
+        estimator_inputs(build("switching", config), bare)
+    assert str(error.value) == ("bare.csv:1: missing column 'omega_rl': estimator switching's yaw-rate check reads "
+                                "ax, omega_rl, omega_rr; for logs without them set [estimator.switching] "
+                                "wheel_check_limit = 0")

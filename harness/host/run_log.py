@@ -34,8 +34,12 @@ def estimator_inputs(estimator, log: Log):
     """The log's columns the estimator reads, as a matrix; one line when one is missing (for wheel
     speeds, with why the estimator cannot do without them)."""
     missing = log.missing(estimator.inputs.names)
+    config = estimator.parameters.numeric
+    if missing and set(missing) <= set(monitor_only_inputs(config, estimator.name)):
+        raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name}'s yaw-rate check "
+                       f"reads {', '.join(monitor_only_inputs(config, estimator.name))}; for logs without them set "
+                       f"[estimator.{estimator.name}] wheel_check_limit = 0")
     if missing and set(missing) <= set(WHEEL_SPEEDS):
-        config = estimator.parameters.numeric
         others = [n for n in config.estimators if not set(WHEEL_SPEEDS) & set(inputs_of(config, n))]
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs the four "
                        f"wheel speeds ({', '.join(WHEEL_SPEEDS)}, rad/s): its 3-DOF model's longitudinal tyre "
