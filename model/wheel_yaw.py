@@ -98,14 +98,12 @@ def monitor(s: dict, u: dict, readable: dict, active, settings, numeric_settings
     (it does not hold for an input only this check reads); a sample where one of them is
     implausible is skipped. The others are plausible on every active sample."""
     left, right = wheels(numeric_settings)
-    read = ("ax", left, right)
-    ok = {name: readable.get(name, 1) for name in read}
-    v = {name: hold(u[name], ok[name], 0) if name in readable else u[name] for name in read}
+    v = {name: hold(u[name], readable[name], 0) if name in readable else u[name] for name in ("ax", left, right)}
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
     wheel_yaw_rate = vehicle["wheel_radius"] * (v[right] - v[left]) / (vehicle["track_width"] * steer)
     rolling = ca.fabs(v["ax"]) <= settings["wheel_check_ax"]
-    for name in readable:
-        rolling = rolling * ok[name]
+    for flag in readable.values():
+        rolling = rolling * flag
     residual = low_pass(s[STATE.name], u["r"] - wheel_yaw_rate, settings["wheel_check_time"], sample_time, rolling)
     updates = {STATE.name: residual}
     raised = ca.fabs(residual) > settings["wheel_check_limit"]

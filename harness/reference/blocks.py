@@ -87,6 +87,12 @@ def whole_samples(duration: float, T: float) -> int:
     return math.floor(duration / T + 0.5)
 
 
+def held_flag(left: float, raised: bool, duration: float, T: float) -> tuple[float, bool]:
+    """(samples left, flag): a flag held ``duration`` s after it was last raised
+    (model.filters.held_flag, on an active sample)."""
+    return (float(whole_samples(duration, T)) if raised else max(left - 1, 0.0)), raised or left > 0
+
+
 def low_pass(previous: float, value: float, T: float, time_constant: float) -> float:
     """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / tau)) (x_k - y_k-1)."""
     return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
@@ -159,10 +165,8 @@ def residual_monitor(x, innovation, settings, T):
     mean first exceeded the limit on this sample."""
     mean = residual_mean(x["residual"], innovation, settings, T)
     now, before = mean > settings["residual_limit"], x["residual"] > settings["residual_limit"]
-    hold = whole_samples(settings["residual_hold"], T)
-    left = hold if now else max(x["residual_hold_left"] - 1, 0)
-    return ({"residual": mean, "residual_hold_left": float(left)},
-            now or x["residual_hold_left"] > 0, now and not before)
+    left, suspect = held_flag(x["residual_hold_left"], now, settings["residual_hold"], T)
+    return {"residual": mean, "residual_hold_left": left}, suspect, now and not before
 
 
 FROZEN_CHANNELS = ("ax", "ay", "r")

@@ -86,15 +86,10 @@ def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool],
         checked, mismatch = _wheel_check(x, u, ok, settings, T, vehicle)
         new, code = new | checked, code | (blocks.YAW_RATE_MISMATCH if mismatch else 0)
     if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
-        new["frozen_recovery_left"], frozen = _held(x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN),
-                                                    settings["frozen_recovery"], T)
+        new["frozen_recovery_left"], frozen = blocks.held_flag(
+            x["frozen_recovery_left"], bool(code & blocks.INPUT_FROZEN), settings["frozen_recovery"], T)
         code |= blocks.INPUT_FROZEN if frozen else 0
     return new, code
-
-
-def _held(left: float, raised: bool, duration: float, T: float) -> tuple[float, bool]:
-    """(samples left, flag): a flag held ``duration`` s after it was last raised."""
-    return (blocks.whole_samples(duration, T) if raised else max(left - 1, 0.0)), raised or left > 0
 
 
 def _wheel_check(x, u, ok, settings, T: float, vehicle) -> tuple[dict, bool]:
@@ -120,8 +115,8 @@ def _wheel_check(x, u, ok, settings, T: float, vehicle) -> tuple[dict, bool]:
     if _on(settings, "wheel_check_scale") and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]:
         mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
     if _on(settings, "wheel_check_hold"):
-        new["wheel_yaw_hold_left"], mismatch = _held(x["wheel_yaw_hold_left"], mismatch,
-                                                     settings["wheel_check_hold"], T)
+        new["wheel_yaw_hold_left"], mismatch = blocks.held_flag(x["wheel_yaw_hold_left"], mismatch,
+                                                                settings["wheel_check_hold"], T)
     return new, mismatch
 
 
