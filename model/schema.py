@@ -295,6 +295,10 @@ PLANT: tuple[Field, ...] = (
     positive("load_transfer_time_constant", "s", "lag of load transfer behind the accelerations"),
     nonnegative("drag_area", "m^2", "C_d * A"),
     nonnegative("rolling_resistance", "-", "rolling-resistance coefficient"),
+    positive("driver_bandwidth", "rad/s", "the simulated driver: natural frequency of its closed-loop "
+             "path error (a calmer driver keeps a softer car inside the cones)", default=2.0),
+    positive("driver_damping", "-", "the simulated driver: damping ratio of its closed-loop path error",
+             default=0.8),
 )
 
 # [sensors]: the sensor model of simulated logs (seed 000 Table 2). Optional.

@@ -12,9 +12,6 @@ from vsegen.harness.sim.road import FLAT, Road
 from vsegen.harness.sim.two_track import AIR_DENSITY, GRAVITY, STATE, static_wheel_loads
 from vsegen.harness.sim.tyre import cornering_stiffness
 
-BANDWIDTH = 2.0
-"""Natural frequency of the driver's closed-loop lateral error (rad/s)."""
-DAMPING = 0.8
 PREVIEW_TIME = 0.2
 """The path curvature is read this far ahead (s), covering steering lag and yaw response."""
 STEER_LAG = 0.05
@@ -44,12 +41,15 @@ class PathFollower:
     """Lateral driver: steady-state curvature feed-forward l kappa (1 + K_s vx^2), read
     PREVIEW_TIME ahead, plus feedback on the lateral error e_y and course-angle error e_chi
     (chi = psi + beta: where the car goes). With e_y'' ~ vx^2 delta / l the gains
-    k_y = w^2 l / vx^2 and k_chi = 2 zeta w l / vx place the error poles at w = BANDWIDTH,
-    zeta = DAMPING. A first-order STEER_LAG models the driver's arms."""
+    k_y = w^2 l / vx^2 and k_chi = 2 zeta w l / vx place the error poles at w = ``bandwidth``
+    (rad/s), zeta = ``damping`` ([plant] driver_bandwidth, driver_damping: a calmer driver for a
+    softer car). A first-order STEER_LAG models the driver's arms."""
 
     vehicle: Mapping[str, float]
     path: Callable[[float], float]
     dt: float
+    bandwidth: float
+    damping: float
     delta: float = 0.0
 
     def __call__(self, t: float, state: np.ndarray) -> float:
@@ -67,8 +67,8 @@ class PathFollower:
         e_y = float(self.path(X)) - Y
         e_chi = np.arctan((float(self.path(X + h)) - float(self.path(X - h))) / (2 * h)) \
             - (psi + np.arctan2(vy, vx))
-        k_y = BANDWIDTH**2 * l / vx**2
-        k_chi = 2 * DAMPING * BANDWIDTH * l / vx
+        k_y = self.bandwidth**2 * l / vx**2
+        k_chi = 2 * self.damping * self.bandwidth * l / vx
         command = l * curvature * (1 + ks * vx * vx) + k_y * e_y + k_chi * e_chi
         command = float(np.clip(command, -STEER_LIMIT, STEER_LIMIT))
         self.delta += self.dt / STEER_LAG * (command - self.delta)

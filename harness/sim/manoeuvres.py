@@ -358,7 +358,8 @@ def _truth_run(config, rate_hz, course, speed, duration, mu, yaw_moment, progres
     """The plant driven along ``course`` at ``speed`` (m/s; or the speed profile ``target`` of
     time) by the path follower, on ``road``."""
     dt = 1.0 / (rate_hz * substeps(rate_hz))
-    steer = PathFollower(driver_view(config), course.centre_line, dt)
+    steer = PathFollower(driver_view(config), course.centre_line, dt, config.plant["driver_bandwidth"],
+                         config.plant["driver_damping"])
     hold = SpeedHold(config.vehicle, config.plant, target or (lambda t: speed), dt, road=road)
     return simulate(config, rate_hz, duration, speed, steer, yaw_moment.torques(config.vehicle, hold), mu,
                     progress=progress, road=road)
