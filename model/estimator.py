@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 
@@ -43,6 +43,9 @@ from vsegen.model.calibration import Parameters
 from vsegen.model.guard import Decisions
 from vsegen.model.layout import Layout
 from vsegen.model.schema import EstimatorSchema
+
+if TYPE_CHECKING:
+    from vsegen.model.monitor_block import MonitorBlock
 
 
 class _ComposedStep:
@@ -379,6 +382,8 @@ class Definition:
     constants; the generated header defines only these."""
     derived: Mapping[str, Derived] = field(default_factory=dict)
     """Its car-specific settings and how each follows from identified quantities."""
+    monitors: Callable[[Mapping], MonitorBlock] | None = None
+    """Its monitor block for numeric settings (``model.monitor_block``), if it carries one."""
 
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,

@@ -10,12 +10,14 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import blocks, monitors
+from vsegen.harness.reference import blocks
+from vsegen.harness.reference.monitor_block import Checks
 
 TABLE = "ekf_rls"
 GRAVITY = blocks.GRAVITY
 INPUTS = ("delta", "vx", "ax", "ay", "r")
-"""What the method reads; the input monitors may add theirs (:func:`input_names`)."""
+"""What the method reads; the monitors may add theirs (:func:`input_names`)."""
+CHECKS = Checks(consistency=True, linear_range=True)
 EKF_P = blocks.upper_names("P", ("beta", "r"))
 RLS_P = blocks.upper_names("Prls", ("c0_1", "c0_2"))
 STATES = ("beta_ekf", "r_ekf", *EKF_P, "c0_1", "c0_2", *RLS_P, "c_front",
@@ -26,8 +28,12 @@ KINEMATIC = ("beta_kin", "ax_f", "ay_f", "r_f", "delta_f", "beta_f")
 only while lambda = 0) and the low-passed a_x, a_y, r, delta and beta_kin."""
 
 
+def _monitors(config):
+    return CHECKS.block(INPUTS, config.settings(TABLE))
+
+
 def input_names(config) -> tuple[str, ...]:
-    return monitors.inputs(INPUTS, config.settings(TABLE))
+    return _monitors(config).inputs
 
 
 def names(config):
@@ -37,9 +43,7 @@ def names(config):
 def states(config) -> tuple[str, ...]:
     s = config.settings(TABLE)
     kinematic = s["stiffness_regressor"] == "kinematic_slip"
-    monitor = s["residual_window"] > 0
-    return (*STATES, *(KINEMATIC if kinematic else ()), *(blocks.MONITOR_STATES if monitor else ()),
-            *monitors.states(s, input_names(config)))
+    return (*STATES, *(KINEMATIC if kinematic else ()), *_monitors(config).states)
 
 
 def _loads(v, ax, ay):
@@ -90,9 +94,9 @@ def _integral(beta_prev, T, vx, ax, ay, r):
 
 
 def init(config, u0):
-    s, v = config.settings(TABLE), config.vehicle
-    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
-                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
+    s, v, block = config.settings(TABLE), config.vehicle, _monitors(config)
+    first, holding = blocks.first_sample(config.limits, dict(zip(block.inputs, u0)), s["vx_min"],
+                                         s["vx_resume"], block.monitored)
     c0 = _c0_nominal(v)
     ay0 = blocks.roll_corrected(first["ay"], s["roll_gradient"])
     if s["stiffness"] == "rls":
@@ -103,8 +107,7 @@ def init(config, u0):
     p = s["rls_initial_covariance"]
     kinematic = {"beta_kin": 0.0, "ax_f": first["ax"], "ay_f": ay0, "r_f": first["r"],
                  "delta_f": first["delta"], "beta_f": 0.0}
-    extra = {**kinematic, **dict.fromkeys(blocks.MONITOR_STATES, 0.0),
-             **monitors.initial(s, input_names(config), first)}
+    extra = {**kinematic, **block.initial(first)}
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], c0, c0, p, 0.0, p, cf, cr,
                      first["r"], 0.0, 0.0, 0.0, holding,
                      *(extra[k] for k in states(config)[len(STATES):])])
@@ -112,11 +115,11 @@ def init(config, u0):
 
 def step(config, state, u):
     s, v, T = config.settings(TABLE), config.vehicle, config.sample_time
-    names = states(config)
+    names, block = states(config), _monitors(config)
     x = dict(zip(names, state))
-    inputs = dict(zip(input_names(config), u))
+    inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                          x["holding"] > 0.5, monitors.monitored_only(INPUTS, s))
+                                          x["holding"] > 0.5, block.monitored)
     if not active:
         held = dict(x, holding=1.0)
         return (np.array([held[k] for k in names]),
@@ -135,7 +138,7 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
-    watched, flags = monitors.step(x, inputs, ok, s, T, input_names(config), config.vehicle)
+    watched, flags = block.watch_inputs(x, inputs, ok, T, config.vehicle)
     new |= watched                          # the input monitors (beyond the paper)
     status |= flags
     X, P, cf, cr = _rls(s, v, T, x, y, A, loads, trusted=flags == 0)
@@ -147,9 +150,6 @@ def step(config, state, u):
     innovation = np.array([r - x_pred[1]])
     xe, Pe = blocks.kf_update(x_pred, P_pred, np.array([r]), np.array([[0.0, 1.0]]),
                               np.zeros((1, 1)), np.zeros(1), np.array([[s["measurement_noise"]]]))
-    if s["residual_window"] > 0:            # the consistency monitor (beyond the paper)
-        monitor, suspect_ekf, _ = blocks.residual_monitor(x, innovation, s, T)
-        new |= monitor
 
     # weight [37], fusion
     rate = max(abs(cf - x["c_front"]) / (T * v["cornering_stiffness_front"]),
@@ -160,12 +160,13 @@ def step(config, state, u):
     else:
         weight = 1.0
     beta = (1 - weight) * xe[0] + weight * beta_int
-    if s["residual_window"] > 0 and suspect_ekf and weight < 0.5:   # the EKF carries the output
-        status |= blocks.MODEL_INCONSISTENT
-    share = s["stiffness_drop_limit"]          # beyond the paper: the tyres past their linear range
-    status |= blocks.beyond_linear_range(ay, s)
-    if cf < share * v["cornering_stiffness_front"] or cr < share * v["cornering_stiffness_rear"]:
-        status |= blocks.BEYOND_LINEAR_RANGE
+    # beyond the paper: the consistency monitor concerns the output while the EKF carries it; the
+    # learned stiffness below its share of the vehicle file's: the tyres past their linear range
+    share = s["stiffness_drop_limit"]
+    dropped = cf < share * v["cornering_stiffness_front"] or cr < share * v["cornering_stiffness_rear"]
+    monitor, judgement, _ = block.judge_model(x, innovation, T, ay, concerns=weight < 0.5, beyond=dropped)
+    new |= monitor
+    status |= judgement
 
     new |= {"beta_ekf": xe[0], "r_ekf": xe[1], **dict(zip(EKF_P, blocks.packed(Pe))),
             "c0_1": X[0], "c0_2": X[1], **dict(zip(RLS_P, blocks.packed(P))), "c_front": cf,

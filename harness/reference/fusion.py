@@ -8,35 +8,39 @@ import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
 from vsegen.harness.reference.kinematic_dynamic import DYN, KINEMATIC_INPUTS
+from vsegen.harness.reference.monitor_block import Checks
 
 TABLE = "fusion"
 OUTPUTS = ("beta", "vy", "r", "weight", "status")
+CHECKS = Checks(consistency=True, linear_range=True)
+"""The input monitors, the consistency monitor of the KF's innovations, the linear-range flag."""
 
 
+def _monitors(config):
+    return CHECKS.block(kinematic_dynamic.INPUTS, config.settings(TABLE))
 
 
 def extra(config) -> tuple[str, ...]:
-    """fusion's own state entries: the learned offset and the consistency monitor's mean, when on."""
-    s = config.settings(TABLE)
-    return (*(("kin_offset",) if s["offset_memory"] > 0 else ()),
-            *(blocks.MONITOR_STATES if s["residual_window"] > 0 else ()))
+    """fusion's own state entries: the learned offset, when on."""
+    return ("kin_offset",) if config.settings(TABLE)["offset_memory"] > 0 else ()
 
 
 def names(config):
-    return (kinematic_dynamic.input_names(config, TABLE), kinematic_dynamic.state_names(config, TABLE, extra(config)),
-            OUTPUTS)
+    block = _monitors(config)
+    return block.inputs, kinematic_dynamic.state_names(config, TABLE, block, extra(config)), OUTPUTS
 
 
 def init(config, u0):
-    return kinematic_dynamic.init(config, TABLE, u0, extra(config))
+    return kinematic_dynamic.init(config, TABLE, _monitors(config), u0, extra(config))
 
 
 def step(config, state, u):
-    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _fuse(config, *args),
+    block = _monitors(config)
+    return kinematic_dynamic.step(config, TABLE, block, state, u, lambda *args: _fuse(config, block, *args),
                                   extra(config))
 
 
-def _fuse(config, x, updates, r_k, ay_f, status, u):
+def _fuse(config, block, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
     P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
@@ -47,10 +51,8 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     xk, P, innovation = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
                                                  x["vx_prev"], u, r_k,
                                                  ay_offset=s["offset_sensor_share"] * offset)
-    monitor = {}
-    if "residual" in x:                       # the consistency monitor (beyond the paper)
-        monitor, suspect, _ = blocks.residual_monitor(x, innovation, s, T)
-        status |= blocks.MODEL_INCONSISTENT if suspect else 0
+    monitor, judgement, _ = block.judge_model(x, innovation, T, u["ay"])   # beyond the paper: the measured a_y
+    status |= judgement
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
@@ -61,7 +63,6 @@ def _fuse(config, x, updates, r_k, ay_f, status, u):
     beta = w * beta_kin + (1 - w) * beta_kf
     if s["disagreement_limit"] > 0 and w * abs(beta_kin - beta_kf) > s["disagreement_limit"]:
         status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
-    status |= blocks.beyond_linear_range(u["ay"], s)    # beyond the paper: the measured a_y
     new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
            "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u["delta"], "vx_prev": u["vx"],
            "holding": 0.0, "mode": DYN, **monitor, **learned}

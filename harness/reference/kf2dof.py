@@ -9,25 +9,26 @@ import math
 
 import numpy as np
 
-from vsegen.harness.reference import bicycle_kf, blocks, monitors
+from vsegen.harness.reference import bicycle_kf, blocks
+from vsegen.harness.reference.monitor_block import Checks
 
 INPUTS = ("delta", "vx", "ay", "r")
-"""What the KF reads; the input monitors may add theirs (:func:`input_names`)."""
+"""What the KF reads; the monitors may add theirs (:func:`input_names`)."""
 OUTPUTS = ("beta", "vy", "r", "status")
+CHECKS = Checks(consistency=True, linear_range=True)
+
+
+def _monitors(config):
+    return CHECKS.block(INPUTS, _settings(config))
 
 
 def input_names(config) -> tuple[str, ...]:
-    return monitors.inputs(INPUTS, _settings(config))
-
-
-def _monitored(config) -> bool:
-    return _settings(config)["residual_window"] > 0
+    return _monitors(config).inputs
 
 
 def _monitor_states(config) -> tuple[str, ...]:
-    """The consistency and input monitors' state entries (those that are on)."""
-    return (*(blocks.MONITOR_STATES if _monitored(config) else ()),
-            *monitors.states(_settings(config), input_names(config)))
+    """The monitor block's state entries (those that are on)."""
+    return _monitors(config).states
 
 
 def names(config):
@@ -42,24 +43,25 @@ def _settings(config):
 
 def init(config, u0) -> np.ndarray:
     s = _settings(config)
-    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config), u0)), s["vx_min"],
-                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
+    block = _monitors(config)
+    first, holding = blocks.first_sample(config.limits, dict(zip(block.inputs, u0)), s["vx_min"],
+                                         s["vx_resume"], block.monitored)
     P0 = np.array(s["initial_covariance"])
-    entries = {**{k: 0.0 for k in blocks.MONITOR_STATES}, **monitors.initial(s, input_names(config), first)}
+    entries = block.initial(first)
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
                      *(entries[k] for k in _monitor_states(config)), holding])
 
 
 def step(config, state, u):
-    s = _settings(config)
+    s, block = _settings(config), _monitors(config)
     T = config.sample_time
     vx_max = config.limits["vx_max"]
-    inputs = dict(zip(input_names(config), u))
-    entries = dict(zip(_monitor_states(config), state[7:-1]))    # the monitors' entries when they are on
+    inputs = dict(zip(block.inputs, u))
+    entries = dict(zip(block.states, state[7:-1]))    # the monitors' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                         holding > 0.5, monitors.monitored_only(INPUTS, s))
+                                         holding > 0.5, block.monitored)
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])
@@ -74,13 +76,9 @@ def step(config, state, u):
     x, P, innovation = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
                                        np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
                                        inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
-    status |= blocks.beyond_linear_range(inputs["ay"], s)
-    updates, flags = monitors.step(entries, inputs, ok, s, T, input_names(config), config.vehicle)
-    entries.update(updates)
-    status |= flags
-    if _monitored(config):
-        updates, suspect, _ = blocks.residual_monitor(entries, innovation, s, T)
-        entries.update(updates)
-        status |= blocks.MODEL_INCONSISTENT if suspect else 0
+    watched, flags = block.watch_inputs(entries, inputs, ok, T, config.vehicle)
+    judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"])
+    entries.update(watched | judged)
+    status |= flags | judgement
     new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0])
     return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])

@@ -9,18 +9,14 @@ from functools import lru_cache
 import numpy as np
 import scipy.signal
 
-from vsegen.harness.reference import bicycle_kf, blocks, monitors
+from vsegen.harness.reference import bicycle_kf, blocks
 
 INPUTS = ("delta", "vx", "ay", "r")
-"""What the schemes read; the input monitors may add theirs (:func:`input_names`)."""
+"""What the schemes read; an estimator's monitor block may add its monitors' (its ``inputs``)."""
 DYN, KIN = 0, 1
 KINEMATIC_INPUTS = ("ay", "r")
 """The kinematic integrator's inputs beside the speed (model: kinematic_dynamic.KINEMATIC_INPUTS)."""
 GRAVITY = blocks.GRAVITY
-
-
-def input_names(config, table) -> tuple[str, ...]:
-    return monitors.inputs(INPUTS, config.settings(table))
 
 
 def roll_corrected(config, table, ay_measured):
@@ -32,14 +28,15 @@ def median_length(config, table) -> int:
     return 2 * round(config.settings(table)["median_span"] / config.sample_time / 2) + 1
 
 
-def state_names(config, table, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
-    """The state entries; ``extra`` are an estimator's own (0 at init, kept while holding)."""
+def state_names(config, table, block, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The state entries; ``block`` the estimator's monitor block
+    (``harness.reference.monitor_block``), ``extra`` its own entries (0 at init, kept while holding)."""
     n = median_length(config, table)
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
             "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-            *monitors.states(config.settings(table), input_names(config, table)), "holding", *extra)
+            *block.states, "holding", *extra)
 
 
 def prefilter(config, table):
@@ -78,10 +75,10 @@ def check(measured, reference, band, last, rejections, timeout):
     return last, last, rejections + 1, False
 
 
-def init(config, table, u0, extra: tuple[str, ...] = ()):
+def init(config, table, block, u0, extra: tuple[str, ...] = ()):
     s = config.settings(table)
-    first, holding = blocks.first_sample(config.limits, dict(zip(input_names(config, table), u0)), s["vx_min"],
-                                         s["vx_resume"], monitors.monitored_only(INPUTS, s))
+    first, holding = blocks.first_sample(config.limits, dict(zip(block.inputs, u0)), s["vx_min"],
+                                         s["vx_resume"], block.monitored)
     delta, vx, r = first["delta"], first["vx"], first["r"]
     ay = roll_corrected(config, table, first["ay"])
     b, a = prefilter(config, table)
@@ -90,7 +87,7 @@ def init(config, table, u0, extra: tuple[str, ...] = ()):
     r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
     P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
-    monitor = monitors.initial(s, input_names(config, table), first)
+    monitor = block.initial(first)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
                      0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *monitor.values(), holding,
                      *([0.0] * len(extra))])
@@ -157,24 +154,24 @@ def beta(config, table, vy, vx):
     return math.atan2(vy, clamp(config, table, vx))
 
 
-def step(config, table, state, u, scheme, extra: tuple[str, ...] = ()):
+def step(config, table, block, state, u, scheme, extra: tuple[str, ...] = ()):
     """One step of a seed-000 estimator: the hold rule; when active, the shared pre-processing
     (§2.2-2.4) and then ``scheme(x, updates, r_k, ay_f, status, u) -> (next state by name,
     output)``, with ``x`` the state by name, ``updates`` the pre-processing's new entries and
     ``status`` including blocks.REFERENCE_SUSPECT, ``u`` the inputs by name. When not active: the
     held state and the output [0, 0, r_last, DYN, status]."""
     s = config.settings(table)
-    names = state_names(config, table, extra)
+    names = state_names(config, table, block, extra)
     x = dict(zip(names, state))
-    inputs = dict(zip(input_names(config, table), u))
+    inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                          x["holding"] > 0.5, monitors.monitored_only(INPUTS, s))
+                                          x["holding"] > 0.5, block.monitored)
     if not active:
         new = held(config, table, x, inputs, ok)
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, inputs)
-    monitor, flags = monitors.step(x, inputs, ok, s, config.sample_time, input_names(config, table), config.vehicle)
+    monitor, flags = block.watch_inputs(x, inputs, ok, config.sample_time, config.vehicle)
     status += (blocks.REFERENCE_SUSPECT if suspect else 0) + flags
     new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, inputs)
     return np.array([new[k] for k in names]), np.array(output)

@@ -10,9 +10,16 @@ import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
 from vsegen.harness.reference.kinematic_dynamic import DYN, KIN, KINEMATIC_INPUTS
+from vsegen.harness.reference.monitor_block import Checks
 
 TABLE = "switching"
 OUTPUTS = ("beta", "vy", "r", "mode", "status")
+CHECKS = Checks()
+"""The input monitors only."""
+
+
+def _monitors(config):
+    return CHECKS.block(kinematic_dynamic.INPUTS, config.settings(TABLE))
 
 
 def extra(config) -> tuple[str, ...]:
@@ -24,16 +31,17 @@ def extra(config) -> tuple[str, ...]:
 
 
 def names(config):
-    return (kinematic_dynamic.input_names(config, TABLE), kinematic_dynamic.state_names(config, TABLE, extra(config)),
-            OUTPUTS)
+    block = _monitors(config)
+    return block.inputs, kinematic_dynamic.state_names(config, TABLE, block, extra(config)), OUTPUTS
 
 
 def init(config, u0):
-    return kinematic_dynamic.init(config, TABLE, u0, extra(config))
+    return kinematic_dynamic.init(config, TABLE, _monitors(config), u0, extra(config))
 
 
 def step(config, state, u):
-    return kinematic_dynamic.step(config, TABLE, state, u, lambda *args: _switch(config, *args), extra(config))
+    return kinematic_dynamic.step(config, TABLE, _monitors(config), state, u, lambda *args: _switch(config, *args),
+                                  extra(config))
 
 
 def _switch(config, x, updates, r_k, ay_f, status, u):

@@ -17,13 +17,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vsegen.harness.reference import blocks, monitors
+from vsegen.harness.reference import blocks
+from vsegen.harness.reference.monitor_block import Checks
 
 LD = np.longdouble
 STATE = ("u", "v", "gamma", "moment", "ax", "ay")
 COVARIANCE = blocks.upper_names("P", STATE)
 OUTPUTS = ("beta", "vx", "vy", "r", "yaw_moment", "ax", "ay", "status")
 WHEEL_SPEEDS = ("omega_fl", "omega_fr", "omega_rl", "omega_rr")
+CHECKS = Checks(consistency=True, linear_range=True)
+"""Beyond the spec: the input monitors, the consistency monitor of the innovations, the linear-range flag."""
 AIR_DENSITY = 1.2
 N = 6
 ADHESION_FLOOR = 1.0
@@ -44,46 +47,39 @@ class Variant:
         wheels = WHEEL_SPEEDS if config.settings(self.table)["longitudinal_force"] == "wheel_speeds" else ()
         return ("delta", "vx", "ax", "ay", "r", *wheels)
 
-    def monitored(self, config) -> tuple[str, ...]:
-        """The inputs only the input monitors read (they do not hold the filter)."""
-        return monitors.monitored_only(self.method_inputs(config), config.settings(self.table))
+    def monitors(self, config):
+        """The monitor block (``harness.reference.monitor_block``)."""
+        return CHECKS.block(self.method_inputs(config), config.settings(self.table))
 
     def names(self, config):
-        s = config.settings(self.table)
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
-        monitor = blocks.MONITOR_STATES if s["residual_window"] > 0 else ()
-        inputs = monitors.inputs(self.method_inputs(config), s)
-        return (inputs, (*STATE, *COVARIANCE, *extra, *monitor, *monitors.states(s, inputs),
-                         "hold_reason"), OUTPUTS)
+        block = self.monitors(config)
+        return block.inputs, (*STATE, *COVARIANCE, *extra, *block.states, "hold_reason"), OUTPUTS
 
     def init(self, config, u0):
-        s = config.settings(self.table)
-        inputs = dict(zip(self.names(config)[0], u0))
-        first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                             self.monitored(config))
+        s, block = config.settings(self.table), self.monitors(config)
+        inputs = dict(zip(block.inputs, u0))
+        first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"], block.monitored)
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
-        extra = ([0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]]
-                 if self.adaptive else []) + ([0.0] * len(blocks.MONITOR_STATES)
-                                              if s["residual_window"] > 0 else [])
-        watched = list(monitors.initial(s, inputs, first).values())
+        extra = [0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]] if self.adaptive else []
+        watched = list(block.initial(first).values())
         return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra + watched
                         + [2 * holding], dtype=float)
 
     def step(self, config, state, u):
-        s = config.settings(self.table)
+        s, block = config.settings(self.table), self.monitors(config)
         input_names, state_names, _ = self.names(config)
         x = dict(zip(state_names, state))
         inputs = dict(zip(input_names, u))
         active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                              x["hold_reason"] > 0.5, self.monitored(config))
+                                              x["hold_reason"] > 0.5, block.monitored)
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
             held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
             return (np.array([held[k] for k in state_names]),
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
-        watched, flags = monitors.step(x, inputs, ok, s, config.sample_time, input_names,
-                                       config.vehicle)    # from the state as it came in
+        watched, flags = block.watch_inputs(x, inputs, ok, config.sample_time, config.vehicle)  # state as it came
         if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)
@@ -134,15 +130,11 @@ class Variant:
             new.update(self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps))
         new["hold_reason"] = 0.0
         status |= blocks.COVARIANCE_REPAIRED if repaired else 0
-        status |= blocks.beyond_linear_range(inputs["ay"], s)
-        first_inconsistent = False
-        if s["residual_window"] > 0:                # the consistency monitor (beyond the spec)
-            monitor, suspect, first_inconsistent = blocks.residual_monitor(x, eps, s, config.sample_time)
-            new.update(monitor)
-            status |= blocks.MODEL_INCONSISTENT if suspect else 0
+        monitor, judgement, first_inconsistent = block.judge_model(x, eps, config.sample_time, inputs["ay"])
+        new.update(monitor)                         # beyond the spec: the monitor block's model checks
+        status |= judgement
         if _leaves_the_envelope(s, X_new, inputs["vx"]) or first_inconsistent:
-            new = dict(zip(state_names, self.init(config, u)), hold_reason=0.0,   # restart here
-                       **{k: new[k] for k in blocks.MONITOR_STATES if k in new})
+            new = dict(zip(state_names, self.init(config, u)), hold_reason=0.0, **monitor)   # restart here
             X_new = np.array([new[k] for k in STATE], dtype=LD)
             status |= blocks.FILTER_RESTARTED
         new.update(watched)

@@ -58,10 +58,8 @@ def monitor_only_inputs(config: VehicleConfig, name: str) -> tuple[str, ...]:
     """The inputs only an input monitor of ``name`` reads (the yaw-rate check's a_x and wheel
     speeds where the method does not read them): an implausible one does not hold the estimator
     (``model.guard.input_guard``), and a log may lack them (the check is then off)."""
-    if not config.settings(name).get("wheel_check_limit", 0.0):
-        return ()
-    unchecked = build(name, config.with_settings(name, wheel_check_limit=0.0)).inputs.names
-    return tuple(n for n in build(name, config).inputs.names if n not in unchecked)
+    monitors = DEFINITIONS[name].monitors
+    return monitors(config.settings(name)).monitored if monitors else ()
 
 
 def underived_warning(config: VehicleConfig, name: str) -> str | None:

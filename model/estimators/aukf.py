@@ -34,13 +34,14 @@ from typing import Any
 
 import casadi as ca
 
-from vsegen.model import consistency, input_monitors, kalman, signals, status, unscented
+from vsegen.model import kalman, signals, status, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import ROLL_GRADIENT, Definition, Estimator, Tunable, make_functions, make_repeated
 from vsegen.model.guard import first_sample, hold, input_guard, model_speed
 from vsegen.model.increments import Pair, lift
 from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.monitor_block import Checks, MonitorBlock
 from vsegen.model.schema import (
     CAPS_ABOVE_FLOORS,
     LOW_SPEED_FIELDS,
@@ -62,6 +63,10 @@ from vsegen.model.three_dof import ThreeDof
 NAME = "aukf"
 PLAIN_NAME = "ukf"
 
+CHANNELS = ("ax", "ay", "r")
+"""The measured channels, in Z's order (the consistency monitor's sensor_noise order)."""
+CHECKS = Checks(channels=CHANNELS, linear_range=True)
+"""Beyond the spec: the monitor block (model.monitor_block)."""
 UKF_FIELDS: tuple[Field, ...] = (
     choice("longitudinal_force", ("wheel_speeds", "free_rolling"), "tyre slip ratios from the "
            "measured wheel speeds (C4.1) or free rolling with a_x a random walk (C4.2)"),
@@ -84,9 +89,7 @@ UKF_FIELDS: tuple[Field, ...] = (
     nonnegative("restart_sideslip", "rad", "beyond the spec: restart when |atan2(v, u)| exceeds "
                 "this; 0 = never"),
     ROLL_CORRECTION,
-    *consistency.fields(("ax", "ay", "r")),
-    consistency.LINEAR_RANGE,
-    *input_monitors.FIELDS,
+    *CHECKS.fields,
     *LOW_SPEED_FIELDS,
 )
 """Seed 002's UKF on the 3-DOF HSRI model (docs/methods.md, seed 002 §3, §5)."""
@@ -109,8 +112,6 @@ X_NAMES = tuple(name for name, _, _ in STATE)
 N = len(STATE)
 MEASURED = (4, 5, 2)
 """Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
-CHANNELS = ("ax", "ay", "r")
-"""The measured channels, in Z's order (the consistency monitor's sensor_noise order)."""
 Q_FLOOR = 1e-3
 """Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
 _BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
@@ -134,9 +135,15 @@ def method_inputs(settings) -> tuple[str, ...]:
     return (*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ()))
 
 
+def monitors(settings) -> MonitorBlock:
+    """The monitor block for the numeric ``settings``."""
+    return CHECKS.block(method_inputs(settings), settings)
+
+
 def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for the configured longitudinal force and variant."""
-    inputs = input_monitors.inputs(method_inputs(settings), settings)
+    block = monitors(settings)
+    inputs = block.inputs
     scale = force_scales(vehicle)
     estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
     states = Layout((
@@ -147,8 +154,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
            *(Signal(f"qvar_{n}", f"({unit})^2", f"process-noise variance of {n}",
                     scale=scale[n] ** 2) for n, unit, _ in STATE),
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
-        *(consistency.STATES if consistency.enabled(settings) else ()),
-        *input_monitors.states(settings, inputs.names),
+        *block.states,
         signals.HOLD_REASON,
     ))
     outputs = Layout((
@@ -246,7 +252,7 @@ class _Symbols:
     inputs: ca.SX
     u: dict
     guard: Any
-    monitored: bool
+    monitors: MonitorBlock
 
 
 @dataclass(frozen=True)
@@ -268,11 +274,11 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     inputs_layout, states, outputs = layouts(numeric, adaptive, params.numeric.vehicle)
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
-    monitored = input_monitors.monitored_only(method_inputs(numeric), numeric)
+    block = monitors(numeric)
     sym = _Symbols(params, name, adaptive, settings, inputs_layout, states, outputs, state, kept, inputs, u,
                    input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["hold_reason"],
-                               monitored),
-                   consistency.enabled(numeric))
+                               block.monitored),
+                   block)
     init_state = _initial_state(sym)
     start = _restarted_after_low_speed(sym, init_state)
     return _step(sym, init_state, start)
@@ -292,8 +298,7 @@ def _initial_state(sym: _Symbols) -> ca.SX:
         **({**{f"qmean_{n}": ca.SX(0) for n in X_NAMES},
             **{f"qvar_{n}": Q0[i] for i, n in enumerate(X_NAMES)},
             "fading": ca.SX(settings["forgetting_factor"])} if sym.adaptive else {}),
-        **consistency.initial_entries(sym.monitored),
-        **input_monitors.initial_entries(first, sym.params.numeric.settings(sym.name), sym.inputs_layout.names),
+        **sym.monitors.initial_entries(first),
         "hold_reason": 2 * holding,
     })
 
@@ -393,30 +398,24 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
     def keep(value, key):
         return ca.if_else(active, value, kept[key])
 
-    suspect = rising = ca.SX(0)
-    if sym.monitored:
-        check = consistency.monitor(f.s, innovation, settings, sym.params.config.sample_time)
-        suspect = ca.logic_and(active, check.suspect)
-        rising = ca.logic_and(active, check.first)
-        extra = {**extra, **check.updates}
-    stuck, flags = input_monitors.monitor(kept, u, guard.plausible, active, settings,    # from the state as it came in
-                                          sym.params.numeric.settings(sym.name), sym.params.config.sample_time,
-                                          sym.inputs_layout.names, sym.params.config.vehicle, guard.monitored)
+    T = sym.params.config.sample_time
+    judged = sym.monitors.judge_model(f.s, active, settings, T, innovation, u["ay"], held_here=False)
+    extra = {**extra, **judged.updates}
+    watched = sym.monitors.watch_inputs(kept, u, guard.plausible, active, settings, T,   # from the state as it came in
+                                        sym.params.config.vehicle)
+    stuck = watched.updates
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),
                            **extra, **stuck, "hold_reason": ca.SX(0)})
     held = states.pack({**kept, **stuck, "hold_reason": ca.if_else(guard.low_speed, 2, 1)})
     restart = states.pack({**{n: init_state[i] for i, n in enumerate(states.names)},
-                           **({e.name: extra[e.name] for e in consistency.STATES} if sym.monitored else {}),
+                           **judged.updates,
                            **stuck, "hold_reason": ca.SX(0)})
-    restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), rising))
+    restarted = ca.logic_and(active, ca.logic_or(diverged(x_new, u["vx"], settings), judged.first_inconsistent))
     x_out = ca.if_else(restarted, restart[:N], x_new)
     code = (guard.status + ca.if_else(active, repaired * status.COVARIANCE_REPAIRED, 0)
             + ca.if_else(restarted, status.FILTER_RESTARTED, 0)
-            + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
-            + flags
-            + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
-                         status.BEYOND_LINEAR_RANGE, 0))
+            + watched.code + judged.code)
     output = sym.outputs.pack({
         "beta": ca.if_else(active, ca.atan2(x_out[1], x_out[0]), 0),
         **{out: keep(x_out[X_NAMES.index(n)], n) for out, n in
@@ -445,12 +444,12 @@ def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:
 
 _UKF_TUNABLE = {"process_noise": Tunable(1e-8, 1e-2), "measurement_noise": Tunable(1e-5, 1e-1)}
 _UKF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.COVARIANCE_REPAIRED, status.FILTER_RESTARTED,
-               status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE, *input_monitors.STATUS_BITS)
-_UKF_DERIVED = {**ROLL_GRADIENT, **consistency.derived(CHANNELS)}
+               *CHECKS.status_bits)
+_UKF_DERIVED = {**ROLL_GRADIENT, **CHECKS.derived}
 DEFINITIONS = (
     Definition(name=PLAIN_NAME, build=build_plain, schema=UKF_SCHEMA, tunable=_UKF_TUNABLE,
-               status_bits=_UKF_STATUS, derived=_UKF_DERIVED),
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=monitors),
     Definition(name=NAME, build=build_adaptive, schema=AUKF_SCHEMA,
                tunable={**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)},
-               status_bits=_UKF_STATUS, derived=_UKF_DERIVED),
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=monitors),
 )

@@ -10,7 +10,7 @@ reconstructed; numbers in brackets are the spec's):
   alpha_eq = |delta - L r / vx| [18];
 * RLS on X = [C0_L, C0_R] with regressor alpha_eq I [26-32], forgetting factor tau^(T / 1 ms)
   (B6), updated only while alpha_eq >= alpha_min (and, beyond the paper, no input monitor raises a
-  bit: model.input_monitors), trace(P) bounded by p_max, X clamped to
+  bit: model.monitor_block), trace(P) bounded by p_max, X clamped to
   [0.3, 1.5] C0_nom [33]; C_f, C_r [24, 25]; ``stiffness = "constant"`` gives the plain EKF with
   the vehicle file's C_f, C_r;
 * per-axle regressors, X = [C0_f, C0_r] against each axle's slip angle [3], updated while both
@@ -35,13 +35,12 @@ Hold rule (model.guard): while not active every state is kept and beta = 0.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import consistency, filters, input_monitors, kalman, signals, status
+from vsegen.model import filters, kalman, signals, status
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
@@ -55,6 +54,7 @@ from vsegen.model.estimator import (
 )
 from vsegen.model.guard import first_sample, hold, input_guard, model_speed, symbolic
 from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.monitor_block import Checks, MonitorBlock
 from vsegen.model.schema import (
     LOW_SPEED_FIELDS,
     LOW_SPEED_RULES,
@@ -75,6 +75,8 @@ NAME = "ekf_rls"
 
 CHANNELS = ("r",)
 """The EKF's measured channel (the consistency monitor's sensor_noise)."""
+CHECKS = Checks(channels=CHANNELS, linear_range=True)
+"""Beyond the paper: the monitor block (model.monitor_block)."""
 SCHEMA = EstimatorSchema(
     fields=(
         choice("stiffness", ("rls", "constant"), "cornering stiffness: estimated online (the "
@@ -101,12 +103,10 @@ SCHEMA = EstimatorSchema(
         nonnegative("indicator_low", "1/s", "D_1: lambda = 0 below"),
         positive("indicator_high", "1/s", "D_2: lambda = 1 above"),
         ROLL_CORRECTION,
-        *consistency.fields(CHANNELS),
-        consistency.LINEAR_RANGE,
         share("stiffness_drop_limit", "beyond the paper: either axle's online stiffness below this share "
                  "of the vehicle file's raises BEYOND_LINEAR_RANGE (the tyres are past their linear range, "
                  "where the linear stiffness it learns lags what they do; 0 = never)", default=0.0),
-        *input_monitors.FIELDS,
+        *CHECKS.fields,
         *LOW_SPEED_FIELDS,
     ),
     rules=(*LOW_SPEED_RULES, above("indicator_high", "indicator_low", "a rate", "1/s"),
@@ -119,12 +119,12 @@ LOAD_FLOOR = 0.05
 """Smallest wheel load, as a share of a static corner load m g / 4 [23]."""
 
 METHOD_INPUTS = ("delta", "vx", "ax", "ay", "r")
-"""What the method reads; the input monitors may add theirs (:func:`input_layout`)."""
+"""What the method reads; the monitors may add theirs (:func:`monitors`)."""
 
 
-def input_layout(settings) -> Layout:
-    """The input layout for the numeric ``settings``: the method's and the input monitors'."""
-    return input_monitors.inputs(METHOD_INPUTS, settings)
+def monitors(settings) -> MonitorBlock:
+    """The monitor block for the numeric ``settings``."""
+    return CHECKS.block(METHOD_INPUTS, settings)
 _EKF = kalman.packed_names("P", ("beta", "r"))
 _RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
 _EKF_ESTIMATES = (Signal("beta_ekf", "rad", "EKF sideslip angle"),
@@ -206,11 +206,9 @@ def nominal_c0(vehicle):
 
 def states(settings) -> Layout:
     """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals, the
-    consistency monitor its entries."""
+    monitor block its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
-    monitor = consistency.STATES if consistency.enabled(settings) else ()
-    watched = input_monitors.states(settings, input_layout(settings).names)
-    return Layout((*STATES.signals, *kinematic, *monitor, *watched))
+    return Layout((*STATES.signals, *kinematic, *monitors(settings).states))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -330,23 +328,23 @@ def build(params: Parameters) -> Estimator:
     """The ekf_rls estimator ([vehicle], [inputs], [estimator.ekf_rls])."""
     config = params.config
     settings, choices = config.settings(NAME), params.numeric.settings(NAME)
-    layout = states(choices)
+    layout, block = states(choices), monitors(choices)
     state, s = layout.symbols("state")
-    in_layout = input_layout(choices)
+    in_layout = block.inputs
     inputs, u = in_layout.symbols("input")
     guard, decisions = symbolic(input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"],
-                                            s["holding"], input_monitors.monitored_only(METHOD_INPUTS, choices)))
+                                            s["holding"], block.monitored))
     ok = guard.plausible
     delta, ax, ay_measured, r_m = (hold(u[n], ok[n], 0) for n in ("delta", "ax", "ay", "r"))
     vx_min = settings["vx_min"]
     vx = model_speed(hold(u["vx"], ok["vx"], vx_min), vx_min, config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
-    monitors = input_monitors.monitor(s, u, ok, guard.active, settings, choices, config.sample_time,
-                                      in_layout.names, config.vehicle, guard.monitored)
-    stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=monitors[1] > 0)
+    watched = block.watch_inputs(s, u, ok, guard.active, settings, config.sample_time, config.vehicle)
+    stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=watched.code > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
-    next_state, output = _fused(config, settings, choices, layout, s, guard, measured, stiffness, ekf, monitors)
-    init_state = _initial_state(config, settings, choices, layout, u, stiffness.kinematic)
+    next_state, output = _fused(config, settings, choices, layout, block, s, guard, measured, stiffness, ekf,
+                                watched)
+    init_state = _initial_state(config, settings, choices, layout, block, u, stiffness.kinematic)
     init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions)
     per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
@@ -415,11 +413,11 @@ def _ekf(config, settings, s: dict, k: _Stiffness, r_m: ca.SX):
                                 settings["measurement_noise"])
 
 
-def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measured, k: _Stiffness, ekf,
-           monitors: tuple[dict, ca.SX]):
+def _fused(config, settings, choices, layout: Layout, block: MonitorBlock, s: dict, guard, m: _Measured,
+           k: _Stiffness, ekf, watched):
     """(next state, output): the stiffness-rate weight, the integral method re-seeded from the
-    fused beta, their fusion, the optional consistency monitor, the input monitors' step
-    ``monitors`` (``model.input_monitors.monitor``) and the hold."""
+    fused beta, their fusion, the monitor block's stages (``watched``: its input monitors') and the
+    hold."""
     vehicle, T = config.vehicle, config.sample_time
     x_ekf, P_ekf, innovation = ekf
     active = guard.active
@@ -434,16 +432,11 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
     def keep(value, name):
         return ca.if_else(active, value, s[name])
 
-    monitor, code = dict(monitors[0]), guard.status + monitors[1]
-    if consistency.enabled(choices):   # beyond the paper: the monitor of the EKF's yaw-rate innovation
-        check = consistency.monitor(s, innovation, settings, T)
-        monitor |= {n: keep(value, n) for n, value in check.updates.items()}
-        # ... which concerns the output only while the EKF carries most of it (lambda < 1/2)
-        suspect = ca.logic_and(ca.logic_and(active, check.suspect), weight < 0.5)
-        code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
-    if choices["linear_range"] > 0 or choices["stiffness_drop_limit"] > 0:    # beyond the paper
-        code = code + ca.if_else(ca.logic_and(active, _beyond_linear_range(vehicle, settings, choices, m.ay, k)),
-                                 status.BEYOND_LINEAR_RANGE, 0)
+    # beyond the paper: the EKF's yaw-rate innovation concerns the output only while the EKF carries
+    # most of it (lambda < 1/2); the learned stiffness can say the tyres left their linear range
+    judged = block.judge_model(s, active, settings, T, innovation, m.ay, concerns=weight < 0.5,
+                               beyond=_stiffness_dropped(vehicle, settings, choices, k))
+    code = guard.status + watched.code + judged.code
     next_state = layout.pack({
         "beta_ekf": keep(x_ekf[0], "beta_ekf"), "r_ekf": keep(x_ekf[1], "r_ekf"),
         **{n: keep(kalman.pack_symmetric(P_ekf)[i], n) for i, n in enumerate(_EKF)},
@@ -454,7 +447,7 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
         "indicator": keep(indicator, "indicator"), "beta": keep(beta, "beta"),
         "holding": ca.if_else(active, 0, 1),
         **{n: keep(value, n) for n, value in k.kinematic.items()},
-        **monitor,
+        **watched.updates, **judged.updates,
     })
     output = OUTPUTS.pack({
         "beta": ca.if_else(active, beta, 0), "beta_ekf": ca.if_else(active, x_ekf[0], 0),
@@ -465,27 +458,24 @@ def _fused(config, settings, choices, layout: Layout, s: dict, guard, m: _Measur
     return next_state, output
 
 
-def _beyond_linear_range(vehicle, settings, choices, ay, k: _Stiffness):
-    """|a_y| beyond ``linear_range``, or an axle's learned stiffness below ``stiffness_drop_limit``
-    times the vehicle file's: the tyres work past their linear range. Only the checks switched on
-    (``choices``, the numeric settings) generate code."""
-    tests = []
-    if choices["linear_range"] > 0:
-        tests.append(consistency.beyond_linear_range(ay, settings))
-    if choices["stiffness_drop_limit"] > 0:
-        share = settings["stiffness_drop_limit"]
-        tests += [k.c_front < share * vehicle["cornering_stiffness_front"],
-                  k.c_rear < share * vehicle["cornering_stiffness_rear"]]
-    return functools.reduce(ca.logic_or, tests)
+def _stiffness_dropped(vehicle, settings, choices, k: _Stiffness) -> tuple:
+    """The tests of an axle's learned stiffness below ``stiffness_drop_limit`` times the vehicle
+    file's (the tyres work past their linear range); none while the limit is 0 (``choices``, the
+    numeric settings)."""
+    if choices["stiffness_drop_limit"] <= 0:
+        return ()
+    share = settings["stiffness_drop_limit"]
+    return (k.c_front < share * vehicle["cornering_stiffness_front"],
+            k.c_rear < share * vehicle["cornering_stiffness_rear"])
 
 
-def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic: dict) -> ca.SX:
+def _initial_state(config, settings, choices, layout: Layout, block: MonitorBlock, u: dict,
+                   kinematic: dict) -> ca.SX:
     """The state at the first sample (§2.7): EKF at [0, r_0] with P_0, RLS at the nominal
     stiffness, the filters at sample 0."""
     vehicle = config.vehicle
     c0_nom = nominal_c0(vehicle)
-    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"],
-                                  input_monitors.monitored_only(METHOD_INPUTS, choices))
+    first, holding = first_sample(u, config.limits, settings["vx_min"], settings["vx_resume"], block.monitored)
     ay0 = roll_corrected(first["ay"], settings["roll_gradient"])
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     P_rls0 = kalman.pack_symmetric(ca.SX.eye(2) * settings["rls_initial_covariance"])
@@ -503,8 +493,7 @@ def _initial_state(config, settings, choices, layout: Layout, u: dict, kinematic
         "c_front": c_front0, "c_rear": c_rear0, "r_last": first["r"], "r_dot": ca.SX(0),
         "indicator": ca.SX(0), "beta": ca.SX(0), "holding": holding,
         **{n: kinematic0[n] for n in kinematic},
-        **consistency.initial_entries(consistency.enabled(choices)),
-        **input_monitors.initial_entries(first, choices, input_layout(choices).names),
+        **block.initial_entries(first),
     })
 
 
@@ -514,6 +503,5 @@ DEFINITIONS = (Definition(
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
              "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
              "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE,
-                 *input_monitors.STATUS_BITS),
-    derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **consistency.derived(CHANNELS)}),)
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=monitors,
+    derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **CHECKS.derived}),)

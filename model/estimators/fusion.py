@@ -11,9 +11,11 @@ a_y - r v_x - c, the KF a_y - offset_sensor_share c).
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
-from vsegen.model import consistency, frozen, signals, status
+from vsegen.model import frozen, signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -37,11 +39,15 @@ from vsegen.model.estimators.kinematic_dynamic import (
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from vsegen.model.guard import hold, symbolic
 from vsegen.model.layout import Layout
+from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, nonnegative, positive
 from vsegen.model.signals import Signal
 
 NAME = "fusion"
 
+CHECKS = Checks(channels=kf2dof.CHANNELS, linear_range=True)
+"""Beyond the paper: the monitor block (model.monitor_block): the input monitors, the consistency
+monitor of the KF's innovations and the linear-range flag."""
 SCHEMA = EstimatorSchema(
     fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             positive("integral_gain", "1/s", "k_c: integral correction of the kinematic "
@@ -51,8 +57,7 @@ SCHEMA = EstimatorSchema(
                         "from the KF, exceeds this (a bank or an offset drifts the integrator); "
                         "0 = never", default=0.0),
             *kinematic_offset.FIELDS,
-            *consistency.fields(kf2dof.CHANNELS),
-            consistency.LINEAR_RANGE),
+            *CHECKS.fields),
     rules=LOW_SPEED_RULES)
 
 OUTPUTS = Layout((
@@ -73,9 +78,7 @@ def kinematic_weight(ay_filtered: ca.SX, threshold: float) -> ca.SX:
 def build(params: Parameters) -> Estimator:
     """The fusion estimator ([vehicle], [inputs], [estimator.fusion])."""
     numeric = params.numeric.settings(NAME)
-    monitored = consistency.enabled(numeric)
-    seed = KinematicDynamic(params, NAME, (*kinematic_offset.states(numeric),
-                                           *(consistency.STATES if monitored else ())))
+    seed = KinematicDynamic(params, NAME, CHECKS, kinematic_offset.states(numeric))
     layout, T = seed.layout, seed.T
     state, s = layout.symbols("state")
     inputs, u = seed.inputs.symbols("input")
@@ -106,18 +109,12 @@ def build(params: Parameters) -> Estimator:
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta_kin = sideslip(vy_kin, vx)
     beta = weight * beta_kin + (1 - weight) * result["beta"]
-    code, monitor = pre.status, {}
+    judged = seed.monitors.judge_model(s, active, seed.settings, T, result["innovation"], u["ay"], held_here=False)
+    code, monitor = pre.status + judged.code, judged.updates
     limit = seed.settings["disagreement_limit"]
-    if params.numeric.settings(NAME)["disagreement_limit"] > 0:   # beyond the paper
+    if numeric["disagreement_limit"] > 0:   # beyond the paper
         apart = weight * ca.fabs(beta_kin - result["beta"]) > limit
         code = code + status.SCHEMES_DISAGREE * (active * apart)
-    if params.numeric.settings(NAME)["linear_range"] > 0:   # beyond the paper
-        code = code + ca.if_else(ca.logic_and(active, consistency.beyond_linear_range(u["ay"], seed.settings)),
-                                 status.BEYOND_LINEAR_RANGE, 0)
-    if monitored:   # beyond the paper: the consistency monitor of the KF's innovations
-        check = consistency.monitor(s, result["innovation"], seed.settings, T)
-        monitor = check.updates
-        code = code + ca.if_else(ca.logic_and(active, check.suspect), status.MODEL_INCONSISTENT, 0)
     running = seed.advanced({**s, **pre.updates}, u, {
         "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
         **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor, **learned})
@@ -143,7 +140,6 @@ DEFINITIONS = (Definition(
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "integral_gain": Tunable(0.05, 5.0, regime=BEYOND_LINEAR),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
-    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.MODEL_INCONSISTENT, status.SCHEMES_DISAGREE,
-                 status.BEYOND_LINEAR_RANGE),
-    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION,
-             **consistency.derived(kf2dof.CHANNELS)}),)
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.SCHEMES_DISAGREE, *CHECKS.status_bits),
+    monitors=functools.partial(CHECKS.block, kf2dof.METHOD_INPUTS),
+    derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **CHECKS.derived}),)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model import consistency, discretize, input_monitors, kalman, signals, status, tyres
+from vsegen.model import discretize, kalman, signals, status, tyres
 from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
@@ -35,6 +35,7 @@ from vsegen.model.estimator import (
 )
 from vsegen.model.guard import first_sample, hold, input_guard, model_speed, previous_inputs, symbolic
 from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.monitor_block import Checks, MonitorBlock
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
 from vsegen.model.signals import Signal
 
@@ -42,29 +43,28 @@ NAME = "kf2dof"
 
 CHANNELS = ("ay", "r")
 """The KF's measured channels (the consistency monitor's sensor_noise order)."""
-SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *consistency.fields(CHANNELS), consistency.LINEAR_RANGE,
-                                 *input_monitors.FIELDS),
-                         rules=LOW_SPEED_RULES)
+CHECKS = Checks(channels=CHANNELS, linear_range=True)
+"""Beyond the paper: the monitor block (model.monitor_block)."""
+SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *CHECKS.fields), rules=LOW_SPEED_RULES)
 
 METHOD_INPUTS = ("delta", "vx", "ay", "r")
-"""What the bicycle-model KF reads; the input monitors may add theirs (:func:`input_layout`)."""
+"""What the bicycle-model KF reads; the monitors may add theirs (:func:`monitors`)."""
 
 
-def input_layout(settings) -> Layout:
-    """The input layout for the numeric ``settings``: the KF's and the input monitors'."""
-    return input_monitors.inputs(METHOD_INPUTS, settings)
+def monitors(settings) -> MonitorBlock:
+    """The monitor block for the numeric ``settings``."""
+    return CHECKS.block(METHOD_INPUTS, settings)
 
 _ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 def states(settings) -> Layout:
-    """The state layout; the monitor's entry only when it is on."""
+    """The state layout; the monitors' entries only when they are on."""
     return Layout((
         *_ESTIMATES,
         *covariance_signals("P", _ESTIMATES),
         Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
-        *(consistency.STATES if consistency.enabled(settings) else ()),
-        *input_monitors.states(settings, input_layout(settings).names),
+        *monitors(settings).states,
         signals.HOLDING,
     ))
 
@@ -176,14 +176,13 @@ def build(params: Parameters) -> Estimator:
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     update = dynamic_update(params)
-    monitored = consistency.enabled(params.numeric.settings(NAME))
+    block = monitors(params.numeric.settings(NAME))
     layout = states(params.numeric.settings(NAME))
 
     state, s = layout.symbols("state")
-    in_layout = input_layout(params.numeric.settings(NAME))
+    in_layout = block.inputs
     inputs, u = in_layout.symbols("input")
-    monitor_only = input_monitors.monitored_only(METHOD_INPUTS, params.numeric.settings(NAME))
-    guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"], monitor_only))
+    guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"], block.monitored))
     ok = guard.plausible
     result = update(
         x=ca.vertcat(s["vy"], s["r"]),
@@ -200,22 +199,15 @@ def build(params: Parameters) -> Estimator:
     vy_next = ca.if_else(active, result["x_next"][0], 0)
     r_next = ca.if_else(active, result["x_next"][1], s["r"])
     P_next = ca.if_else(active, result["P_next"], P0)
-    code = guard.status + ca.if_else(
-        ca.logic_and(active, consistency.beyond_linear_range(u["ay"], settings)),
-        status.BEYOND_LINEAR_RANGE, 0)
-    monitor, flags = input_monitors.monitor(s, u, ok, active, settings, params.numeric.settings(NAME),
-                                            config.sample_time, in_layout.names, config.vehicle, monitor_only)
-    code = code + flags
-    if monitored:
-        check = consistency.monitor(s, result["innovation"], settings, config.sample_time)
-        monitor |= {k: ca.if_else(active, v, s[k]) for k, v in check.updates.items()}
-        code = code + ca.if_else(ca.logic_and(active, check.suspect), status.MODEL_INCONSISTENT, 0)
+    watched = block.watch_inputs(s, u, ok, active, settings, config.sample_time, config.vehicle)
+    judged = block.judge_model(s, active, settings, config.sample_time, result["innovation"], u["ay"])
+    code = guard.status + watched.code + judged.code
     next_state = layout.pack({
         "vy": vy_next,
         "r": r_next,
         **{name: P_next[i] for i, name in enumerate(_COVARIANCE)},
         **previous_inputs(u, ok, s),
-        **monitor,
+        **watched.updates, **judged.updates,
         "holding": ca.if_else(active, 0, 1),
     })
     output = OUTPUTS.pack({
@@ -225,15 +217,14 @@ def build(params: Parameters) -> Estimator:
         "status": code,
     })
 
-    first, holding = first_sample(u, limits, vx_min, vx_resume, monitor_only)
+    first, holding = first_sample(u, limits, vx_min, vx_resume, block.monitored)
     init_state = layout.pack({
         "vy": ca.SX(0),
         "r": first["r"],
         **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
-        **consistency.initial_entries(monitored),
-        **input_monitors.initial_entries(first, params.numeric.settings(NAME), in_layout.names),
+        **block.initial_entries(first),
         "holding": holding,
     })
     init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
@@ -245,6 +236,5 @@ def build(params: Parameters) -> Estimator:
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable=KF_TUNABLES,
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, status.MODEL_INCONSISTENT, status.BEYOND_LINEAR_RANGE,
-                 *input_monitors.STATUS_BITS),
-    derived={**KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **consistency.derived(CHANNELS)}),)
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=monitors,
+    derived={**KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **CHECKS.derived}),)

@@ -11,13 +11,14 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import filters, frozen, input_monitors, kalman, signals, status
+from vsegen.model import filters, frozen, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import BEYOND_LINEAR, Tunable
 from vsegen.model.estimators import kf2dof
 from vsegen.model.guard import Guard, first_sample, hold, input_guard, model_speed, plausibility, previous_inputs
 from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
 from vsegen.model.sensors import roll_corrected
 from vsegen.model.signals import Signal
@@ -27,9 +28,9 @@ KINEMATIC_INPUTS = ("ay", "r")
 COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 _KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
 DYN, KIN = 0, 1
-STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT, *input_monitors.STATUS_BITS)
-"""What seed 000's estimators can raise: the hold rule's bits, the reliability checks' time-out and
-the input monitors'."""
+STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT)
+"""What seed 000's estimators can raise beside their monitor block's bits: the hold rule's bits and
+the reliability checks' time-out."""
 
 YAW_RATE_CHECKS = ("reference", "yaw_acceleration")
 KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
@@ -51,9 +52,9 @@ KINEMATIC_DYNAMIC_FIELDS: tuple[Field, ...] = (
     positive("reference_timeout", "s", "after this long of continuous rejection, accept again"),
     positive("threshold", "m/s^2", "switching threshold a_yT on |a_y,f|"),
     ROLL_CORRECTION,
-    *input_monitors.FIELDS,
 )
-"""Seed 000's pre-processing and switching settings (docs/methods.md, seed 000 §3)."""
+"""Seed 000's pre-processing and switching settings (docs/methods.md, seed 000 §3); each estimator
+adds its monitor block's (``model.monitor_block``)."""
 
 
 def _checks_against(kind: str):
@@ -76,7 +77,7 @@ def window(params: Parameters, table: str) -> int:
 
 def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal, ...] = ()) -> Layout:
     """The state layout; ``extra`` are an estimator's own entries (0 at init, kept while holding),
-    ``monitors`` the input monitors' (``model.input_monitors``)."""
+    ``monitors`` its monitor block's (``model.monitor_block``)."""
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -132,20 +133,20 @@ class Preprocessed:
 
 
 class KinematicDynamic:
-    """Layout, settings and helpers of one seed-000 estimator table."""
+    """Layout, settings and helpers of one seed-000 estimator table, with the monitor block of its
+    ``checks``."""
 
-    def __init__(self, params: Parameters, table: str, extra: tuple[Signal, ...] = ()) -> None:
+    def __init__(self, params: Parameters, table: str, checks: Checks, extra: tuple[Signal, ...] = ()) -> None:
         self.params = params
         self.table = table
         self.settings = params.config.settings(table)
         self.T = params.config.sample_time
         self.n_median = window(params, table)
         self.extra = extra
-        self.inputs = kf2dof.input_layout(params.numeric.settings(table))
-        self.monitored = input_monitors.monitored_only(kf2dof.METHOD_INPUTS, params.numeric.settings(table))
-        """The input layout: the KF's inputs and what the input monitors read beside them."""
-        self.monitors = input_monitors.states(params.numeric.settings(table), self.inputs.names)
-        self.layout = states(self.n_median, extra, self.monitors)
+        self.monitors = checks.block(kf2dof.METHOD_INPUTS, params.numeric.settings(table))
+        self.inputs = self.monitors.inputs
+        """The input layout: the KF's inputs and what the monitors read beside them."""
+        self.layout = states(self.n_median, extra, self.monitors.states)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
@@ -162,7 +163,8 @@ class KinematicDynamic:
 
     def guard(self, s: dict, u: dict) -> Guard:
         """The input guard of the sample (``model.guard.input_guard``)."""
-        return input_guard(u, self.params.config.limits, self.vx_min, self.vx_resume, s["holding"], self.monitored)
+        return input_guard(u, self.params.config.limits, self.vx_min, self.vx_resume, s["holding"],
+                           self.monitors.monitored)
 
     def preprocess(self, s: dict, u: dict, guard: Guard | None = None) -> Preprocessed:
         """Filters and reliability checks of the sample, under ``guard`` (default: its
@@ -190,10 +192,8 @@ class KinematicDynamic:
         history = [ay_b] + [s[f"ay_b_hist_{i}"] for i in range(1, self.n_median)]
         suspect = ca.logic_or(r_check.forced, ay_check.forced)
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
-        monitor, flags = input_monitors.monitor(s, u, ok, active, settings,
-                                                self.params.numeric.settings(self.table), self.T,
-                                                self.inputs.names, self.params.config.vehicle, self.monitored)
-        code = code + flags
+        watched = self.monitors.watch_inputs(s, u, ok, active, settings, self.T, self.params.config.vehicle)
+        code = code + watched.code
 
         def keep(name, value):
             return ca.if_else(active, value, s[name])
@@ -206,9 +206,9 @@ class KinematicDynamic:
             "r_last": keep("r_last", r_check.last), "ay_last": keep("ay_last", ay_check.last),
             "r_rejections": keep("r_rejections", r_check.rejections),
             "ay_rejections": keep("ay_rejections", ay_check.rejections),
-            **monitor,
+            **watched.updates,
         }
-        frozen_inputs = frozen.any_frozen(monitor, settings, self.T, KINEMATIC_INPUTS)
+        frozen_inputs = frozen.any_frozen(watched.updates, settings, self.T, KINEMATIC_INPUTS)
         return Preprocessed(guard, r_check.value, filters.median(history), code, updates, frozen_inputs)
 
     def held(self, m: dict, v: dict, plausible: dict | None = None) -> dict:
@@ -233,7 +233,8 @@ class KinematicDynamic:
     def initial_state(self, u: dict) -> ca.SX:
         """§2.9: filters at their DC steady state for sample 0, r_last = r_0 if inside the band of
         r_ref,0 else r_ref,0, KF at [0, r_0] with P_0, previous inputs = sample 0."""
-        first, holding = first_sample(u, self.params.config.limits, self.vx_min, self.vx_resume, self.monitored)
+        first, holding = first_sample(u, self.params.config.limits, self.vx_min, self.vx_resume,
+                                      self.monitors.monitored)
         ay0, r0, delta0, vx0 = self.roll_corrected(first["ay"]), first["r"], first["delta"], first["vx"]
         r_ref0 = reference_yaw_rate(self.params, delta0, self.speed(vx0))
         r_last0 = ca.if_else(ca.fabs(r0 - r_ref0) <= self.settings["yaw_rate_band"], r0, r_ref0)
@@ -247,7 +248,7 @@ class KinematicDynamic:
             "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
             "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
             "delta_prev": delta0, "vx_prev": vx0,
-            **input_monitors.initial_entries(first, self.params.numeric.settings(self.table), self.inputs.names),
+            **self.monitors.initial_entries(first),
             "holding": holding,
             **{entry.name: ca.SX(0) for entry in self.extra},
         })

@@ -19,6 +19,7 @@ Only the active scheme is evaluated in the generated C (model.estimator.Schemes)
 
 from __future__ import annotations
 
+import functools
 from dataclasses import replace
 
 import casadi as ca
@@ -49,12 +50,15 @@ from vsegen.model.estimators.kinematic_dynamic import (
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from vsegen.model.guard import hold
 from vsegen.model.layout import Layout
+from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
 from vsegen.model.signals import Signal
 from vsegen.model.status import KINEMATIC_DWELL_LIMITED
 
 NAME = "switching"
 
+CHECKS = Checks()
+"""Beyond the paper: the monitor block (model.monitor_block): the input monitors."""
 SCHEMA = EstimatorSchema(
     fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
             nonnegative("hysteresis", "m/s^2", "beyond the paper (A7): enter the kinematic "
@@ -72,7 +76,8 @@ SCHEMA = EstimatorSchema(
             nonnegative("kinematic_max_dwell", "s", "beyond the paper: longest stay in the kinematic "
                         "scheme while |a_y,f| stays above the threshold; then the dynamic scheme takes "
                         "over (status KINEMATIC_DWELL_LIMITED) until |a_y,f| falls below it; 0 = "
-                        "unbounded (the paper)", default=0.0)),
+                        "unbounded (the paper)", default=0.0),
+            *CHECKS.fields),
     rules=(*LOW_SPEED_RULES, below("hysteresis", "threshold", "a number >= 0", "m/s^2")))
 HOLD = 2
 PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
@@ -148,7 +153,7 @@ def dwell_limited(seed: KinematicDynamic, candidate, samples):
 
 def build(params: Parameters) -> Estimator:
     """The switching estimator ([vehicle], [inputs], [estimator.switching])."""
-    seed = KinematicDynamic(params, NAME, extra_states(params.numeric.settings(NAME)))
+    seed = KinematicDynamic(params, NAME, CHECKS, extra_states(params.numeric.settings(NAME)))
     layout, T = seed.layout, seed.T
 
     # ---- select: pre-processing and the choice of scheme ---------------------------------------
@@ -232,5 +237,6 @@ DEFINITIONS = (Definition(
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "hysteresis": Tunable(0.0, 1.0, log=False, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
-    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED),
+    status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED, *CHECKS.status_bits),
+    monitors=functools.partial(CHECKS.block, kf2dof.METHOD_INPUTS),
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION}),)

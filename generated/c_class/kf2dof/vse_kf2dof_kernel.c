@@ -854,15 +854,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][0]=a04;
   res[1][1]=a10;
   res[1][2]=a30;
-  a23=(casadi_real)(a23<a20);
-  a23=(casadi_real)((a00!=0.)&&(a23!=0.));
-  a23=(casadi_real)((a00!=0.)&&(a23!=0.));
-  a30=256.;
-  a23=((a23!=0.)?a30:0.);
   a30=2048.;
   a10=6.;
-  a20=(casadi_real)(a20<=a10);
-  a16=(a16*a20);
+  a10=(casadi_real)(a20<=a10);
+  a16=(a16*a10);
   a21=(a21-a07);
   a21=(a21*a01);
   a21=(a21*a01);
@@ -890,14 +885,19 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a16=(casadi_real)(a16<a26);
   a11=(a11*a16);
   a30=(a30+a11);
-  a23=(a23+a30);
   a17=(casadi_real)(a17<a27);
   a24=(casadi_real)((a24!=0.)||(a17!=0.));
-  a00=(casadi_real)((a00!=0.)&&(a24!=0.));
-  a24=128.;
-  a00=((a00!=0.)?a24:0.);
-  a23=(a23+a00);
-  res[1][3]=a23;
+  a24=(casadi_real)((a00!=0.)&&(a24!=0.));
+  a17=128.;
+  a24=((a24!=0.)?a17:0.);
+  a23=(casadi_real)(a23<a20);
+  a23=(casadi_real)((a00!=0.)&&(a23!=0.));
+  a00=(casadi_real)((a00!=0.)&&(a23!=0.));
+  a23=256.;
+  a00=((a00!=0.)?a23:0.);
+  a24=(a24+a00);
+  a30=(a30+a24);
+  res[1][3]=a30;
   return 0;
 }
 

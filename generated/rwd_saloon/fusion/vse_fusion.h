@@ -41,13 +41,13 @@ typedef double vse_fusion_real;
 #define VSE_FUSION_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
 #define VSE_FUSION_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 #define VSE_FUSION_STATUS_REFERENCE_SUSPECT (4) /**< a reliability check rejected a measurement for longer than its time-out and accepted it again: the reference (e.g. the steady-state yaw rate) is suspect */
+#define VSE_FUSION_STATUS_SCHEMES_DISAGREE (4096) /**< the kinematic and the model-based scheme disagree by more than disagreement_limit in their share of the output (a road bank, a sensor offset, a frozen or late signal, or a model error): the estimate is suspect */
+#define VSE_FUSION_STATUS_MODEL_INCONSISTENT (128) /**< the measurements disagree with the model's predictions (mean squared innovation above residual_limit sensor variances over residual_window): the estimate is suspect */
+#define VSE_FUSION_STATUS_BEYOND_LINEAR_RANGE (256) /**< the lateral acceleration is beyond linear_range, where the estimate rests on the tyre model (linear, or with a friction coefficient the road may not offer): the estimate is suspect */
 #define VSE_FUSION_STATUS_INPUT_FROZEN (2048) /**< an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time, or the path curvature changed at a constant steer angle (steer_check_limit): a stuck sensor or CAN signal; the estimate is suspect */
 #define VSE_FUSION_STATUS_LATERAL_INCONSISTENT (8192) /**< in quasi-steady driving the lateral acceleration differs from r v_x by more than lateral_check_limit on average: a road bank, an accelerometer offset or mounting tilt, a yaw-rate or speed error; the estimate is suspect */
 #define VSE_FUSION_STATUS_STEERING_OFFSET (16384) /**< the steering-angle zero learned in straight driving (steering_offset) is beyond steering_offset_limit: the steering-angle sensor needs its zero calibrated; the model-based estimate is suspect */
 #define VSE_FUSION_STATUS_YAW_RATE_MISMATCH (32768) /**< the yaw rate differs from the non-driven wheels' speed difference by more than wheel_check_limit on average: a gyro offset, drift or freeze, or a wheel-speed fault; the estimate is suspect */
-#define VSE_FUSION_STATUS_MODEL_INCONSISTENT (128) /**< the measurements disagree with the model's predictions (mean squared innovation above residual_limit sensor variances over residual_window): the estimate is suspect */
-#define VSE_FUSION_STATUS_SCHEMES_DISAGREE (4096) /**< the kinematic and the model-based scheme disagree by more than disagreement_limit in their share of the output (a road bank, a sensor offset, a frozen or late signal, or a model error): the estimate is suspect */
-#define VSE_FUSION_STATUS_BEYOND_LINEAR_RANGE (256) /**< the lateral acceleration is beyond linear_range, where the estimate rests on the tyre model (linear, or with a friction coefficient the road may not offer): the estimate is suspect */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {
@@ -92,20 +92,20 @@ enum {
     VSE_FUSION_STATE_P_R_R = 18, /* (rad/s)^2: KF covariance entry (upper triangle, row by row) */
     VSE_FUSION_STATE_DELTA_PREV = 19, /* rad: last plausible steer angle */
     VSE_FUSION_STATE_VX_PREV = 20, /* m/s: last plausible speed */
-    VSE_FUSION_STATE_FROZEN_AY_VALUE = 21, /* m/s^2: frozen-signal monitor: last plausible ay */
-    VSE_FUSION_STATE_FROZEN_AY_REPEATS = 22, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
-    VSE_FUSION_STATE_FROZEN_R_VALUE = 23, /* rad/s: frozen-signal monitor: last plausible r */
-    VSE_FUSION_STATE_FROZEN_R_REPEATS = 24, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_FUSION_STATE_STEADY_DELTA = 25, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_FUSION_STATE_STEADY_SAMPLES = 26, /* -: cross-checks: samples the stretch has lasted (at most steady_time / T) */
-    VSE_FUSION_STATE_LATERAL_RESIDUAL = 27, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_FUSION_STATE_STEERING_OFFSET = 28, /* rad: learned steering-angle zero (road wheel) */
-    VSE_FUSION_STATE_CURVATURE = 29, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_FUSION_STATE_STEADY_CURVATURE = 30, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_FUSION_STATE_HOLDING = 31, /* -: 1 while holding (low speed or invalid input), else 0 */
-    VSE_FUSION_STATE_KIN_OFFSET = 32, /* m/s^2: learned kinematic offset c: mean of a_y - r v_x in near-straight driving (offset_memory) */
-    VSE_FUSION_STATE_RESIDUAL = 33, /* -: consistency monitor: mean squared innovation in sensor variances */
-    VSE_FUSION_STATE_RESIDUAL_HOLD_LEFT = 34 /* -: consistency monitor: samples MODEL_INCONSISTENT stays raised */
+    VSE_FUSION_STATE_RESIDUAL = 21, /* -: consistency monitor: mean squared innovation in sensor variances */
+    VSE_FUSION_STATE_RESIDUAL_HOLD_LEFT = 22, /* -: consistency monitor: samples MODEL_INCONSISTENT stays raised */
+    VSE_FUSION_STATE_FROZEN_AY_VALUE = 23, /* m/s^2: frozen-signal monitor: last plausible ay */
+    VSE_FUSION_STATE_FROZEN_AY_REPEATS = 24, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
+    VSE_FUSION_STATE_FROZEN_R_VALUE = 25, /* rad/s: frozen-signal monitor: last plausible r */
+    VSE_FUSION_STATE_FROZEN_R_REPEATS = 26, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
+    VSE_FUSION_STATE_STEADY_DELTA = 27, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_FUSION_STATE_STEADY_SAMPLES = 28, /* -: cross-checks: samples the stretch has lasted (at most steady_time / T) */
+    VSE_FUSION_STATE_LATERAL_RESIDUAL = 29, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_FUSION_STATE_STEERING_OFFSET = 30, /* rad: learned steering-angle zero (road wheel) */
+    VSE_FUSION_STATE_CURVATURE = 31, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_FUSION_STATE_STEADY_CURVATURE = 32, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_FUSION_STATE_HOLDING = 33, /* -: 1 while holding (low speed or invalid input), else 0 */
+    VSE_FUSION_STATE_KIN_OFFSET = 34 /* m/s^2: learned kinematic offset c: mean of a_y - r v_x in near-straight driving (offset_memory) */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -166,17 +166,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=((a07!=0.)?a06:0.);
   res[0][19]=a06;
   res[0][20]=a12;
-  a00=((a01!=0.)?a00:0.);
-  res[0][21]=a00;
+  res[0][21]=a02;
   res[0][22]=a02;
-  res[0][23]=a03;
+  a00=((a01!=0.)?a00:0.);
+  res[0][23]=a00;
   res[0][24]=a02;
-  res[0][25]=a06;
+  res[0][25]=a03;
   res[0][26]=a02;
-  res[0][27]=a02;
+  res[0][27]=a06;
   res[0][28]=a02;
   res[0][29]=a02;
   res[0][30]=a02;
+  res[0][31]=a02;
+  res[0][32]=a02;
   a07=(a07*a10);
   a07=(a07*a01);
   a07=(a07*a04);
@@ -190,9 +192,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a07=(a07*a10);
   a07=(casadi_real)(a07==0.);
   a07=((a07!=0.)?a08:0.);
-  res[0][31]=a07;
-  res[0][32]=a02;
-  res[0][33]=a02;
+  res[0][33]=a07;
   res[0][34]=a02;
   return 0;
 }
@@ -202,9 +202,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * arg[0] input[4]: delta, vx, ay, r
  * res[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
@@ -236,7 +236,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][3]=a5;
   a6=(casadi_real)(a2<a6);
   a7=0.;
-  a8=arg[0][31];
+  a8=arg[0][33];
   a7=(casadi_real)(a7<a8);
   a8=3.5000000000000000e+00;
   a2=(casadi_real)(a2<a8);
@@ -259,9 +259,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_fusion_kernel_guard: 38 operations (CasADi SX instructions)
  * arg[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  */
@@ -311,8 +311,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_28 = arg[0][28];
   const casadi_real state_29 = arg[0][29];
   const casadi_real state_30 = arg[0][30];
+  const casadi_real state_31 = arg[0][31];
   const casadi_real state_32 = arg[0][32];
-  const casadi_real state_33 = arg[0][33];
   const casadi_real state_34 = arg[0][34];
   res[0][0]=a00;
   a02=state_0;
@@ -399,16 +399,16 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a22=state_12;
   res[0][12]=a22;
   a22=25.;
-  a25=state_21;
+  a25=state_23;
   a25=(casadi_real)(a01==a25);
-  a13=state_22;
+  a13=state_24;
   a13=(a13+a15);
   a13=casadi_fmin(a13,a22);
   a25=(a25*a13);
   a13=(casadi_real)(a22<=a25);
-  a19=state_23;
+  a19=state_25;
   a19=(casadi_real)(a07==a19);
-  a27=state_24;
+  a27=state_26;
   a27=(a27+a15);
   a27=casadi_fmin(a27,a22);
   a19=(a19*a27);
@@ -794,7 +794,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a54=(a48*a43);
   a42=(a42-a54);
   a54=4.0000000000000002e-01;
-  a55=state_32;
+  a55=state_34;
   a56=(a54*a55);
   a00=(a00-a56);
   a56=(a29*a35);
@@ -900,170 +900,170 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][18]=a51;
   res[0][19]=a08;
   res[0][20]=a09;
-  res[0][21]=a01;
-  res[0][22]=a25;
-  res[0][23]=a07;
-  res[0][24]=a19;
+  a51=9.5122942450071402e-01;
+  a16=state_21;
+  a51=(a51*a16);
+  a16=4.8770575499285984e-02;
+  a00=casadi_sq(a00);
+  a46=8.9640360000000002e-02;
+  a00=(a00/a46);
+  a46=100.;
+  a00=casadi_fmin(a00,a46);
+  a28=casadi_sq(a28);
+  a40=3.0660010000000006e-04;
+  a28=(a28/a40);
+  a28=casadi_fmin(a28,a46);
+  a00=(a00+a28);
+  a28=2.;
+  a00=(a00/a28);
+  a16=(a16*a00);
+  a51=(a51+a16);
+  res[0][21]=a51;
+  a51=(casadi_real)(a23<a51);
+  a46=((a51!=0.)?a46:0.);
+  a16=(casadi_real)(a51==0.);
+  a00=state_22;
+  a28=(a00-a15);
+  a40=0.;
+  a28=casadi_fmax(a28,a40);
+  a16=((a16!=0.)?a28:0.);
+  a46=(a46+a16);
+  res[0][22]=a46;
+  res[0][23]=a01;
+  res[0][24]=a25;
+  res[0][25]=a07;
+  res[0][26]=a19;
   a19=5.9000000000000008e-01;
-  a25=state_25;
-  a51=(a08-a25);
-  a51=casadi_fabs(a51);
-  a51=(a51*a09);
-  a51=(a51*a09);
-  a19=(casadi_real)(a19<a51);
-  a51=(a19*a08);
+  a25=state_27;
+  a46=(a08-a25);
+  a46=casadi_fabs(a46);
+  a46=(a46*a09);
+  a46=(a46*a09);
+  a19=(casadi_real)(a19<a46);
+  a46=(a19*a08);
   a19=(a15-a19);
   a25=(a19*a25);
-  a51=(a51+a25);
-  res[0][25]=a51;
-  a51=state_26;
-  a25=(a51+a15);
+  a46=(a46+a25);
+  res[0][27]=a46;
+  a46=state_28;
+  a25=(a46+a15);
   a16=30.;
   a25=casadi_fmin(a25,a16);
   a19=(a19*a25);
-  res[0][26]=a19;
-  a25=state_27;
-  a46=1.9801326693244747e-02;
+  res[0][28]=a19;
+  a25=state_29;
+  a28=1.9801326693244747e-02;
   a19=(casadi_real)(a16<=a19);
-  a40=casadi_fabs(a01);
-  a39=1.5000000000000000e+00;
-  a45=(casadi_real)(a40<=a39);
-  a45=(a19*a45);
-  a45=(a46*a45);
-  a29=(a07*a09);
-  a01=(a01-a29);
-  a01=(a01-a25);
-  a45=(a45*a01);
-  a25=(a25+a45);
-  res[0][27]=a25;
-  a45=state_28;
-  a01=1.9980013326669210e-03;
-  a29=(casadi_real)(a40<=a33);
+  a39=casadi_fabs(a01);
+  a45=1.5000000000000000e+00;
+  a29=(casadi_real)(a39<=a45);
   a29=(a19*a29);
-  a49=15.;
-  a32=(casadi_real)(a49<=a09);
-  a29=(a29*a32);
-  a01=(a01*a29);
+  a29=(a28*a29);
+  a49=(a07*a09);
+  a01=(a01-a49);
+  a01=(a01-a25);
+  a29=(a29*a01);
+  a25=(a25+a29);
+  res[0][29]=a25;
+  a29=state_30;
+  a01=1.9980013326669210e-03;
+  a49=(casadi_real)(a39<=a33);
+  a49=(a19*a49);
+  a32=15.;
+  a48=(casadi_real)(a32<=a09);
+  a49=(a49*a48);
+  a01=(a01*a49);
   a14=(a14*a07);
-  a49=casadi_fmax(a09,a49);
-  a14=(a14/a49);
+  a32=casadi_fmax(a09,a32);
+  a14=(a14/a32);
   a08=(a08-a14);
-  a08=(a08-a45);
+  a08=(a08-a29);
   a01=(a01*a08);
-  a45=(a45+a01);
-  res[0][28]=a45;
-  a01=state_29;
+  a29=(a29+a01);
+  res[0][30]=a29;
+  a01=state_31;
   a08=9.5162581964040371e-02;
   a07=(a07/a09);
   a07=(a07-a01);
   a08=(a08*a07);
   a01=(a01+a08);
-  res[0][29]=a01;
-  a51=(casadi_real)(a51<a16);
-  a51=(a19*a51);
-  a16=(a51*a01);
-  a51=(a15-a51);
-  a08=state_30;
-  a51=(a51*a08);
-  a16=(a16+a51);
-  res[0][30]=a16;
-  a51=0.;
-  res[0][31]=a51;
-  a08=casadi_fmin(a03,a05);
+  res[0][31]=a01;
+  a46=(casadi_real)(a46<a16);
+  a46=(a19*a46);
+  a16=(a46*a01);
+  a46=(a15-a46);
+  a08=state_32;
+  a46=(a46*a08);
+  a16=(a16+a46);
+  res[0][32]=a16;
+  res[0][33]=a40;
+  a46=casadi_fmin(a03,a05);
   a03=casadi_fmax(a03,a05);
   a05=casadi_fmin(a03,a02);
-  a07=casadi_fmin(a08,a05);
-  a08=casadi_fmax(a08,a05);
+  a08=casadi_fmin(a46,a05);
+  a46=casadi_fmax(a46,a05);
   a03=casadi_fmax(a03,a02);
   a02=casadi_fmin(a03,a06);
-  a05=casadi_fmin(a08,a02);
-  a07=casadi_fmax(a07,a05);
-  a08=casadi_fmax(a08,a02);
+  a05=casadi_fmin(a46,a02);
+  a08=casadi_fmax(a08,a05);
+  a46=casadi_fmax(a46,a02);
   a03=casadi_fmax(a03,a06);
   a06=state_7;
   a03=casadi_fmin(a03,a06);
-  a08=casadi_fmin(a08,a03);
-  a07=casadi_fmax(a07,a08);
-  a08=(a07-a55);
-  a08=casadi_fabs(a08);
-  a08=(casadi_real)(a08<a33);
+  a46=casadi_fmin(a46,a03);
+  a08=casadi_fmax(a08,a46);
+  a46=(a08-a55);
+  a46=casadi_fabs(a46);
+  a46=(casadi_real)(a46<a33);
   a03=(a20*a09);
   a06=casadi_fabs(a03);
   a06=(casadi_real)(a06<a33);
-  a08=(casadi_real)((a08!=0.)&&(a06!=0.));
-  a08=(casadi_real)((a15!=0.)&&(a08!=0.));
-  a46=(a46*a08);
+  a46=(casadi_real)((a46!=0.)&&(a06!=0.));
+  a46=(casadi_real)((a15!=0.)&&(a46!=0.));
+  a28=(a28*a46);
   a18=(a18-a03);
   a18=(a18-a55);
-  a46=(a46*a18);
-  a55=(a55+a46);
-  res[0][32]=a55;
-  a55=9.5122942450071402e-01;
-  a46=state_33;
-  a55=(a55*a46);
-  a46=4.8770575499285984e-02;
-  a00=casadi_sq(a00);
-  a18=8.9640360000000002e-02;
-  a00=(a00/a18);
-  a18=100.;
-  a00=casadi_fmin(a00,a18);
-  a28=casadi_sq(a28);
-  a03=3.0660010000000006e-04;
-  a28=(a28/a03);
-  a28=casadi_fmin(a28,a18);
-  a00=(a00+a28);
-  a28=2.;
-  a00=(a00/a28);
-  a46=(a46*a00);
-  a55=(a55+a46);
-  res[0][33]=a55;
-  a55=(casadi_real)(a23<a55);
-  a18=((a55!=0.)?a18:0.);
-  a46=(casadi_real)(a55==0.);
-  a00=state_34;
-  a28=(a00-a15);
-  a28=casadi_fmax(a28,a51);
-  a46=((a46!=0.)?a28:0.);
-  a18=(a18+a46);
-  res[0][34]=a18;
-  a07=casadi_fabs(a07);
-  a07=(a07/a10);
-  a07=casadi_fmax(a07,a51);
-  a07=casadi_fmin(a07,a15);
-  a07=(a07*a27);
+  a28=(a28*a18);
+  a55=(a55+a28);
+  res[0][34]=a55;
+  a08=casadi_fabs(a08);
+  a08=(a08/a10);
+  a08=casadi_fmax(a08,a40);
+  a08=casadi_fmin(a08,a15);
+  a08=(a08*a27);
   a27=(a38/a11);
   a27=atan(a27);
-  a10=(a07*a27);
-  a18=(a15-a07);
+  a10=(a08*a27);
+  a55=(a15-a08);
   a11=(a35/a11);
   a11=atan(a11);
-  a46=(a18*a11);
-  a10=(a10+a46);
+  a28=(a55*a11);
+  a10=(a10+a28);
   res[1][0]=a10;
-  a38=(a07*a38);
-  a18=(a18*a35);
-  a38=(a38+a18);
+  a38=(a08*a38);
+  a55=(a55*a35);
+  a38=(a38+a55);
   res[1][1]=a38;
   res[1][2]=a20;
-  res[1][3]=a07;
+  res[1][3]=a08;
   a17=(casadi_real)((a17!=0.)||(a24!=0.));
   a17=(casadi_real)((a15!=0.)&&(a17!=0.));
   a17=((a17!=0.)?a23:0.);
   a23=2048.;
   a24=6.;
-  a40=(casadi_real)(a40<=a24);
-  a19=(a19*a40);
+  a39=(casadi_real)(a39<=a24);
+  a19=(a19*a39);
   a01=(a01-a16);
   a01=(a01*a09);
   a01=(a01*a09);
   a01=casadi_fabs(a01);
-  a39=(casadi_real)(a39<a01);
-  a19=(a19*a39);
-  a39=(a13+a22);
+  a45=(casadi_real)(a45<a01);
+  a19=(a19*a45);
+  a45=(a13+a22);
   a13=(a13*a22);
-  a39=(a39-a13);
-  a13=(a19+a39);
-  a19=(a19*a39);
+  a45=(a45-a13);
+  a13=(a19+a45);
+  a19=(a19*a45);
   a13=(a13-a19);
   a23=(a23*a13);
   a13=8192.;
@@ -1073,24 +1073,24 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a23=(a23+a13);
   a13=16384.;
   a54=1.6999999999999999e-03;
-  a45=casadi_fabs(a45);
-  a54=(casadi_real)(a54<a45);
+  a29=casadi_fabs(a29);
+  a54=(casadi_real)(a54<a29);
   a13=(a13*a54);
   a23=(a23+a13);
   a17=(a17+a23);
-  a23=4096.;
-  a13=2.5999999999999999e-02;
+  a40=(casadi_real)(a40<a00);
+  a51=(casadi_real)((a51!=0.)||(a40!=0.));
+  a15=(casadi_real)((a15!=0.)&&(a51!=0.));
+  a51=128.;
+  a15=((a15!=0.)?a51:0.);
+  a17=(a17+a15);
+  a15=4096.;
+  a51=2.5999999999999999e-02;
   a27=(a27-a11);
   a27=casadi_fabs(a27);
-  a07=(a07*a27);
-  a13=(casadi_real)(a13<a07);
-  a23=(a23*a13);
-  a17=(a17+a23);
-  a51=(casadi_real)(a51<a00);
-  a55=(casadi_real)((a55!=0.)||(a51!=0.));
-  a15=(casadi_real)((a15!=0.)&&(a55!=0.));
-  a55=128.;
-  a15=((a15!=0.)?a55:0.);
+  a08=(a08*a27);
+  a51=(casadi_real)(a51<a08);
+  a15=(a15*a51);
   a17=(a17+a15);
   res[1][4]=a17;
   return 0;
@@ -1100,15 +1100,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_fusion_kernel_active: 782 operations (CasADi SX instructions)
  * arg[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] state_next[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  * res[1] output[5]: beta, vy, r, weight, status
  */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_active(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -1144,8 +1144,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_28 = arg[0][28];
   const casadi_real state_29 = arg[0][29];
   const casadi_real state_30 = arg[0][30];
+  const casadi_real state_31 = arg[0][31];
   const casadi_real state_32 = arg[0][32];
-  const casadi_real state_33 = arg[0][33];
   const casadi_real state_34 = arg[0][34];
   res[0][0]=a0;
   a0=state_1;
@@ -1217,12 +1217,12 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][29]=a4;
   a4=state_30;
   res[0][30]=a4;
-  a4=1.;
+  a4=state_31;
   res[0][31]=a4;
-  a5=state_32;
-  res[0][32]=a5;
-  a5=state_33;
-  res[0][33]=a5;
+  a4=state_32;
+  res[0][32]=a4;
+  a4=1.;
+  res[0][33]=a4;
   a5=state_34;
   res[0][34]=a5;
   res[1][0]=a1;
@@ -1246,16 +1246,16 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  * vse_fusion_kernel_held: 93 operations (CasADi SX instructions)
  * arg[0] state[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  * res[0] state_next[35]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
- *     P_vy_r, P_r_r, delta_prev, vx_prev, frozen_ay_value, frozen_ay_repeats, frozen_r_value,
- *     frozen_r_repeats, steady_delta, steady_samples, lateral_residual, steering_offset,
- *     curvature, steady_curvature, holding, kin_offset, residual, residual_hold_left
+ *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, frozen_ay_value,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, holding, kin_offset
  * res[1] output[5]: beta, vy, r, weight, status
  */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_held(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){

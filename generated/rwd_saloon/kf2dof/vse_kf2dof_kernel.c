@@ -836,15 +836,10 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][0]=a04;
   res[1][1]=a10;
   res[1][2]=a29;
-  a11=(casadi_real)(a11<a20);
-  a11=(casadi_real)((a00!=0.)&&(a11!=0.));
-  a11=(casadi_real)((a00!=0.)&&(a11!=0.));
-  a29=256.;
-  a11=((a11!=0.)?a29:0.);
   a29=2048.;
   a10=6.;
-  a20=(casadi_real)(a20<=a10);
-  a22=(a22*a20);
+  a10=(casadi_real)(a20<=a10);
+  a22=(a22*a10);
   a31=(a31-a07);
   a31=(a31*a01);
   a31=(a31*a01);
@@ -872,14 +867,19 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a22=(casadi_real)(a22<a25);
   a23=(a23*a22);
   a29=(a29+a23);
-  a11=(a11+a29);
   a16=(casadi_real)(a16<a27);
   a28=(casadi_real)((a28!=0.)||(a16!=0.));
-  a00=(casadi_real)((a00!=0.)&&(a28!=0.));
-  a28=128.;
-  a00=((a00!=0.)?a28:0.);
-  a11=(a11+a00);
-  res[1][3]=a11;
+  a28=(casadi_real)((a00!=0.)&&(a28!=0.));
+  a16=128.;
+  a28=((a28!=0.)?a16:0.);
+  a11=(casadi_real)(a11<a20);
+  a11=(casadi_real)((a00!=0.)&&(a11!=0.));
+  a00=(casadi_real)((a00!=0.)&&(a11!=0.));
+  a11=256.;
+  a00=((a00!=0.)?a11:0.);
+  a28=(a28+a00);
+  a29=(a29+a28);
+  res[1][3]=a29;
   return 0;
 }
 

@@ -41,11 +41,11 @@ typedef double vse_switching_real;
 #define VSE_SWITCHING_STATUS_LOW_SPEED (1) /**< vx below the low-speed limit (or not yet back above the resume speed): the estimator holds */
 #define VSE_SWITCHING_STATUS_INVALID_INPUT (2) /**< an input was NaN, +-Inf or beyond its plausibility limit: the estimator holds, the input is ignored */
 #define VSE_SWITCHING_STATUS_REFERENCE_SUSPECT (4) /**< a reliability check rejected a measurement for longer than its time-out and accepted it again: the reference (e.g. the steady-state yaw rate) is suspect */
+#define VSE_SWITCHING_STATUS_KINEMATIC_DWELL_LIMITED (64) /**< the kinematic scheme reached its maximum dwell with |a_y| still above the threshold: the model-based scheme runs beyond its linear range until |a_y| falls */
 #define VSE_SWITCHING_STATUS_INPUT_FROZEN (2048) /**< an inertial input (a_x, a_y or r) has repeated its value bit for bit for frozen_time, or the path curvature changed at a constant steer angle (steer_check_limit): a stuck sensor or CAN signal; the estimate is suspect */
 #define VSE_SWITCHING_STATUS_LATERAL_INCONSISTENT (8192) /**< in quasi-steady driving the lateral acceleration differs from r v_x by more than lateral_check_limit on average: a road bank, an accelerometer offset or mounting tilt, a yaw-rate or speed error; the estimate is suspect */
 #define VSE_SWITCHING_STATUS_STEERING_OFFSET (16384) /**< the steering-angle zero learned in straight driving (steering_offset) is beyond steering_offset_limit: the steering-angle sensor needs its zero calibrated; the model-based estimate is suspect */
 #define VSE_SWITCHING_STATUS_YAW_RATE_MISMATCH (32768) /**< the yaw rate differs from the non-driven wheels' speed difference by more than wheel_check_limit on average: a gyro offset, drift or freeze, or a wheel-speed fault; the estimate is suspect */
-#define VSE_SWITCHING_STATUS_KINEMATIC_DWELL_LIMITED (64) /**< the kinematic scheme reached its maximum dwell with |a_y| still above the threshold: the model-based scheme runs beyond its linear range until |a_y| falls */
 
 /** One sample of inputs (log columns of the same names; SI units). */
 typedef struct {

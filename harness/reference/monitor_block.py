@@ -1,0 +1,78 @@
+"""The monitor block in plain Python (model.monitor_block): every check an estimator carries beyond
+its method, declared once per estimator (:class:`Checks`) and built from its settings and its
+method's inputs: the input layout, the inputs only the monitors read, the state entries and their
+initial values, and the two stages of a step (the input monitors, ``harness.reference.monitors``;
+then the consistency monitor of the filter's innovations and the linear-range flag,
+``harness.reference.blocks``). Written from the equations, not from the model's code."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from vsegen.harness.reference import blocks, monitors
+
+
+@dataclass(frozen=True)
+class Checks:
+    """Which model checks an estimator carries beside the input monitors."""
+
+    consistency: bool = False
+    """A consistency monitor of its filter's prior innovations (setting residual_window > 0)."""
+    linear_range: bool = False
+    """BEYOND_LINEAR_RANGE while |a_y| > linear_range (> 0)."""
+
+    def block(self, method_inputs, settings: Mapping) -> MonitorBlock:
+        return MonitorBlock(self, tuple(method_inputs), settings)
+
+
+@dataclass(frozen=True)
+class MonitorBlock:
+    """The checks of one estimator for its ``settings``."""
+
+    checks: Checks
+    method_inputs: tuple[str, ...]
+    settings: Mapping
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """The method's inputs and what the monitors read beside them, in the log's column order."""
+        return monitors.inputs(self.method_inputs, self.settings)
+
+    @property
+    def monitored(self) -> tuple[str, ...]:
+        """The inputs only the monitors read (an implausible one does not hold the estimator)."""
+        return monitors.monitored_only(self.method_inputs, self.settings)
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the consistency monitor is on."""
+        return self.checks.consistency and self.settings["residual_window"] > 0
+
+    @property
+    def states(self) -> tuple[str, ...]:
+        """The entries of the checks that are on: the consistency monitor's, the input monitors'."""
+        return (*(blocks.MONITOR_STATES if self.consistent else ()), *monitors.states(self.settings, self.inputs))
+
+    def initial(self, first: Mapping[str, float]) -> dict:
+        """The entries at the first sample ``first`` (its neutralised inputs)."""
+        return {**dict.fromkeys(blocks.MONITOR_STATES if self.consistent else (), 0.0),
+                **monitors.initial(self.settings, self.inputs, first)}
+
+    def watch_inputs(self, x, u, ok, T: float, vehicle) -> tuple[dict, int]:
+        """(new entries, status bits) of the input monitors; on an active sample only."""
+        return monitors.step(x, u, ok, self.settings, T, self.inputs, vehicle)
+
+    def judge_model(self, x, innovation, T: float, ay: float, concerns: bool = True,
+                    beyond: bool = False) -> tuple[dict, int, bool]:
+        """(new entries, status bits, first firing) of the model checks on an active sample: the
+        consistency monitor (MODEL_INCONSISTENT where ``concerns``) and BEYOND_LINEAR_RANGE while
+        |``ay``| > linear_range or the estimator's own ``beyond`` holds."""
+        new, code, first = {}, 0, False
+        if self.consistent:
+            new, suspect, first = blocks.residual_monitor(x, innovation, self.settings, T)
+            code |= blocks.MODEL_INCONSISTENT if suspect and concerns else 0
+        if self.checks.linear_range:
+            code |= blocks.beyond_linear_range(ay, self.settings)
+        code |= blocks.BEYOND_LINEAR_RANGE if beyond else 0
+        return new, code, first

@@ -1,0 +1,149 @@
+"""The monitor block: every check a sideslip estimator carries beyond its method, wired once.
+Beyond the papers; the rule it serves: never a silently wrong estimate.
+
+An estimator declares the checks it carries in one place, a :class:`Checks` (its module's
+``CHECKS``): whether a consistency monitor watches its filter's prior innovations, over which
+measured channels, and whether |a_y| beyond ``linear_range`` flags its tyre model. Its schema
+fields, status bits and derived settings follow from that declaration. From the numeric
+settings and the inputs its method reads it builds one :class:`MonitorBlock`, which supplies
+
+* the input layout (the method's inputs plus what the monitors read beside them) and the inputs
+  only the monitors read (an implausible one never holds the estimator, ``model.guard``);
+* its state entries and their values at the first sample;
+* each step's state updates and status code, in two stages, since the checks look at different
+  moments of the step: :meth:`MonitorBlock.watch_inputs` before the method runs (the input
+  monitors of ``model.input_monitors``: frozen signals, the cross-checks, the yaw rate against the
+  wheels) and :meth:`MonitorBlock.judge_model` after its filter's update (the consistency monitor
+  of ``model.consistency`` and the linear-range flag).
+
+A check whose setting is 0 has no state and generates no code. A new input check is written in
+``model.input_monitors`` (its module and one line there); a new check of the model's output here.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+
+from vsegen.model import consistency, input_monitors, status
+from vsegen.model.estimator import Derived
+from vsegen.model.layout import Layout
+from vsegen.model.schema import Field
+from vsegen.model.signals import Signal
+
+
+@dataclass(frozen=True)
+class Checks:
+    """The checks an estimator carries beyond its method, declared once."""
+
+    channels: tuple[str, ...] = ()
+    """The measured channels (keys of ``model.consistency.CHANNELS``, in its ``sensor_noise``
+    order) whose prior innovations the consistency monitor watches; () = no consistency monitor."""
+    linear_range: bool = False
+    """Whether |a_y| beyond the setting ``linear_range`` raises BEYOND_LINEAR_RANGE (a sideslip
+    that rests on a tyre model)."""
+
+    @property
+    def fields(self) -> tuple[Field, ...]:
+        """The schema fields of the checks."""
+        return (*(consistency.fields(self.channels) if self.channels else ()),
+                *((consistency.LINEAR_RANGE,) if self.linear_range else ()), *input_monitors.FIELDS)
+
+    @property
+    def status_bits(self) -> tuple[int, ...]:
+        """The status bits the checks can raise."""
+        return (*((status.MODEL_INCONSISTENT,) if self.channels else ()),
+                *((status.BEYOND_LINEAR_RANGE,) if self.linear_range else ()),
+                *input_monitors.STATUS_BITS)
+
+    @property
+    def derived(self) -> dict[str, Derived]:
+        """Settings that follow from identified quantities (``sensor_noise``)."""
+        return consistency.derived(self.channels) if self.channels else {}
+
+    def block(self, method_inputs: tuple[str, ...], numeric_settings: Mapping) -> MonitorBlock:
+        """The block of an estimator whose method reads ``method_inputs``, for its numeric
+        settings (which checks exist)."""
+        return MonitorBlock(self, tuple(method_inputs), numeric_settings)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One stage of a step: the new state entries, the status code, and whether the consistency
+    monitor's mean first exceeded its limit on this sample (an estimator may restart on it)."""
+
+    updates: dict
+    code: ca.SX
+    first_inconsistent: ca.SX = ca.SX(0)
+
+
+@dataclass(frozen=True)
+class MonitorBlock:
+    """The checks of one estimator for its numeric settings (:meth:`Checks.block`)."""
+
+    checks: Checks
+    method_inputs: tuple[str, ...]
+    numeric: Mapping
+
+    @cached_property
+    def inputs(self) -> Layout:
+        """The input layout: the method's inputs and what the monitors read beside them."""
+        return input_monitors.inputs(self.method_inputs, self.numeric)
+
+    @cached_property
+    def monitored(self) -> tuple[str, ...]:
+        """The inputs only the monitors read (``model.guard.input_guard``'s ``monitored``)."""
+        return input_monitors.monitored_only(self.method_inputs, self.numeric)
+
+    @property
+    def consistency(self) -> bool:
+        """Whether the consistency monitor exists (structural)."""
+        return bool(self.checks.channels) and consistency.enabled(self.numeric)
+
+    @cached_property
+    def states(self) -> tuple[Signal, ...]:
+        """The state entries of the checks that are on."""
+        return (*(consistency.STATES if self.consistency else ()),
+                *input_monitors.states(self.numeric, self.inputs.names))
+
+    def initial_entries(self, first: dict) -> dict:
+        """The entries at the first sample ``first`` (its neutralised inputs)."""
+        return {**consistency.initial_entries(self.consistency),
+                **input_monitors.initial_entries(first, self.numeric, self.inputs.names)}
+
+    def watch_inputs(self, s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
+                     vehicle) -> Step:
+        """The input monitors' stage from the state entries ``s`` as they came in, the raw inputs
+        ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator holds
+        them); ``settings`` and ``vehicle`` numbers or calibration symbols."""
+        updates, code = input_monitors.monitor(s, u, plausible, active, settings, self.numeric, sample_time,
+                                               self.inputs.names, vehicle, self.monitored)
+        return Step(updates, code)
+
+    def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,
+                    concerns=None, beyond: tuple = (), held_here: bool = True) -> Step:
+        """The model checks' stage: the consistency monitor of the prior ``innovation`` (its
+        entries kept while not active, unless ``held_here`` is False: an estimator that selects its
+        whole state by ``active`` holds them itself; MODEL_INCONSISTENT where ``concerns``, default
+        always: an estimator whose output the filter carries only in part says when it does), and
+        BEYOND_LINEAR_RANGE while |``ay``| > ``linear_range`` or any of the estimator's own
+        ``beyond`` tests holds. Only the checks that are on generate code."""
+        updates, code, first = {}, ca.SX(0), ca.SX(0)
+        if self.consistency:
+            check = consistency.monitor(s, innovation, settings, sample_time)
+            updates = ({n: ca.if_else(active, value, s[n]) for n, value in check.updates.items()}
+                       if held_here else check.updates)
+            suspect = ca.logic_and(active, check.suspect)
+            suspect = suspect if concerns is None else ca.logic_and(suspect, concerns)
+            code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
+            first = ca.logic_and(active, check.first)
+        tests = [*((consistency.beyond_linear_range(ay, settings),)
+                   if self.checks.linear_range and self.numeric["linear_range"] > 0 else ()), *beyond]
+        if tests:
+            code = code + ca.if_else(ca.logic_and(active, functools.reduce(ca.logic_or, tests)),
+                                     status.BEYOND_LINEAR_RANGE, 0)
+        return Step(updates, code, first)
