@@ -167,36 +167,13 @@ def build(params: Parameters) -> Estimator:
     gyro_ok = ok["r"]
     adapting = ca.logic_and(gyro_ok, ca.logic_and(ok["vx"], ca.logic_not(guard.low_speed)))
 
-    # ---- KF1: companion-form prediction with theta_n-1, update with the gyro -------------------
     theta = ca.vertcat(*[s[name] for name in theta_names])
     previous_inputs = [s["mz_prev"], *([s["delta_prev"]] if n == 4 else [])]
     phi = ca.vertcat(s["x_1"], s["x_2"], *previous_inputs)
-    companion = ca.blockcat([[theta[0], theta[1]], [1, 0]])
-    Gamma = ca.vertcat(ca.horzcat(*[theta[i] for i in range(2, n)]), ca.SX.zeros(1, n - 2))
-    P = kalman.unpack_symmetric(ca.vertcat(*[s[k] for k in kalman.packed_names("P", HISTORY)]), 2)
-    s_pred, P_pred = kalman.predict(ca.vertcat(s["x_1"], s["x_2"]), P, companion, Gamma,
-                                    ca.vertcat(*previous_inputs), ca.diag(ca.vertcat(Q, 0)))
-    h = ca.horzcat(1, 0)
-    s_upd, P_upd, _ = kalman.update_joseph(s_pred, P_pred, hold(u["r"], gyro_ok, 0), h,
-                                           ca.SX.zeros(1, 1), ca.SX(0), R)
-    gain = ca.if_else(gyro_ok, P_pred[0, 0] / (P_pred[0, 0] + R), 0)
-    s_next = ca.if_else(gyro_ok, s_upd, s_pred)
-    P_next = ca.if_else(gyro_ok, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_pred))
+    s_next, P_next, gain = _history_kf(s, theta, previous_inputs, hold(u["r"], gyro_ok, 0), gyro_ok, R, Q)
     x_n = s_next[0]
-
-    # ---- KF2: random-walk parameters, KF1's output as measurement --------------------------------
-    P_theta = kalman.unpack_symmetric(
-        ca.vertcat(*[s[k] for k in kalman.packed_names("Pt", theta_names)]), n) + Q_theta
-    excited = ca.mtimes([phi.T, P_theta, phi]) >= settings["excitation_floor"]
-    identify = ca.logic_and(adapting, excited)
-    theta_upd, P_theta_upd, _ = kalman.update_joseph(theta, P_theta, x_n, phi.T, ca.SX.zeros(1, 1),
-                                                     ca.SX(0), gain * gain * R)
-    theta_next = ca.if_else(identify, theta_upd, theta)
-    P_theta_next = ca.if_else(identify, kalman.pack_symmetric(P_theta_upd),
-                              kalman.pack_symmetric(P_theta))
-    a1, a2, projected = project_stable(theta_next[0], theta_next[1], settings["stability_radius"],
-                                       identify)
-    theta_out = ca.vertcat(a1, a2, theta_next[2:])
+    theta_out, P_theta_next, projected = _parameter_kf(s, theta_names, theta, phi, x_n, gain * gain * R,
+                                                       Q_theta, settings, adapting)
 
     mz = hold(u["mz"], ok["mz"], 0)
     next_state = states.pack({
@@ -218,6 +195,42 @@ def build(params: Parameters) -> Estimator:
     return Estimator(NAME, "yaw rate from an ARX model with a dual Kalman filter (seed 004)",
                      INPUTS, states, outputs, init, SingleStep(step), params,
                      notes(params), rounding_gain=PARAMETER_WALK_GAIN)
+
+
+def _history_kf(s: dict, theta, previous_inputs: list, r_measured, gyro_ok, R, Q):
+    """KF1: companion-form prediction of the yaw-rate history with theta_n-1, update with the gyro
+    where it is plausible. Returns (history, its packed covariance, the gain of its first entry)."""
+    n = theta.numel()
+    companion = ca.blockcat([[theta[0], theta[1]], [1, 0]])
+    Gamma = ca.vertcat(ca.horzcat(*[theta[i] for i in range(2, n)]), ca.SX.zeros(1, n - 2))
+    P = kalman.unpack_symmetric(ca.vertcat(*[s[k] for k in kalman.packed_names("P", HISTORY)]), 2)
+    s_pred, P_pred = kalman.predict(ca.vertcat(s["x_1"], s["x_2"]), P, companion, Gamma,
+                                    ca.vertcat(*previous_inputs), ca.diag(ca.vertcat(Q, 0)))
+    h = ca.horzcat(1, 0)
+    s_upd, P_upd, _ = kalman.update_joseph(s_pred, P_pred, r_measured, h, ca.SX.zeros(1, 1), ca.SX(0), R)
+    gain = ca.if_else(gyro_ok, P_pred[0, 0] / (P_pred[0, 0] + R), 0)
+    s_next = ca.if_else(gyro_ok, s_upd, s_pred)
+    P_next = ca.if_else(gyro_ok, kalman.pack_symmetric(P_upd), kalman.pack_symmetric(P_pred))
+    return s_next, P_next, gain
+
+
+def _parameter_kf(s: dict, theta_names, theta, phi, x_n, variance, Q_theta, settings, adapting):
+    """KF2: random-walk parameters with KF1's output ``x_n`` (of ``variance``) as measurement, on
+    excited samples while ``adapting``, projected into the stability region. Returns (theta, the
+    packed covariance, whether the projection acted)."""
+    n = len(theta_names)
+    P_theta = kalman.unpack_symmetric(
+        ca.vertcat(*[s[k] for k in kalman.packed_names("Pt", theta_names)]), n) + Q_theta
+    excited = ca.mtimes([phi.T, P_theta, phi]) >= settings["excitation_floor"]
+    identify = ca.logic_and(adapting, excited)
+    theta_upd, P_theta_upd, _ = kalman.update_joseph(theta, P_theta, x_n, phi.T, ca.SX.zeros(1, 1),
+                                                     ca.SX(0), variance)
+    theta_next = ca.if_else(identify, theta_upd, theta)
+    P_theta_next = ca.if_else(identify, kalman.pack_symmetric(P_theta_upd),
+                              kalman.pack_symmetric(P_theta))
+    a1, a2, projected = project_stable(theta_next[0], theta_next[1], settings["stability_radius"],
+                                       identify)
+    return ca.vertcat(a1, a2, theta_next[2:]), P_theta_next, projected
 
 
 def _initial_state(params: Parameters, states: Layout, theta_names: tuple[str, ...], u: dict) -> ca.SX:

@@ -217,8 +217,20 @@ def build(params: Parameters) -> Estimator:
         "status": code,
     })
 
-    first, holding = first_sample(u, limits, vx_min, vx_resume, block.monitored)
-    init_state = layout.pack({
+    init_state = _initial_state(params, layout, block, u, P0)
+    init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
+                                   next_state, output, params, decisions)
+    return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
+                     in_layout, layout, OUTPUTS, init, structure, params, zoh_note(params))
+
+
+def _initial_state(params: Parameters, layout: Layout, block: MonitorBlock, u: dict, P0) -> ca.SX:
+    """Initialisation: vy = 0, r = r_0, P = P_0 (packed), previous inputs = sample 0, the monitors
+    at their first-sample entries; holding unless sample 0 is plausible and vx_0 >= vx_resume."""
+    settings = params.config.settings(NAME)
+    first, holding = first_sample(u, params.config.limits, settings["vx_min"], settings["vx_resume"],
+                                  block.monitored)
+    return layout.pack({
         "vy": ca.SX(0),
         "r": first["r"],
         **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
@@ -227,11 +239,6 @@ def build(params: Parameters) -> Estimator:
         **block.initial_entries(first),
         "holding": holding,
     })
-    init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
-                                   next_state, output, params, decisions)
-    return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
-                     in_layout, layout, OUTPUTS, init, structure, params, zoh_note(params))
-
 
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,

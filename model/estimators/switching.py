@@ -152,13 +152,25 @@ def dwell_limited(seed: KinematicDynamic, candidate, samples):
 
 
 def build(params: Parameters) -> Estimator:
-    """The switching estimator ([vehicle], [inputs], [estimator.switching])."""
+    """The switching estimator ([vehicle], [inputs], [estimator.switching]): the select (pre-processing
+    and the choice of scheme), then only the chosen scheme runs."""
     seed = KinematicDynamic(params, NAME, CHECKS, extra_states(params.numeric.settings(NAME)))
-    layout, T = seed.layout, seed.T
-
-    # ---- select: pre-processing and the choice of scheme ---------------------------------------
+    layout = seed.layout
     state, s = layout.symbols("state")
     inputs, u = seed.inputs.symbols("input")
+    mid, scratch = _select(seed, s, u)
+    schemes, next_state, out = make_schemes(
+        NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch, _schemes(params, seed), params)
+    init, step = make_functions(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
+                                seed.initial_state(u), next_state, out, params)
+    return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
+                     seed.inputs, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
+
+
+def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX]:
+    """(state entries after the select, the packed SCRATCH): pre-processing, the remembered peak,
+    the scheme wanted and its dwell bound, the learned offset."""
+    T = seed.T
     pre = seed.preprocess(s, u)
     active = pre.guard.active
     extra = {}
@@ -180,8 +192,17 @@ def build(params: Parameters) -> Estimator:
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
                             "mode_prev": s["mode"], "status": status})
+    return mid, scratch
 
-    # ---- the three schemes, each from the select's outputs -------------------------------------
+
+def _output(beta, vy, r, mode_value, code):
+    return OUTPUTS.pack({"beta": beta, "vy": vy, "r": r, "mode": mode_value, "status": code})
+
+
+def _schemes(params: Parameters, seed: KinematicDynamic) -> list:
+    """The three schemes (dynamic, kinematic, hold), each a function of the select's state entries,
+    its SCRATCH and the inputs (``model.estimator.make_schemes``)."""
+    layout, T = seed.layout, seed.T
     update = kf2dof.dynamic_update(params, NAME)
 
     def scheme(label, body):
@@ -190,9 +211,6 @@ def build(params: Parameters) -> Estimator:
         input_sym, v = seed.inputs.symbols("input")
         next_state, output = body(m, c, v)
         return label, mid_sym, scratch_sym, input_sym, layout.pack(next_state), output
-
-    def output(beta, vy, r, mode_value, code):
-        return OUTPUTS.pack({"beta": beta, "vy": vy, "r": r, "mode": mode_value, "status": code})
 
     def dynamic(m, c, v):
         from_kin = c["mode_prev"] == KIN
@@ -209,26 +227,19 @@ def build(params: Parameters) -> Estimator:
         changes = {"vy": vy, "r": result["x_next"][1],
                    **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}}
         return (seed.advanced(m, v, changes),
-                output(result["beta"], vy, c["r_checked"], DYN, c["status"]))
+                _output(result["beta"], vy, c["r_checked"], DYN, c["status"]))
 
     def kinematic(m, c, v):
         start = ca.if_else(c["mode_prev"] == DYN, m["vy"], m["vy_kin"])
         vy_kin = start + T * (c["ay_prev"] - c["r_prev"] * m["vx_prev"] - m.get("kin_offset", 0))
         return (seed.advanced(m, v, {"vy_kin": vy_kin}),
-                output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
-                       c["status"]))
+                _output(sideslip(vy_kin, seed.speed(v["vx"])), vy_kin, c["r_checked"], KIN,
+                        c["status"]))
 
     def held(m, c, v):
-        return seed.held(m, v), output(ca.SX(0), ca.SX(0), m["r_last"], ca.SX(DYN), c["status"])
+        return seed.held(m, v), _output(ca.SX(0), ca.SX(0), m["r_last"], ca.SX(DYN), c["status"])
 
-    schemes, next_state, out = make_schemes(
-        NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch,
-        [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)],
-        params)
-    init, step = make_functions(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
-                                seed.initial_state(u), next_state, out, params)
-    return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
-                     seed.inputs, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
+    return [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)]
 
 
 DEFINITIONS = (Definition(
