@@ -72,5 +72,8 @@ def test_an_estimator_that_needs_wheel_speeds_says_why_and_what_runs_instead(rev
         run_estimator(revs_car, "ukf", piece)
     message = str(refused.value)
     assert "\n" not in message and "missing column 'omega_fl'" in message and "longitudinal" in message
-    assert "kf2dof" in message and "ukf" not in message.split("run ")[-1]
+    assert "kf2dof" in message and "ukf" not in message.split("run ")[-1].split(", or set")[0]
+    assert 'longitudinal_force = "free_rolling"' in message
     assert run_estimator(revs_car, "kf2dof", piece)["beta"].shape == (len(piece),)
+    free_rolling = revs_car.with_settings("ukf", longitudinal_force="free_rolling")
+    assert run_estimator(free_rolling, "ukf", piece)["beta"].shape == (len(piece),)   # the setting it names runs

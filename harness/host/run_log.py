@@ -44,7 +44,9 @@ def estimator_inputs(estimator, log: Log):
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs the four "
                        f"wheel speeds ({', '.join(WHEEL_SPEEDS)}, rad/s): its 3-DOF model's longitudinal tyre "
                        "forces come from the wheels' slip, which v_x and a_x alone do not give; without wheel "
-                       f"speeds run {', '.join(others) or 'an estimator that does not read them'}")
+                       f"speeds run {', '.join(others) or 'an estimator that does not read them'}, or set "
+                       f"[estimator.{estimator.name}] longitudinal_force = \"free_rolling\" (no longitudinal "
+                       "tyre forces, a_x a random walk: a different estimator, to be scored before it is trusted)")
     if missing:
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name} needs "
                        f"{', '.join(estimator.inputs.names)}")
