@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 82d8a3c83cff6eeaf7744142521f7d08799e8511b3e28485710801f8ba16e433
- * Operations: step 402, init 384 (CasADi SX instructions).
+ * Operations: step 402, init 234 (CasADi SX instructions).
  * exogenous: mz
  * prior_zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17
  */

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 03b54d4de60466e1596e100da65f09fc2b5e22710bb71cfcef428804ba1a1331
-# Operations: step 694, init 59 (CasADi SX instructions).
+# Operations: step 546, init 59 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 327636582c84c1b5a40c5e09f3241e0f02faeddb7b1d33cceeae5b6026bdb406
- * Operations: step 402, init 365 (CasADi SX instructions).
+ * Operations: step 402, init 226 (CasADi SX instructions).
  * exogenous: mz
  * prior_zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17
  */

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 06dfe9d3caf43e0752f03a1d113d21316a8ade8a33597fa47b83ba9bb976fe9a
-# Operations: step 820, init 99 (CasADi SX instructions).
+# Operations: step 683, init 99 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 # median_window: 5 samples

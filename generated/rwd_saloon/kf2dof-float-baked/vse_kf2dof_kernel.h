@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: b4461d991db851f1dea09da1c5f658e662a8bfb88332051ec9f7a68afff27f0d
- * Operations: step 676, init 59 (CasADi SX instructions).
+ * Operations: step 539, init 59 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
