@@ -2,10 +2,11 @@
 Beyond the papers; the rule it serves: never a silently wrong estimate.
 
 An estimator declares the checks it carries in one place, a :class:`Checks` (its module's
-``CHECKS``): whether a consistency monitor watches its filter's prior innovations, over which
-measured channels, and whether |a_y| beyond ``linear_range`` flags its tyre model. Its schema
-fields, status bits and derived settings follow from that declaration. From the numeric
-settings and the inputs its method reads it builds one :class:`MonitorBlock`, which supplies
+``CHECKS``): the inputs its method reads, whether a consistency monitor watches its filter's prior
+innovations, over which measured channels, and whether |a_y| beyond ``linear_range`` flags its
+tyre model. Its schema fields, status bits and derived settings follow from that declaration.
+From the numeric settings it builds one :class:`MonitorBlock` (``CHECKS.block``, also its
+``Definition.monitors``), which supplies
 
 * the input layout (the method's inputs plus what the monitors read beside them) and the inputs
   only the monitors read (an implausible one never holds the estimator, ``model.guard``);
@@ -23,7 +24,7 @@ A check whose setting is 0 has no state and generates no code. A new input check
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -40,6 +41,9 @@ from vsegen.model.signals import Signal
 class Checks:
     """The checks an estimator carries beyond its method, declared once."""
 
+    method_inputs: tuple[str, ...] | Callable[[Mapping], tuple[str, ...]]
+    """What the method reads (catalogue names), or the function of the numeric settings that says
+    it (an estimator whose model reads more in some configurations)."""
     channels: tuple[str, ...] = ()
     """The measured channels (keys of ``model.consistency.CHANNELS``, in its ``sensor_noise``
     order) whose prior innovations the consistency monitor watches; () = no consistency monitor."""
@@ -65,9 +69,11 @@ class Checks:
         """Settings that follow from identified quantities (``sensor_noise``)."""
         return consistency.derived(self.channels) if self.channels else {}
 
-    def block(self, method_inputs: tuple[str, ...], numeric_settings: Mapping) -> MonitorBlock:
-        """The block of an estimator whose method reads ``method_inputs``, for its numeric
-        settings (which checks exist)."""
+    def block(self, numeric_settings: Mapping) -> MonitorBlock:
+        """The block for the estimator's numeric settings (which checks exist)."""
+        method_inputs = self.method_inputs
+        if callable(method_inputs):
+            method_inputs = method_inputs(numeric_settings)
         return MonitorBlock(self, tuple(method_inputs), numeric_settings)
 
 

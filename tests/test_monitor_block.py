@@ -43,7 +43,7 @@ def _judged(config, residual, concerns):
     """(code, first firing) of kf2dof's model stage for a previous mean ``residual`` and an
     innovation of 10 sigma on both channels, active."""
     settings = config.settings("kf2dof")
-    block = kf2dof.monitors(settings)
+    block = kf2dof.CHECKS.block(settings)
     s = {"residual": ca.SX(residual), "residual_hold_left": ca.SX(0)}
     sigma = settings["sensor_noise"]
     step = block.judge_model(s, ca.SX(1), settings, config.sample_time, ca.vertcat(10 * sigma[0], 10 * sigma[1]),

@@ -65,7 +65,16 @@ PLAIN_NAME = "ukf"
 
 CHANNELS = ("ax", "ay", "r")
 """The measured channels, in Z's order (the consistency monitor's sensor_noise order)."""
-CHECKS = Checks(channels=CHANNELS, linear_range=True)
+_BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
+
+
+def method_inputs(settings) -> tuple[str, ...]:
+    """What the model reads: with ``longitudinal_force = "wheel_speeds"`` also every wheel speed."""
+    wheels = settings["longitudinal_force"] == "wheel_speeds"
+    return (*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ()))
+
+
+CHECKS = Checks(method_inputs, channels=CHANNELS, linear_range=True)
 """Beyond the spec: the monitor block (model.monitor_block)."""
 UKF_FIELDS: tuple[Field, ...] = (
     choice("longitudinal_force", ("wheel_speeds", "free_rolling"), "tyre slip ratios from the "
@@ -114,7 +123,6 @@ MEASURED = (4, 5, 2)
 """Z = [a_x, a_y, gamma] = X[4], X[5], X[2]."""
 Q_FLOOR = 1e-3
 """Sage-Husa safeguard: Q_ii >= Q_FLOOR Q_0,ii (§2.10)."""
-_BASE_INPUTS = ("delta", "vx", "ax", "ay", "r")
 COVARIANCE = kalman.packed_names("P", X_NAMES)
 """The state names behind each entry of COVARIANCE."""
 
@@ -129,20 +137,11 @@ def force_scales(vehicle) -> dict[str, float]:
     return scales
 
 
-def method_inputs(settings) -> tuple[str, ...]:
-    """What the model reads: with ``longitudinal_force = "wheel_speeds"`` also every wheel speed."""
-    wheels = settings["longitudinal_force"] == "wheel_speeds"
-    return (*_BASE_INPUTS, *(signals.WHEEL_SPEEDS if wheels else ()))
-
-
-def monitors(settings) -> MonitorBlock:
-    """The monitor block for the numeric ``settings``."""
-    return CHECKS.block(method_inputs(settings), settings)
 
 
 def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
     """(inputs, states, outputs) for the configured longitudinal force and variant."""
-    block = monitors(settings)
+    block = CHECKS.block(settings)
     inputs = block.inputs
     scale = force_scales(vehicle)
     estimates = tuple(Signal(name, unit, doc, scale=scale[name]) for name, unit, doc in STATE)
@@ -274,7 +273,7 @@ def _build(params: Parameters, name: str, adaptive: bool) -> Estimator:
     inputs_layout, states, outputs = layouts(numeric, adaptive, params.numeric.vehicle)
     state, kept = states.symbols("state")
     inputs, u = inputs_layout.symbols("input")
-    block = monitors(numeric)
+    block = CHECKS.block(numeric)
     sym = _Symbols(params, name, adaptive, settings, inputs_layout, states, outputs, state, kept, inputs, u,
                    input_guard(u, config.limits, settings["vx_min"], settings["vx_resume"], kept["hold_reason"],
                                block.monitored),
@@ -448,8 +447,8 @@ _UKF_STATUS = (status.LOW_SPEED, status.INVALID_INPUT, status.COVARIANCE_REPAIRE
 _UKF_DERIVED = {**ROLL_GRADIENT, **CHECKS.derived}
 DEFINITIONS = (
     Definition(name=PLAIN_NAME, build=build_plain, schema=UKF_SCHEMA, tunable=_UKF_TUNABLE,
-               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=monitors),
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=CHECKS.block),
     Definition(name=NAME, build=build_adaptive, schema=AUKF_SCHEMA,
                tunable={**_UKF_TUNABLE, "forgetting_factor": Tunable(0.95, 0.99, log=False)},
-               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=monitors),
+               status_bits=_UKF_STATUS, derived=_UKF_DERIVED, monitors=CHECKS.block),
 )

@@ -75,7 +75,9 @@ NAME = "ekf_rls"
 
 CHANNELS = ("r",)
 """The EKF's measured channel (the consistency monitor's sensor_noise)."""
-CHECKS = Checks(channels=CHANNELS, linear_range=True)
+METHOD_INPUTS = ("delta", "vx", "ax", "ay", "r")
+"""What the method reads; the monitors may add theirs (``CHECKS.block(settings).inputs``)."""
+CHECKS = Checks(METHOD_INPUTS, channels=CHANNELS, linear_range=True)
 """Beyond the paper: the monitor block (model.monitor_block)."""
 SCHEMA = EstimatorSchema(
     fields=(
@@ -118,13 +120,6 @@ REFERENCE_PERIOD = 0.001
 LOAD_FLOOR = 0.05
 """Smallest wheel load, as a share of a static corner load m g / 4 [23]."""
 
-METHOD_INPUTS = ("delta", "vx", "ax", "ay", "r")
-"""What the method reads; the monitors may add theirs (:func:`monitors`)."""
-
-
-def monitors(settings) -> MonitorBlock:
-    """The monitor block for the numeric ``settings``."""
-    return CHECKS.block(METHOD_INPUTS, settings)
 _EKF = kalman.packed_names("P", ("beta", "r"))
 _RLS = kalman.packed_names("Prls", ("c0_1", "c0_2"))
 _EKF_ESTIMATES = (Signal("beta_ekf", "rad", "EKF sideslip angle"),
@@ -208,7 +203,7 @@ def states(settings) -> Layout:
     """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals, the
     monitor block its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
-    return Layout((*STATES.signals, *kinematic, *monitors(settings).states))
+    return Layout((*STATES.signals, *kinematic, *CHECKS.block(settings).states))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -328,7 +323,7 @@ def build(params: Parameters) -> Estimator:
     """The ekf_rls estimator ([vehicle], [inputs], [estimator.ekf_rls])."""
     config = params.config
     settings, choices = config.settings(NAME), params.numeric.settings(NAME)
-    layout, block = states(choices), monitors(choices)
+    layout, block = states(choices), CHECKS.block(choices)
     state, s = layout.symbols("state")
     in_layout = block.inputs
     inputs, u = in_layout.symbols("input")
@@ -503,5 +498,5 @@ DEFINITIONS = (Definition(
              "forgetting_factor": Tunable(0.95, 0.9999, log=False),
              "indicator_low": Tunable(0.1, 2.0, regime=BEYOND_LINEAR),
              "indicator_high": Tunable(0.5, 10.0, regime=BEYOND_LINEAR)},
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=monitors,
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=CHECKS.block,
     derived={**ROLL_GRADIENT, **GYRO_VARIANCE, **CHECKS.derived}),)

@@ -11,8 +11,6 @@ a_y - r v_x - c, the KF a_y - offset_sensor_share c).
 
 from __future__ import annotations
 
-import functools
-
 import casadi as ca
 
 from vsegen.model import frozen, signals, status
@@ -45,7 +43,7 @@ from vsegen.model.signals import Signal
 
 NAME = "fusion"
 
-CHECKS = Checks(channels=kf2dof.CHANNELS, linear_range=True)
+CHECKS = Checks(kf2dof.METHOD_INPUTS, channels=kf2dof.CHANNELS, linear_range=True)
 """Beyond the paper: the monitor block (model.monitor_block): the input monitors, the consistency
 monitor of the KF's innovations and the linear-range flag."""
 SCHEMA = EstimatorSchema(
@@ -141,5 +139,5 @@ DEFINITIONS = (Definition(
              "integral_gain": Tunable(0.05, 5.0, regime=BEYOND_LINEAR),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.SCHEMES_DISAGREE, *CHECKS.status_bits),
-    monitors=functools.partial(CHECKS.block, kf2dof.METHOD_INPUTS),
+    monitors=CHECKS.block,
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **CHECKS.derived}),)

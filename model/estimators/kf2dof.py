@@ -43,17 +43,11 @@ NAME = "kf2dof"
 
 CHANNELS = ("ay", "r")
 """The KF's measured channels (the consistency monitor's sensor_noise order)."""
-CHECKS = Checks(channels=CHANNELS, linear_range=True)
+METHOD_INPUTS = ("delta", "vx", "ay", "r")
+"""What the bicycle-model KF reads; the monitors may add theirs (``CHECKS.block(settings).inputs``)."""
+CHECKS = Checks(METHOD_INPUTS, channels=CHANNELS, linear_range=True)
 """Beyond the paper: the monitor block (model.monitor_block)."""
 SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *CHECKS.fields), rules=LOW_SPEED_RULES)
-
-METHOD_INPUTS = ("delta", "vx", "ay", "r")
-"""What the bicycle-model KF reads; the monitors may add theirs (:func:`monitors`)."""
-
-
-def monitors(settings) -> MonitorBlock:
-    """The monitor block for the numeric ``settings``."""
-    return CHECKS.block(METHOD_INPUTS, settings)
 
 _ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
 _COVARIANCE = kalman.packed_names("P", ("vy", "r"))
@@ -64,7 +58,7 @@ def states(settings) -> Layout:
         *covariance_signals("P", _ESTIMATES),
         Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
-        *monitors(settings).states,
+        *CHECKS.block(settings).states,
         signals.HOLDING,
     ))
 
@@ -176,7 +170,7 @@ def build(params: Parameters) -> Estimator:
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
     P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
     update = dynamic_update(params)
-    block = monitors(params.numeric.settings(NAME))
+    block = CHECKS.block(params.numeric.settings(NAME))
     layout = states(params.numeric.settings(NAME))
 
     state, s = layout.symbols("state")
@@ -243,5 +237,5 @@ def _initial_state(params: Parameters, layout: Layout, block: MonitorBlock, u: d
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable=KF_TUNABLES,
-    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=monitors,
+    status_bits=(status.LOW_SPEED, status.INVALID_INPUT, *CHECKS.status_bits), monitors=CHECKS.block,
     derived={**KF_MEASUREMENT_NOISE, **TYRE_FRICTION, **CHECKS.derived}),)

@@ -143,7 +143,7 @@ class KinematicDynamic:
         self.T = params.config.sample_time
         self.n_median = window(params, table)
         self.extra = extra
-        self.monitors = checks.block(kf2dof.METHOD_INPUTS, params.numeric.settings(table))
+        self.monitors = checks.block(params.numeric.settings(table))
         self.inputs = self.monitors.inputs
         """The input layout: the KF's inputs and what the monitors read beside them."""
         self.layout = states(self.n_median, extra, self.monitors.states)

@@ -19,7 +19,6 @@ Only the active scheme is evaluated in the generated C (model.estimator.Schemes)
 
 from __future__ import annotations
 
-import functools
 from dataclasses import replace
 
 import casadi as ca
@@ -57,7 +56,7 @@ from vsegen.model.status import KINEMATIC_DWELL_LIMITED
 
 NAME = "switching"
 
-CHECKS = Checks()
+CHECKS = Checks(kf2dof.METHOD_INPUTS)
 """Beyond the paper: the monitor block (model.monitor_block): the input monitors."""
 SCHEMA = EstimatorSchema(
     fields=(*KF_FIELDS, *KINEMATIC_DYNAMIC_FIELDS,
@@ -249,5 +248,5 @@ DEFINITIONS = (Definition(
              "hysteresis": Tunable(0.0, 1.0, log=False, regime=LOW_FRICTION),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED, *CHECKS.status_bits),
-    monitors=functools.partial(CHECKS.block, kf2dof.METHOD_INPUTS),
+    monitors=CHECKS.block,
     derived={**ROLL_GRADIENT, **KF_MEASUREMENT_NOISE, **TYRE_FRICTION}),)
