@@ -17,8 +17,10 @@ From the numeric settings it builds one :class:`MonitorBlock` (``CHECKS.block``,
   wheels) and :meth:`MonitorBlock.judge_model` after its filter's update (the consistency monitor
   of ``model.consistency`` and the linear-range flag).
 
-A check whose setting is 0 has no state and generates no code. A new input check is written in
-``model.input_monitors`` (its module and one line there); a new check of the model's output here.
+A check whose setting is 0 has no state and generates no code. A new input check is its own
+module wired into ``model.input_monitors`` (fields, states, initial entries, step); a new check of
+the model's output is a field of :class:`Checks` and its part of :meth:`MonitorBlock.judge_model`.
+No estimator file changes for either, beyond naming a new model check in its ``CHECKS``.
 """
 
 from __future__ import annotations

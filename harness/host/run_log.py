@@ -35,9 +35,10 @@ def estimator_inputs(estimator, log: Log):
     speeds, with why the estimator cannot do without them)."""
     missing = log.missing(estimator.inputs.names)
     config = estimator.parameters.numeric
-    if missing and set(missing) <= set(monitor_only_inputs(config, estimator.name)):
+    checked_only = monitor_only_inputs(config, estimator.name)
+    if missing and set(missing) <= set(checked_only):
         raise LogError(f"{log.source}:1: missing column '{missing[0]}': estimator {estimator.name}'s yaw-rate check "
-                       f"reads {', '.join(monitor_only_inputs(config, estimator.name))}; for logs without them set "
+                       f"reads {', '.join(checked_only)}; for logs without them set "
                        f"[estimator.{estimator.name}] wheel_check_limit = 0")
     if missing and set(missing) <= set(WHEEL_SPEEDS):
         others = [n for n in config.estimators if not set(WHEEL_SPEEDS) & set(inputs_of(config, n))]
