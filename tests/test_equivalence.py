@@ -37,11 +37,11 @@ def check_every_scenario(config, name, real, params):
 
 
 PARTICLE_FILTERS = ("pf_adaptive", "pf_improved")
-"""Their double-baked runs take 19-25 s each: in the slow suite, with their other forms."""
+"""Their double-baked runs take 19-25 s each: the slow suite verifies them, every step and trajectory
+(tests/test_pf_adaptive_pf_improved.py), with their other forms."""
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in PARTICLE_FILTERS else n
-                                  for n in ESTIMATORS])
+@pytest.mark.parametrize("name", [n for n in ESTIMATORS if n not in PARTICLE_FILTERS])
 def test_generated_c_equals_the_reference_on_every_scenario(config, name):
     check_every_scenario(config, name, "double", "baked")
 

@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from cases import DECISIVE
 from junit_reports import read_junit
 from locations import DEFAULT_VEHICLE, REPO
 
@@ -86,9 +87,11 @@ def test_without_qemu_the_command_is_one_line(tmp_path, vsegen):
 @pytest.mark.parametrize("car, board", [("c_class", "m4f"), ("rwd_saloon", "m7")])
 def test_every_estimator_runs_under_pil(board, car):
     """Every estimator of each car on one board, each board once (float on the M4F, double on the
-    M7); `python -m bench.pil --vehicle FILE` runs a car on both (docs/benchmarks.md)."""
+    M7), on the decisive scenarios (the host build equals the reference on all of them, verify);
+    `python -m bench.pil --vehicle FILE` runs a car on both boards and every scenario
+    (docs/benchmarks.md)."""
     vehicle = load_vehicle(REPO / "vehicles" / f"{car}.toml")
-    results = pil.pil(vehicle, tuple(vehicle.estimators), board, "baked")
+    results = pil.pil(vehicle, tuple(vehicle.estimators), board, "baked", DECISIVE)
     failures = [(r.reference.estimator, r.reference.case) for r in results if not r.ok]
     assert failures == []
     assert np.isfinite([r.instructions_per_step for r in results]).all()
