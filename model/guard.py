@@ -51,7 +51,7 @@ def input_guard(inputs: Mapping[str, ca.SX], limits: Mapping[str, float], vx_min
             ``hold_reason`` or ``low_speed_hold`` state entry), else 0.
         monitored: inputs only an input monitor reads (the yaw-rate check's wheel speeds): an
             implausible one neither holds the estimator nor raises INVALID_INPUT; the monitor
-            skips the sample (``model.wheel_yaw``).
+            skips the sample (``model.input_checks.wheel_yaw``).
     """
     plausible = plausibility(inputs, limits)
     all_plausible = _all(flag for name, flag in plausible.items() if name not in monitored)

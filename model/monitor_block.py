@@ -17,8 +17,8 @@ From the numeric settings it builds one :class:`MonitorBlock` (``CHECKS.block``,
   wheels) and :meth:`MonitorBlock.judge_model` after its filter's update (the consistency monitor
   of ``model.consistency`` and the linear-range flag).
 
-A check whose setting is 0 has no state and generates no code. A new input check is its own
-module wired into ``model.input_monitors`` (fields, states, initial entries, step); a new check of
+A check whose setting is 0 has no state and generates no code. A new input check is one new
+module of ``model.input_checks`` (found there, combined by ``model.input_monitors``); a new check of
 the model's output is a field of :class:`Checks` and its part of :meth:`MonitorBlock.judge_model`.
 No estimator file changes for either, beyond naming a new model check in its ``CHECKS``.
 """
@@ -34,6 +34,7 @@ import casadi as ca
 
 from vsegen.model import consistency, input_monitors, status
 from vsegen.model.estimator import Derived
+from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
 from vsegen.model.schema import Field
 from vsegen.model.signals import Signal
@@ -128,8 +129,8 @@ class MonitorBlock:
         """The input monitors' stage from the state entries ``s`` as they came in, the raw inputs
         ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator holds
         them); ``settings`` and ``vehicle`` numbers or calibration symbols."""
-        updates, code = input_monitors.monitor(s, u, plausible, active, settings, self.numeric, sample_time,
-                                               self.inputs.names, vehicle, self.monitored)
+        updates, code = input_monitors.monitor(Watch(s, u, plausible, active, settings, self.numeric, sample_time,
+                                                     self.inputs.names, vehicle, self.monitored))
         return Step(updates, code)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,

@@ -1,5 +1,5 @@
-"""The cross-checks of the inputs (model.crosscheck, model.wheel_yaw): a bank or an accelerometer
-offset raises LATERAL_INCONSISTENT, a steering-angle zero error STEERING_OFFSET within 60 s of
+"""The cross-checks of the inputs (model.input_checks.crosscheck, model.input_checks.wheel_yaw): a
+bank or an accelerometer offset raises LATERAL_INCONSISTENT, a steering-angle zero error STEERING_OFFSET within 60 s of
 ordinary driving, a steering angle frozen in a manoeuvre INPUT_FROZEN within 1 s, a gyro that
 disagrees with the non-driven wheels YAW_RATE_MISMATCH; undisturbed drives raise none of them, on
 both truth cars; a limit of 0 removes its check."""

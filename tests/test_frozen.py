@@ -1,4 +1,4 @@
-"""The frozen-signal monitor (model.frozen): a stuck a_x, a_y or r raises INPUT_FROZEN within
+"""The frozen-signal monitor (model.input_checks.frozen): a stuck a_x, a_y or r raises INPUT_FROZEN within
 frozen_time, a live or quantised signal never does, and frozen_time = 0 removes it."""
 
 from __future__ import annotations

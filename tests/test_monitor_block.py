@@ -1,14 +1,25 @@
 """The monitor block (model/monitor_block.py): each estimator declares its checks once and takes its
 inputs, states and status bits from the block; a check that is off leaves no state; the model
-stage raises what it should. Equivalence of every check with the reference is in verify."""
+stage raises what it should; a new input check is one module per tree (model/input_checks/,
+harness/reference/input_checks/), with no wiring. Equivalence of every check with the reference
+is in verify."""
 
 from __future__ import annotations
 
+import sys
+
 import casadi as ca
+import numpy as np
 import pytest
 
+from vsegen.harness.reference import input_checks as reference_input_checks
+from vsegen.harness.reference import kf2dof as reference_kf2dof
+from vsegen.harness.reference.input_checks import checks as reference_checks
+from vsegen.harness.sim.scenarios import Case
 from vsegen.model import consistency, input_monitors, status
-from vsegen.model.estimators import DEFINITIONS, build, kf2dof, monitor_only_inputs
+from vsegen.model import input_checks as model_checks
+from vsegen.model.estimators import DEFINITIONS, build, build_fresh, kf2dof, monitor_only_inputs
+from vsegen.model.input_checks import registered
 
 MONITORED = [name for name, d in DEFINITIONS.items() if d.monitors]
 ALL_OFF = {**input_monitors.OFF, "residual_window": 0.0, "linear_range": 0.0}
@@ -60,3 +71,90 @@ def test_the_model_stage_raises_model_inconsistent_where_it_concerns_the_output(
     code, _ = _judged(config, 2 * limit, concerns=0)
     assert not code & status.MODEL_INCONSISTENT
     assert consistency.enabled(config.settings("kf2dof"))
+
+
+def test_model_and_reference_find_the_same_input_checks_in_the_same_order():
+    def names(modules):
+        return [module.__name__.rsplit(".", 1)[1] for module in modules]
+
+    assert names(registered()) == names(reference_checks()) == ["frozen", "crosscheck", "wheel_yaw"]
+
+
+TOY_MODEL = '''
+"""A check written in a test: v_x above 30 m/s for more than 3 samples raises INPUT_FROZEN."""
+import casadi as ca
+from vsegen.model import status
+from vsegen.model.signals import Signal
+ORDER = 99
+FIELDS = ()
+BITS = (status.INPUT_FROZEN,)
+STATE = Signal("toy_fast_samples", "-", "samples above 30 m/s")
+def reads(numeric):
+    return ("ax",)
+def enabled(numeric, inputs):
+    return "ax" in inputs
+def raises(numeric, inputs):
+    return BITS
+def states(numeric, inputs):
+    return (STATE,)
+def initial_entries(first, numeric, inputs):
+    return {STATE.name: ca.SX(0)}
+def monitor(watch):
+    count = (watch.u["vx"] > 30) * (watch.s[STATE.name] + 1)
+    updates = {STATE.name: ca.if_else(watch.active, count, watch.s[STATE.name])}
+    return updates, {status.INPUT_FROZEN: watch.active * (count > 3)}
+'''
+TOY_REFERENCE = '''
+ORDER = 99
+def reads(settings):
+    return ("ax",)
+def enabled(settings, inputs):
+    return "ax" in inputs
+def raises(settings, inputs):
+    return 2048
+def states(settings, inputs):
+    return ("toy_fast_samples",)
+def initial(settings, inputs, first):
+    return {"toy_fast_samples": 0.0}
+def step(x, u, ok, settings, T, inputs, vehicle):
+    count = x["toy_fast_samples"] + 1 if u["vx"] > 30 else 0.0
+    return {"toy_fast_samples": count}, 2048 if count > 3 else 0
+'''
+
+
+@pytest.fixture
+def toy_check(tmp_path, monkeypatch):
+    """One module more in each tree's input_checks package, as a new check would be."""
+    for package, text in ((model_checks, TOY_MODEL), (reference_input_checks, TOY_REFERENCE)):
+        folder = tmp_path / package.__name__.replace(".", "_")
+        folder.mkdir()
+        (folder / "toy_speed.py").write_text(text)
+        monkeypatch.setattr(package, "__path__", [*package.__path__, str(folder)])
+    registered.cache_clear()
+    reference_checks.cache_clear()
+    yield
+    registered.cache_clear()
+    reference_checks.cache_clear()
+    for name in [n for n in sys.modules if n.endswith(".toy_speed")]:
+        del sys.modules[name]
+
+
+def test_a_check_added_as_one_module_per_tree_reaches_the_estimators_equal_to_the_reference(config, toy_check):
+    """No wiring: kf2dof takes the toy check's input (a_x), state and bit, and steps equal to its
+    reference, which takes them from its own new module."""
+    estimator = build_fresh("kf2dof", config)
+    assert "ax" in estimator.inputs.names and "toy_fast_samples" in estimator.states.names
+    assert reference_kf2dof.input_names(config) == estimator.inputs.names
+    assert reference_kf2dof.names(config)[1] == estimator.states.names
+    log = Case.of("dlc", speed_kmh=120.0).simulate(config, 1.0 / config.sample_time, 1)
+    inputs = log.matrix(estimator.inputs.names)[:200]
+    state = np.array(estimator.init(inputs[0])).ravel()
+    reference_state = reference_kf2dof.init(config, inputs[0])
+    statuses = []
+    for row in inputs:
+        state, output = (np.array(v).ravel() for v in estimator.step(state, row))
+        reference_state, reference_output = reference_kf2dof.step(config, reference_state, row)
+        np.testing.assert_allclose(state, reference_state, rtol=1e-9, atol=1e-12)
+        assert output[-1] == reference_output[-1]
+        statuses.append(int(output[-1]))
+    assert statuses[2] & status.INPUT_FROZEN == 0 and statuses[3] & status.INPUT_FROZEN    # 4th sample > 30 m/s

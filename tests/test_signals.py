@@ -68,15 +68,15 @@ def test_the_reference_writes_the_model_status_bits():
 def test_the_reference_watches_the_model_frozen_channels():
     """The frozen-signal monitor's channels are written in both (the reference never imports the
     model); they must agree."""
-    from vsegen.harness.reference import blocks
-    from vsegen.model import frozen
+    from vsegen.harness.reference.input_checks import frozen as reference
+    from vsegen.model.input_checks import frozen
 
-    assert blocks.FROZEN_CHANNELS == frozen.CHANNELS
+    assert reference.CHANNELS == frozen.CHANNELS
 
 
 def test_the_reference_crosschecks_the_model_inputs():
     """The cross-checks' inputs are written in both; they must agree."""
-    from vsegen.harness.reference import monitors
-    from vsegen.model import crosscheck
+    from vsegen.harness.reference.input_checks import crosscheck as reference
+    from vsegen.model.input_checks import crosscheck
 
-    assert monitors.CROSSCHECK_INPUTS == crosscheck.INPUTS
+    assert reference.INPUTS == crosscheck.INPUTS

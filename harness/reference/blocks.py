@@ -169,50 +169,6 @@ def residual_monitor(x, innovation, settings, T):
     return {"residual": mean, "residual_hold_left": left}, suspect, now and not before
 
 
-FROZEN_CHANNELS = ("ax", "ay", "r")
-"""The frozen-signal monitor's channels (model.frozen.CHANNELS), where an estimator reads them."""
-
-
-def frozen_states(settings, inputs) -> tuple[str, ...]:
-    """The frozen-signal monitor's state entries for an estimator reading ``inputs`` (none when
-    ``frozen_time`` is 0)."""
-    if settings["frozen_time"] <= 0.0:
-        return ()
-    return tuple(name for c in FROZEN_CHANNELS if c in inputs
-                 for name in (f"frozen_{c}_value", f"frozen_{c}_repeats"))
-
-
-def frozen_initial(settings, inputs, first: Mapping[str, float]) -> dict:
-    """The monitor's entries at init: the first sample's (neutralised) values, no repetition."""
-    if settings["frozen_time"] <= 0.0:
-        return {}
-    return {k: v for c in FROZEN_CHANNELS if c in inputs
-            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))}
-
-
-def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
-    """Whether one of the channels ``names`` is frozen, from the frozen-signal monitor's new
-    entries ``new`` (model.frozen.any_frozen); False when the monitor is off."""
-    limit = whole_samples(settings["frozen_time"], T)
-    return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
-
-
-def frozen_monitor(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs):
-    """(new entries, frozen) of the frozen-signal monitor (model.frozen): per channel, the samples
-    its plausible value has repeated bit for bit, at most N = round(frozen_time / T); frozen while
-    any count reaches N. Call only on an active sample (a holding estimator holds the monitor)
-    and only when frozen_time > 0."""
-    limit = whole_samples(settings["frozen_time"], T)
-    new, frozen = {}, False
-    for c in (c for c in FROZEN_CHANNELS if c in inputs):
-        value, count = x[f"frozen_{c}_value"], x[f"frozen_{c}_repeats"]
-        count = min(count + 1.0, limit) if ok[c] and u[c] == value else 0.0
-        new[f"frozen_{c}_value"] = u[c] if ok[c] else value
-        new[f"frozen_{c}_repeats"] = count
-        frozen = frozen or count >= limit
-    return new, frozen
-
-
 def roll_corrected(ay_measured, roll_gradient):
     """Accelerometer reading without the gravity component of body roll: a_y,m = a_y (1 + g k)
     to first order for roll phi = k a_y (k = roll_gradient; 0 = none)."""

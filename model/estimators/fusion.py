@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from vsegen.model import frozen, signals, status
+from vsegen.model import signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -31,11 +31,13 @@ from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
     COVARIANCE,
     KINEMATIC_DYNAMIC_FIELDS,
+    KINEMATIC_INPUTS,
     YAW_RATE_CHECK_TUNABLES,
     KinematicDynamic,
 )
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from vsegen.model.guard import hold, symbolic
+from vsegen.model.input_checks import frozen
 from vsegen.model.layout import Layout
 from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, nonnegative, positive
@@ -101,7 +103,7 @@ def build(params: Parameters) -> Estimator:
     vy_kf = result["x_next"][0]
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"] - offset) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
-    if frozen.enabled(numeric):   # its inputs frozen: the KF alone, and the integrator follows it
+    if frozen.enabled(numeric, KINEMATIC_INPUTS):   # its inputs frozen: the KF alone, and the integrator follows it
         vy_kin = ca.if_else(pre.kinematic_inputs_frozen, vy_kf, vy_kin)
         weight = weight * ca.logic_not(pre.kinematic_inputs_frozen)
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))

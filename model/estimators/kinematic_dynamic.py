@@ -11,12 +11,13 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import filters, frozen, kalman, signals, status
+from vsegen.model import filters, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import BEYOND_LINEAR, Tunable
 from vsegen.model.estimators import kf2dof
 from vsegen.model.guard import Guard, first_sample, hold, input_guard, model_speed, plausibility, previous_inputs
+from vsegen.model.input_checks import frozen
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
@@ -128,7 +129,7 @@ class Preprocessed:
     updates: dict[str, ca.SX]
     """New values of the pre-processing state entries (held while not active)."""
     kinematic_inputs_frozen: ca.SX = ca.SX(0)
-    """1 while a_y or r, the kinematic integrator's inputs, is frozen (``model.frozen``): the
+    """1 while a_y or r, the kinematic integrator's inputs, is frozen (``model.input_checks.frozen``): the
     model-based scheme must carry the estimate then."""
 
 

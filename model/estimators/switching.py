@@ -23,7 +23,7 @@ from dataclasses import replace
 
 import casadi as ca
 
-from vsegen.model import frozen, signals, status
+from vsegen.model import signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
@@ -43,11 +43,13 @@ from vsegen.model.estimators.kinematic_dynamic import (
     DYN,
     KIN,
     KINEMATIC_DYNAMIC_FIELDS,
+    KINEMATIC_INPUTS,
     YAW_RATE_CHECK_TUNABLES,
     KinematicDynamic,
 )
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
 from vsegen.model.guard import hold
+from vsegen.model.input_checks import frozen
 from vsegen.model.layout import Layout
 from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema, below, fraction, nonnegative, positive
@@ -134,7 +136,7 @@ def wanted_scheme(seed: KinematicDynamic, pre, mode_prev, peak=None):
     """KIN while |a_y,f| is above the threshold, else DYN; beyond the paper, DYN while a_y or r,
     the integrator's inputs, is frozen (the KF only weighs them as measurements)."""
     mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, mode_prev, peak), KIN, DYN)
-    if frozen.enabled(seed.params.numeric.settings(NAME)):
+    if frozen.enabled(seed.params.numeric.settings(NAME), KINEMATIC_INPUTS):
         mode = ca.if_else(pre.kinematic_inputs_frozen, DYN, mode)
     return mode
 

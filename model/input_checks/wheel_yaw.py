@@ -34,10 +34,15 @@ from __future__ import annotations
 
 import casadi as ca
 
+from vsegen.model import status
 from vsegen.model.filters import held_flag, low_pass
 from vsegen.model.guard import hold
+from vsegen.model.input_checks import Watch
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
+
+ORDER = 3
+BITS = (status.YAW_RATE_MISMATCH,)
 
 FIELDS = (
     choice("wheel_check_axle", ("rear", "front"), "beyond the papers: the non-driven axle whose "
@@ -83,6 +88,11 @@ def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
     return bool(checked) and all(name in inputs for name in checked)
 
 
+def raises(numeric_settings, inputs: tuple[str, ...]) -> tuple[int, ...]:
+    """YAW_RATE_MISMATCH where the check is on."""
+    return BITS if enabled(numeric_settings, inputs) else ()
+
+
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
     """The check's state entries (0 at init), none when it is off."""
     if not enabled(numeric_settings, inputs):
@@ -91,12 +101,19 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
             *((HOLD,) if numeric_settings["wheel_check_hold"] > 0.0 else ()))
 
 
-def monitor(s: dict, u: dict, readable: dict, active, settings, numeric_settings, sample_time: float,
-            vehicle) -> tuple[dict, ca.SX]:
-    """(new state entries, 1 while the yaw rates disagree); call only when :func:`enabled`.
-    ``readable``: the plausibility flags of the inputs the estimator's guard does not decide on
-    (it does not hold for an input only this check reads); a sample where one of them is
-    implausible is skipped. The others are plausible on every active sample."""
+def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
+    """Nothing learned at init."""
+    return {entry.name: ca.SX(0) for entry in states(numeric_settings, inputs)}
+
+
+def monitor(watch: Watch) -> tuple[dict, dict]:
+    """(new state entries, {YAW_RATE_MISMATCH: 1 while the yaw rates disagree}); call only when
+    :func:`enabled`. A sample where an input the estimator's guard does not decide on (it does
+    not hold for an input only this check reads) is implausible is skipped; the others are
+    plausible on every active sample."""
+    s, u, active, settings, numeric_settings = watch.s, watch.u, watch.active, watch.settings, watch.numeric
+    sample_time, vehicle = watch.sample_time, watch.vehicle
+    readable = {name: watch.plausible[name] for name in watch.monitored}
     left, right = wheels(numeric_settings)
     v = {name: hold(u[name], readable[name], 0) if name in readable else u[name] for name in ("ax", left, right)}
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
@@ -117,5 +134,5 @@ def monitor(s: dict, u: dict, readable: dict, active, settings, numeric_settings
     if numeric_settings["wheel_check_hold"] > 0.0:
         updates[HOLD.name], flag = held_flag(s[HOLD.name], active * raised, active, settings["wheel_check_hold"],
                                              sample_time)
-        return updates, flag
-    return updates, active * raised
+        return updates, {status.YAW_RATE_MISMATCH: flag}
+    return updates, {status.YAW_RATE_MISMATCH: active * raised}

@@ -49,9 +49,11 @@ import casadi as ca
 
 from vsegen.model import status
 from vsegen.model.filters import low_pass, whole_samples
+from vsegen.model.input_checks import Watch
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
 
+ORDER = 2
 INPUTS = ("delta", "vx", "ay", "r")
 """The inputs the checks read; an estimator without all of them has no cross-checks."""
 
@@ -92,32 +94,47 @@ _STEADY = (Signal("steady_delta", "rad", "cross-checks: steer angle at the start
            Signal("steady_samples", "-", "cross-checks: samples the stretch has lasted (at most "
                   "steady_time / T)"))
 _CHECKS = (
-    ("lateral_check_limit", (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x "
-                                    "in quasi-steady driving"),)),
-    ("steering_offset_limit", (Signal("steering_offset", "rad", "learned steering-angle zero (road "
-                                      "wheel)"),)),
-    ("steer_check_limit", (Signal("curvature", "1/m", "steer check: low-passed path curvature r / v_x"),
-                           Signal("steady_curvature", "1/m", "steer check: low-passed path curvature "
-                                  "when the stretch turned quasi-steady"))),
+    ("lateral_check_limit", status.LATERAL_INCONSISTENT,
+     (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x in quasi-steady driving"),)),
+    ("steering_offset_limit", status.STEERING_OFFSET,
+     (Signal("steering_offset", "rad", "learned steering-angle zero (road wheel)"),)),
+    ("steer_check_limit", status.INPUT_FROZEN,
+     (Signal("curvature", "1/m", "steer check: low-passed path curvature r / v_x"),
+      Signal("steady_curvature", "1/m", "steer check: low-passed path curvature when the stretch turned "
+             "quasi-steady"))),
 )
-"""Each check: the setting whose value > 0 switches it on, and its state entries (0 at init)."""
+"""Each check: the setting whose value > 0 switches it on, the bit it raises and its state entries
+(0 at init)."""
+BITS = tuple(bit for _, bit, _ in _CHECKS)
 
 
 def _on(numeric_settings, limit_key: str) -> bool:
     return numeric_settings[limit_key] > 0.0
 
 
+def reads(numeric_settings) -> tuple[str, ...]:
+    """None beside the method's: an estimator without all of :data:`INPUTS` has no cross-checks."""
+    return ()
+
+
 def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
     """Whether an estimator reading ``inputs`` has any cross-check (structural: a limit > 0 when
     it is generated, also in calibratable mode)."""
-    return all(name in inputs for name in INPUTS) and any(_on(numeric_settings, key) for key, _ in _CHECKS)
+    return all(name in inputs for name in INPUTS) and any(_on(numeric_settings, key) for key, _, _ in _CHECKS)
+
+
+def raises(numeric_settings, inputs: tuple[str, ...]) -> tuple[int, ...]:
+    """The bits of the checks that are on."""
+    if not enabled(numeric_settings, inputs):
+        return ()
+    return tuple(bit for key, bit, _ in _CHECKS if _on(numeric_settings, key))
 
 
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
     """The checks' state entries (none when all are off)."""
     if not enabled(numeric_settings, inputs):
         return ()
-    return (*_STEADY, *(entry for key, entries in _CHECKS if _on(numeric_settings, key) for entry in entries))
+    return (*_STEADY, *(entry for key, _, entries in _CHECKS if _on(numeric_settings, key) for entry in entries))
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
@@ -126,12 +143,12 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
             for entry in states(numeric_settings, inputs)}
 
 
-def monitor(s: dict, u: dict, active, settings, numeric_settings, sample_time: float,
-            wheelbase) -> tuple[dict, dict]:
-    """(new state entries, {status bit: 1 while raised}) from the state entries ``s``, the inputs
-    ``u`` (plausible on an active sample) and the guard's ``active`` flag; call only when
-    :func:`enabled`. Flags and selections are arithmetic, f a + (1 - f) b for a flag f (exact for
-    f in {0, 1}), so an active guarded kernel has no branch (model.guard)."""
+def monitor(watch: Watch) -> tuple[dict, dict]:
+    """(new state entries, {status bit: 1 while raised}) on a step (the inputs are plausible on an
+    active sample); call only when :func:`enabled`. Flags and selections are arithmetic,
+    f a + (1 - f) b for a flag f (exact for f in {0, 1})."""
+    s, u, active, settings, sample_time = watch.s, watch.u, watch.active, watch.settings, watch.sample_time
+    numeric_settings, wheelbase = watch.numeric, watch.vehicle["wheelbase"]
     limit = whole_samples(settings["steady_time"], sample_time)
     moved = ca.fabs(u["delta"] - s["steady_delta"]) * u["vx"] * u["vx"] > settings["steady_band"] * wheelbase
     samples = (1 - moved) * ca.fmin(s["steady_samples"] + 1, limit)

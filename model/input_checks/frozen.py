@@ -26,17 +26,27 @@ import functools
 
 import casadi as ca
 
+from vsegen.model import status
 from vsegen.model.filters import whole_samples
+from vsegen.model.input_checks import Watch
 from vsegen.model.schema import nonnegative
 from vsegen.model.signals import INPUT, Signal
+
+ORDER = 1
 
 CHANNELS = ("ax", "ay", "r")
 """The inputs the monitor watches, where an estimator reads them."""
 
-FIELD = nonnegative("frozen_time", "s", "beyond the papers: an inertial input (a_x, a_y, r) that "
+FIELDS = (nonnegative("frozen_time", "s", "beyond the papers: an inertial input (a_x, a_y, r) that "
                     "repeats its value bit for bit this long raises status INPUT_FROZEN (a stuck "
                     "sensor or CAN signal); longer than a few CAN message periods; 0 = no monitor",
-                    default=0.25)
+                    default=0.25),
+          nonnegative("frozen_recovery", "s", "beyond the papers: status INPUT_FROZEN stays raised this "
+                      "long after a frozen input (or steering angle) moves again, while the estimate "
+                      "recovers from what it was fed; 0 = off", default=0.0))
+"""``frozen_time``, and ``frozen_recovery``: the hold of INPUT_FROZEN that ``model.input_monitors``
+puts over every check raising it (the steer check too)."""
+BITS = (status.INPUT_FROZEN,)
 
 
 def channels(inputs: tuple[str, ...]) -> tuple[str, ...]:
@@ -44,15 +54,25 @@ def channels(inputs: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(c for c in CHANNELS if c in inputs)
 
 
-def enabled(numeric_settings) -> bool:
+def reads(numeric_settings) -> tuple[str, ...]:
+    """None beside the method's: the monitor watches what the method reads."""
+    return ()
+
+
+def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
     """Whether the generated code has the monitor (structural: ``frozen_time`` > 0 when it is
-    generated, also in calibratable mode)."""
-    return numeric_settings["frozen_time"] > 0.0
+    generated, also in calibratable mode, and an estimator reading ``inputs`` has a channel)."""
+    return numeric_settings["frozen_time"] > 0.0 and bool(channels(inputs))
+
+
+def raises(numeric_settings, inputs: tuple[str, ...]) -> tuple[int, ...]:
+    """INPUT_FROZEN where the monitor is on."""
+    return BITS if enabled(numeric_settings, inputs) else ()
 
 
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
     """The monitor's state entries for an estimator reading ``inputs`` (none when it is off)."""
-    if not enabled(numeric_settings):
+    if not enabled(numeric_settings, inputs):
         return ()
     entries = []
     for c in channels(inputs):
@@ -65,7 +85,7 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
     """The entries at init: the first sample's (neutralised) values, no repetition."""
-    if not enabled(numeric_settings):
+    if not enabled(numeric_settings, inputs):
         return {}
     return {k: v for c in channels(inputs)
             for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", ca.SX(0)))}
@@ -86,15 +106,14 @@ def any_frozen(updates: dict, settings, sample_time: float, names: tuple[str, ..
     return functools.reduce(ca.logic_or, [count >= limit for count in counts])
 
 
-def monitor(s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
-            inputs: tuple[str, ...]) -> tuple[dict, ca.SX]:
-    """(new state entries, 1 while a channel is frozen) from the state entries ``s``, the raw
-    inputs ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator
-    holds the monitor too); call only when :func:`enabled`. Flags combine by arithmetic, so an
-    active sample's kernel has no branch (model.guard)."""
-    limit = samples_limit(settings, sample_time)
+def monitor(watch: Watch) -> tuple[dict, dict]:
+    """(new state entries, {INPUT_FROZEN: 1 while a channel is frozen}) on a step; call only when
+    :func:`enabled`. An implausible sample is no repetition, and a holding estimator holds the
+    monitor too."""
+    s, u, plausible, active = watch.s, watch.u, watch.plausible, watch.active
+    limit = samples_limit(watch.settings, watch.sample_time)
     updates, frozen = {}, ca.SX(0)
-    for c in channels(inputs):
+    for c in channels(watch.inputs):
         value, count = s[f"frozen_{c}_value"], s[f"frozen_{c}_repeats"]
         repeated = plausible[c] * (u[c] == value)
         count_next = repeated * ca.fmin(count + 1, limit)
@@ -102,4 +121,4 @@ def monitor(s: dict, u: dict, plausible: dict, active, settings, sample_time: fl
         updates[f"frozen_{c}_repeats"] = ca.if_else(active, count_next, count)
         stuck = count_next >= limit
         frozen = frozen + stuck - frozen * stuck
-    return updates, active * frozen
+    return updates, {status.INPUT_FROZEN: active * frozen}

@@ -1,0 +1,67 @@
+"""The yaw rate against the non-driven axle's wheel yaw rate r_w (model.input_checks.wheel_yaw):
+the mean of r - r_w beyond the limit, or beyond a share of the mean |r_w| where that is large
+enough, held a while after, raises YAW_RATE_MISMATCH; a sample with an implausible a_x or wheel
+speed, or braking or accelerating hard, is skipped."""
+
+from __future__ import annotations
+
+import math
+
+from vsegen.harness.reference import blocks
+
+ORDER = 3
+
+
+def _axle(settings) -> tuple[str, str]:
+    axle = "r" if settings["wheel_check_axle"] == "rear" else "f"
+    return f"omega_{axle}l", f"omega_{axle}r"
+
+
+def reads(settings) -> tuple[str, ...]:
+    """With the check on: the steer angle, a_x, r and the checked axle's wheel speeds."""
+    return ("delta", "ax", "r", *_axle(settings)) if settings["wheel_check_limit"] > 0 else ()
+
+
+def enabled(settings, inputs) -> bool:
+    checked = reads(settings)
+    return bool(checked) and all(n in inputs for n in checked)
+
+
+def raises(settings, inputs) -> int:
+    return blocks.YAW_RATE_MISMATCH if enabled(settings, inputs) else 0
+
+
+def states(settings, inputs) -> tuple[str, ...]:
+    if not enabled(settings, inputs):
+        return ()
+    return ("wheel_yaw_residual", *(("wheel_yaw_rate",) if settings["wheel_check_scale"] > 0 else ()),
+            *(("wheel_yaw_hold_left",) if settings["wheel_check_hold"] > 0 else ()))
+
+
+def initial(settings, inputs, first) -> dict:
+    return dict.fromkeys(states(settings, inputs), 0.0)
+
+
+def step(x, u, ok, settings, T: float, inputs, vehicle) -> tuple[dict, int]:
+    left, right = _axle(settings)
+    scale = settings["wheel_check_scale"] > 0
+    new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
+    if scale:
+        new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
+    readable = ok["ax"] and ok[left] and ok[right]
+    if readable and abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+        steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
+        wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
+        new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
+                                                    settings["wheel_check_time"])
+        if scale:
+            new["wheel_yaw_rate"] = blocks.low_pass(new["wheel_yaw_rate"], abs(wheel_yaw_rate), T,
+                                                    settings["wheel_check_time"])
+    residual = abs(new["wheel_yaw_residual"])
+    mismatch = residual > settings["wheel_check_limit"]
+    if scale and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]:
+        mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
+    if settings["wheel_check_hold"] > 0:
+        new["wheel_yaw_hold_left"], mismatch = blocks.held_flag(x["wheel_yaw_hold_left"], mismatch,
+                                                                settings["wheel_check_hold"], T)
+    return new, blocks.YAW_RATE_MISMATCH if mismatch else 0
