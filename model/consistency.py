@@ -55,16 +55,31 @@ def fields(channels: tuple[str, ...]) -> tuple[Field, ...]:
 
 
 LINEAR_RANGE = nonnegative(
-    "linear_range", "m/s^2", "beyond the papers: above this |a_y| the tyres leave their linear "
-    "range, where the estimate rests on the tyre model (a linear one, or one with a friction "
-    "coefficient the road may not offer) and the status says BEYOND_LINEAR_RANGE (about half the "
-    "friction limit: 4 for a dry road); 0 = never", default=0.0)
-"""For estimators whose sideslip rests on a tyre model (kf2dof, ukf, aukf)."""
+    "linear_range", "m/s^2", "beyond the papers: above this |a_y|, measured or as the filter's model "
+    "predicts it, the tyres leave their linear range, where the estimate rests on the tyre model (a "
+    "linear one, or one with a friction coefficient the road may not offer) and the status says "
+    "BEYOND_LINEAR_RANGE (about half the friction limit: 4 for a dry road); 0 = never", default=0.0)
+"""For estimators whose sideslip rests on a tyre model (kf2dof, ukf, aukf). The model's a_y leads
+the measured one into a manoeuvre (the steer angle acts on it first), and on a slippery road it
+asks for more than the tyres give."""
+LINEAR_RANGE_HOLD = nonnegative(
+    "linear_range_hold", "s", "beyond the papers: BEYOND_LINEAR_RANGE stays raised this long after "
+    "|a_y| fell back within linear_range (a car sliding at the limit dips below it for a moment); "
+    "0 = off", default=0.0)
+LINEAR_RANGE_STATE = Signal("linear_range_hold_left", "-", "samples BEYOND_LINEAR_RANGE stays raised "
+                            "(linear_range_hold)")
 
 
-def beyond_linear_range(ay, settings):
-    """1 when |``ay``| exceeds ``linear_range`` (> 0)."""
-    return ca.logic_and(settings["linear_range"] > 0, ca.fabs(ay) > settings["linear_range"])
+def beyond_linear_range(ay, settings, ay_model=None):
+    """1 when |``ay``| (measured), or |``ay_model``| (the filter's prior a_y, where it has one),
+    exceeds ``linear_range`` (> 0)."""
+    seen = ca.fabs(ay) if ay_model is None else ca.fmax(ca.fabs(ay), ca.fabs(ay_model))
+    return ca.logic_and(settings["linear_range"] > 0, seen > settings["linear_range"])
+
+
+def holds_linear_range(numeric_settings) -> bool:
+    """Whether BEYOND_LINEAR_RANGE is held after it fell (structural)."""
+    return numeric_settings["linear_range"] > 0.0 and numeric_settings["linear_range_hold"] > 0.0
 
 
 def derived(channels: tuple[str, ...]) -> dict[str, Derived]:

@@ -34,6 +34,7 @@ import casadi as ca
 
 from vsegen.model import consistency, input_monitors, status
 from vsegen.model.estimator import Derived
+from vsegen.model.filters import held_flag
 from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
 from vsegen.model.schema import Field
@@ -58,7 +59,8 @@ class Checks:
     def fields(self) -> tuple[Field, ...]:
         """The schema fields of the checks."""
         return (*(consistency.fields(self.channels) if self.channels else ()),
-                *((consistency.LINEAR_RANGE,) if self.linear_range else ()), *input_monitors.FIELDS)
+                *((consistency.LINEAR_RANGE, consistency.LINEAR_RANGE_HOLD) if self.linear_range else ()),
+                *input_monitors.FIELDS)
 
     @property
     def status_bits(self) -> tuple[int, ...]:
@@ -113,15 +115,22 @@ class MonitorBlock:
         """Whether the consistency monitor exists (structural)."""
         return bool(self.checks.channels) and consistency.enabled(self.numeric)
 
+    @property
+    def linear_range_held(self) -> bool:
+        """Whether BEYOND_LINEAR_RANGE is held after it fell (structural)."""
+        return self.checks.linear_range and consistency.holds_linear_range(self.numeric)
+
     @cached_property
     def states(self) -> tuple[Signal, ...]:
         """The state entries of the checks that are on."""
         return (*(consistency.STATES if self.consistency else ()),
+                *((consistency.LINEAR_RANGE_STATE,) if self.linear_range_held else ()),
                 *input_monitors.states(self.numeric, self.inputs.names))
 
     def initial_entries(self, first: dict) -> dict:
         """The entries at the first sample ``first`` (its neutralised inputs)."""
         return {**consistency.initial_entries(self.consistency),
+                **({consistency.LINEAR_RANGE_STATE.name: ca.SX(0)} if self.linear_range_held else {}),
                 **input_monitors.initial_entries(first, self.numeric, self.inputs.names)}
 
     def watch_inputs(self, s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
@@ -134,13 +143,14 @@ class MonitorBlock:
         return Step(updates, code)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,
-                    concerns=None, beyond: tuple = (), held_here: bool = True) -> Step:
+                    ay_model=None, concerns=None, beyond: tuple = (), held_here: bool = True) -> Step:
         """The model checks' stage: the consistency monitor of the prior ``innovation`` (its
         entries kept while not active, unless ``held_here`` is False: an estimator that selects its
         whole state by ``active`` holds them itself; MODEL_INCONSISTENT where ``concerns``, default
         always: an estimator whose output the filter carries only in part says when it does), and
-        BEYOND_LINEAR_RANGE while |``ay``| > ``linear_range`` or any of the estimator's own
-        ``beyond`` tests holds. Only the checks that are on generate code."""
+        BEYOND_LINEAR_RANGE while |``ay``| or |``ay_model``| (the filter's prior a_y, where it has
+        one) > ``linear_range``, held ``linear_range_hold`` after, or while any of the estimator's
+        own ``beyond`` tests holds. Only the checks that are on generate code."""
         updates, code, first = {}, ca.SX(0), ca.SX(0)
         if self.consistency:
             check = consistency.monitor(s, innovation, settings, sample_time)
@@ -150,8 +160,13 @@ class MonitorBlock:
             suspect = suspect if concerns is None else ca.logic_and(suspect, concerns)
             code = code + ca.if_else(suspect, status.MODEL_INCONSISTENT, 0)
             first = ca.logic_and(active, check.first)
-        tests = [*((consistency.beyond_linear_range(ay, settings),)
-                   if self.checks.linear_range and self.numeric["linear_range"] > 0 else ()), *beyond]
+        tests = list(beyond)
+        if self.checks.linear_range and self.numeric["linear_range"] > 0:
+            over = consistency.beyond_linear_range(ay, settings, ay_model)
+            if self.linear_range_held:
+                name = consistency.LINEAR_RANGE_STATE.name
+                updates[name], over = held_flag(s[name], over, active, settings["linear_range_hold"], sample_time)
+            tests.insert(0, over)
         if tests:
             code = code + ca.if_else(ca.logic_and(active, functools.reduce(ca.logic_or, tests)),
                                      status.BEYOND_LINEAR_RANGE, 0)

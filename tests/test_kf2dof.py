@@ -114,7 +114,7 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
 
     fn = dynamic_update(baked(config))
     assert fn.name_in() == ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
-    assert fn.name_out() == ["x_next", "P_next", "beta", "innovation"]
+    assert fn.name_out() == ["x_next", "P_next", "beta", "innovation", "ay_model"]
     s = config.settings("kf2dof")
     x, P = np.array([0.1, 0.05]), np.array([[0.02, 0.001], [0.001, 0.003]])
     out = fn(x=x, P=[P[0, 0], P[0, 1], P[1, 1]], delta_prev=0.01, vx_prev=20.0, delta=0.012,
@@ -128,4 +128,5 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
                               np.array(s["measurement_noise"]))
     np.testing.assert_allclose(np.array(out["x_next"]).ravel(), xe, rtol=1e-13)
     np.testing.assert_allclose(np.array(out["P_next"]).ravel(), [Pe[0, 0], Pe[0, 1], Pe[1, 1]], rtol=1e-12)
+    np.testing.assert_allclose(float(out["ay_model"]), (C @ xp + D.ravel() * 0.012)[0], rtol=1e-12)  # the prior's a_y
     assert float(out["beta"]) == pytest.approx(np.arctan2(xe[0], 20.5), rel=1e-13)

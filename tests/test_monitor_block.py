@@ -55,7 +55,7 @@ def _judged(config, residual, concerns):
     innovation of 10 sigma on both channels, active."""
     settings = config.settings("kf2dof")
     block = kf2dof.CHECKS.block(settings)
-    s = {"residual": ca.SX(residual), "residual_hold_left": ca.SX(0)}
+    s = {"residual": ca.SX(residual), "residual_hold_left": ca.SX(0), "linear_range_hold_left": ca.SX(0)}
     sigma = settings["sensor_noise"]
     step = block.judge_model(s, ca.SX(1), settings, config.sample_time, ca.vertcat(10 * sigma[0], 10 * sigma[1]),
                              ca.SX(0.0), concerns=ca.SX(concerns))
@@ -71,6 +71,27 @@ def test_the_model_stage_raises_model_inconsistent_where_it_concerns_the_output(
     code, _ = _judged(config, 2 * limit, concerns=0)
     assert not code & status.MODEL_INCONSISTENT
     assert consistency.enabled(config.settings("kf2dof"))
+
+
+def _beyond(config, ay, ay_model, left):
+    """(BEYOND_LINEAR_RANGE raised, samples left) of kf2dof's model stage, active."""
+    settings = config.settings("kf2dof")
+    block = kf2dof.CHECKS.block(settings)
+    s = {"residual": ca.SX(0), "residual_hold_left": ca.SX(0), "linear_range_hold_left": ca.SX(left)}
+    step = block.judge_model(s, ca.SX(1), settings, config.sample_time, ca.vertcat(0, 0), ca.SX(ay), ca.SX(ay_model))
+    left = int(ca.evalf(step.updates["linear_range_hold_left"]))
+    return bool(int(ca.evalf(step.code)) & status.BEYOND_LINEAR_RANGE), left
+
+
+def test_the_linear_range_flag_reads_the_model_a_y_and_holds(config):
+    settings = config.settings("kf2dof")
+    limit, held = settings["linear_range"], round(settings["linear_range_hold"] / config.sample_time)
+    assert held >= 1
+    assert _beyond(config, 0.5 * limit, 0.5 * limit, 0) == (False, 0)
+    assert _beyond(config, 1.1 * limit, 0.5 * limit, 0) == (True, held)
+    assert _beyond(config, 0.5 * limit, -1.1 * limit, 0) == (True, held)    # the model asks for more
+    assert _beyond(config, 0.5 * limit, 0.5 * limit, 2) == (True, 1)        # fell back: held
+    assert _beyond(config, 0.5 * limit, 0.5 * limit, 1) == (True, 0)
 
 
 def test_model_and_reference_find_the_same_input_checks_in_the_same_order():

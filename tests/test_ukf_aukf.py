@@ -18,7 +18,7 @@ from vsegen.harness.verify.equivalence import verify_estimator
 from vsegen.model import input_monitors, status, three_dof, unscented
 from vsegen.model.bicycle import GRAVITY
 from vsegen.model.calibration import baked
-from vsegen.model.estimators import aukf
+from vsegen.model.estimators import DEFINITIONS, aukf
 from vsegen.model.increments import Pair, fmax, lift, sqrt
 from vsegen.model.params import ParameterError
 
@@ -296,10 +296,8 @@ def test_an_estimate_outside_the_envelope_restarts_the_filter(config, variant):
     assert not flagged[:300].any() and flagged[300]
     restart = np.array(est.init(inputs[300])).ravel()
     restart[est.states.index("hold_reason")] = 0
-    monitor = est.states.index("residual")         # the consistency monitor's mean carries on
-    assert states[301][monitor] > 0.0
-    restart[monitor] = states[301][monitor]
-    for entry in input_monitors.states(config.settings("ukf"), est.inputs.names):   # and the input monitors
+    assert states[301][est.states.index("residual")] > 0.0    # the consistency monitor's mean carries on,
+    for entry in DEFINITIONS["ukf"].monitors(config.settings("ukf")).states:   # as every check's entries do
         restart[est.states.index(entry.name)] = states[301][est.states.index(entry.name)]
     assert states[301] == pytest.approx(restart, rel=1e-12, abs=1e-15)
     assert out[300, 1] == inputs[300, est.inputs.index("vx")] and out[300, 0] == 0.0

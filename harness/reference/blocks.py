@@ -153,10 +153,11 @@ MONITOR_STATES = ("residual", "residual_hold_left")
 """The consistency monitor's state entries (model.consistency.STATES)."""
 
 
-def beyond_linear_range(ay: float, settings) -> int:
-    """Status bit BEYOND_LINEAR_RANGE when |``ay``| (the logged a_y, m/s^2) exceeds the setting
-    ``linear_range`` (0 = never), else 0."""
-    return BEYOND_LINEAR_RANGE if settings["linear_range"] > 0 and abs(ay) > settings["linear_range"] else 0
+def beyond_linear_range(ay: float, settings, ay_model: float | None = None) -> bool:
+    """Whether |``ay``| (the logged a_y, m/s^2), or |``ay_model``| (the filter's prior a_y, where
+    it has one), exceeds the setting ``linear_range`` (0 = never)."""
+    seen = abs(ay) if ay_model is None else max(abs(ay), abs(ay_model))
+    return settings["linear_range"] > 0 and seen > settings["linear_range"]
 
 
 def residual_monitor(x, innovation, settings, T):

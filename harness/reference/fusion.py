@@ -49,10 +49,10 @@ def _fuse(config, block, x, updates, r_k, ay_f, status, u):
     if s["offset_memory"] > 0:
         learned["kin_offset"] = kinematic_dynamic.learned_offset(s, T, offset, ay_f, updates["ay_last"],
                                                                  updates["r_last"], u["vx"])
-    xk, P, innovation = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
+    xk, P, innovation, ay_model = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
                                                  x["vx_prev"], u, r_k,
                                                  ay_offset=s["offset_sensor_share"] * offset)
-    monitor, judgement, _ = block.judge_model(x, innovation, T, u["ay"])   # beyond the paper: the measured a_y
+    monitor, judgement, _ = block.judge_model(x, innovation, T, u["ay"], ay_model)   # beyond the paper
     status |= judgement
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))

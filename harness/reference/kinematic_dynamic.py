@@ -144,10 +144,12 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
     """The 2-DOF KF (harness.reference.bicycle_kf): predict with the previous inputs, update with
-    z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-))."""
+    z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-), the prior's a_y)."""
     z = np.array([roll_corrected(config, table, u["ay"]) - ay_offset, r_k])
-    return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, np.array([vy, r]), P,
-                           delta_prev, clamp(config, table, vx_prev), u["delta"], clamp(config, table, u["vx"]), z)
+    x, P, innovation = bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time,
+                                       np.array([vy, r]), P, delta_prev, clamp(config, table, vx_prev), u["delta"],
+                                       clamp(config, table, u["vx"]), z)
+    return x, P, innovation, z[0] - innovation[0]
 
 
 def beta(config, table, vy, vx):

@@ -20,7 +20,8 @@ class Checks:
     consistency: bool = False
     """A consistency monitor of its filter's prior innovations (setting residual_window > 0)."""
     linear_range: bool = False
-    """BEYOND_LINEAR_RANGE while |a_y| > linear_range (> 0)."""
+    """BEYOND_LINEAR_RANGE while |a_y|, measured or the filter's prior, > linear_range (> 0), held
+    linear_range_hold after."""
 
     def block(self, method_inputs, settings: Mapping) -> MonitorBlock:
         return MonitorBlock(self, tuple(method_inputs), settings)
@@ -45,6 +46,11 @@ class MonitorBlock:
         return monitors.monitored_only(self.method_inputs, self.settings)
 
     @property
+    def range_held(self) -> bool:
+        """Whether BEYOND_LINEAR_RANGE is held after it fell."""
+        return self.checks.linear_range and self.settings["linear_range"] > 0 and self.settings["linear_range_hold"] > 0
+
+    @property
     def consistent(self) -> bool:
         """Whether the consistency monitor is on."""
         return self.checks.consistency and self.settings["residual_window"] > 0
@@ -52,27 +58,34 @@ class MonitorBlock:
     @property
     def states(self) -> tuple[str, ...]:
         """The entries of the checks that are on: the consistency monitor's, the input monitors'."""
-        return (*(blocks.MONITOR_STATES if self.consistent else ()), *monitors.states(self.settings, self.inputs))
+        return (*(blocks.MONITOR_STATES if self.consistent else ()),
+                *(("linear_range_hold_left",) if self.range_held else ()), *monitors.states(self.settings, self.inputs))
 
     def initial(self, first: Mapping[str, float]) -> dict:
         """The entries at the first sample ``first`` (its neutralised inputs)."""
         return {**dict.fromkeys(blocks.MONITOR_STATES if self.consistent else (), 0.0),
+                **({"linear_range_hold_left": 0.0} if self.range_held else {}),
                 **monitors.initial(self.settings, self.inputs, first)}
 
     def watch_inputs(self, x, u, ok, T: float, vehicle) -> tuple[dict, int]:
         """(new entries, status bits) of the input monitors; on an active sample only."""
         return monitors.step(x, u, ok, self.settings, T, self.inputs, vehicle)
 
-    def judge_model(self, x, innovation, T: float, ay: float, concerns: bool = True,
-                    beyond: bool = False) -> tuple[dict, int, bool]:
+    def judge_model(self, x, innovation, T: float, ay: float, ay_model: float | None = None,
+                    concerns: bool = True, beyond: bool = False) -> tuple[dict, int, bool]:
         """(new entries, status bits, first firing) of the model checks on an active sample: the
         consistency monitor (MODEL_INCONSISTENT where ``concerns``) and BEYOND_LINEAR_RANGE while
-        |``ay``| > linear_range or the estimator's own ``beyond`` holds."""
+        |``ay``| or |``ay_model``| (the filter's prior a_y) > linear_range, held linear_range_hold
+        after, or while the estimator's own ``beyond`` holds."""
         new, code, first = {}, 0, False
         if self.consistent:
             new, suspect, first = blocks.residual_monitor(x, innovation, self.settings, T)
             code |= blocks.MODEL_INCONSISTENT if suspect and concerns else 0
         if self.checks.linear_range:
-            code |= blocks.beyond_linear_range(ay, self.settings)
+            over = blocks.beyond_linear_range(ay, self.settings, ay_model)
+            if self.range_held:
+                new["linear_range_hold_left"], over = blocks.held_flag(x["linear_range_hold_left"], over,
+                                                                       self.settings["linear_range_hold"], T)
+            code |= blocks.BEYOND_LINEAR_RANGE if over else 0
         code |= blocks.BEYOND_LINEAR_RANGE if beyond else 0
         return new, code, first

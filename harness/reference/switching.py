@@ -79,7 +79,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
             vy0, r0 = x["vy"], x["r"]
             P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
         sensor = s["offset_sensor_share"] * new["kin_offset"] if s["offset_memory"] > 0 else 0.0
-        xk, P, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k,
+        xk, P, _, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k,
                                             ay_offset=sensor)   # beyond the paper: the offset's sensor share
         new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
         vy = xk[0]

@@ -130,7 +130,7 @@ class Variant:
             new.update(self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps))
         new["hold_reason"] = 0.0
         status |= blocks.COVARIANCE_REPAIRED if repaired else 0
-        monitor, judgement, first_inconsistent = block.judge_model(x, eps, config.sample_time, inputs["ay"])
+        monitor, judgement, first_inconsistent = block.judge_model(x, eps, config.sample_time, inputs["ay"], z_hat[1])
         new.update(monitor)                         # beyond the spec: the monitor block's model checks
         status |= judgement
         if _leaves_the_envelope(s, X_new, inputs["vx"]) or first_inconsistent:

@@ -342,7 +342,7 @@ def _step(sym: _Symbols, init_state: ca.SX, f: _Filter) -> Estimator:
 
     x_new, P_new, innovation, correction = _update(settings, u, active, x_pred, spread, f.Q)
     extra = _sage_husa(sym, f, propagated, spread, x_new, P_new, correction) if sym.adaptive else {}
-    next_state, output = _finish(sym, init_state, f, x_new, P_new, innovation, repaired, extra)
+    next_state, output = _finish(sym, init_state, f, x_new, P_new, innovation, x_pred[MEASURED[1]], repaired, extra)
     repeated, next_state, output = make_repeated(name, sym.state, sym.inputs, offsets, shared, each,
                                                  results, ca.cse(next_state), ca.cse(output), params)
     init, step = make_functions(name, sym.inputs_layout, sym.states, sym.outputs, sym.inputs, sym.state,
@@ -388,9 +388,10 @@ def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, corr
             "fading": f.s["fading"] * forgetting}
 
 
-def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, repaired, extra: dict):
+def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, ay_model, repaired, extra: dict):
     """(next state, output): the update, the hold, or a restart (beyond the spec: the innovation
-    monitor's first firing or an estimate outside the plausible envelope), and the status."""
+    monitor's first firing or an estimate outside the plausible envelope), and the status;
+    ``ay_model`` the prior's a_y (for the linear-range flag)."""
     settings, u, guard, kept, states = sym.settings, sym.u, sym.guard, sym.kept, sym.states
     active = guard.active
 
@@ -398,7 +399,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, rep
         return ca.if_else(active, value, kept[key])
 
     T = sym.params.config.sample_time
-    judged = sym.monitors.judge_model(f.s, active, settings, T, innovation, u["ay"], held_here=False)
+    judged = sym.monitors.judge_model(f.s, active, settings, T, innovation, u["ay"], ay_model, held_here=False)
     extra = {**extra, **judged.updates}
     watched = sym.monitors.watch_inputs(kept, u, guard.plausible, active, settings, T,   # from the state as it came in
                                         sym.params.config.vehicle)

@@ -109,7 +109,8 @@ def build(params: Parameters) -> Estimator:
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta_kin = sideslip(vy_kin, vx)
     beta = weight * beta_kin + (1 - weight) * result["beta"]
-    judged = seed.monitors.judge_model(s, active, seed.settings, T, result["innovation"], u["ay"], held_here=False)
+    judged = seed.monitors.judge_model(s, active, seed.settings, T, result["innovation"], u["ay"], result["ay_model"],
+                                       held_here=False)
     code, monitor = pre.status + judged.code, judged.updates
     limit = seed.settings["disagreement_limit"]
     if numeric["disagreement_limit"] > 0:   # beyond the paper

@@ -92,7 +92,8 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
     Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad; as atan(vy / vx), the
     speed being clamped positive), ``innovation`` =
-    z - C x- - D delta (the prior innovation of [a_y, r], for the consistency monitor).
+    z - C x- - D delta (the prior innovation of [a_y, r], for the consistency monitor) and
+    ``ay_model``, the prior's a_y (m/s^2, a_y minus its innovation; for the linear-range flag).
     Both speeds are clamped to [vx_min, vx_max] before use; the caller's guard ensures the inputs
     are plausible. Reused by every estimator with a dynamic (KF) scheme.
     """
@@ -133,9 +134,9 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     return ca.Function(
         f"{table}_dynamic_update",
         [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
-        [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], seen_speed(vx)), innovation],
+        [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], seen_speed(vx)), innovation, ay - innovation[0]],
         names + ["params"] * params.calibratable,
-        ["x_next", "P_next", "beta", "innovation"],
+        ["x_next", "P_next", "beta", "innovation", "ay_model"],
     )
 
 
@@ -194,7 +195,8 @@ def build(params: Parameters) -> Estimator:
     r_next = ca.if_else(active, result["x_next"][1], s["r"])
     P_next = ca.if_else(active, result["P_next"], P0)
     watched = block.watch_inputs(s, u, ok, active, settings, config.sample_time, config.vehicle)
-    judged = block.judge_model(s, active, settings, config.sample_time, result["innovation"], u["ay"])
+    judged = block.judge_model(s, active, settings, config.sample_time, result["innovation"], u["ay"],
+                               result["ay_model"])
     code = guard.status + watched.code + judged.code
     next_state = layout.pack({
         "vy": vy_next,
