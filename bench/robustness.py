@@ -17,11 +17,12 @@ import numpy as np
 
 from bench import REPO
 from bench.document import provenance, write_cluster_report
+from bench.silent import MODEL_BASED
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.logs.table import SPIN_SIDESLIP
 from vsegen.harness.project.vehicles import load_vehicle
-from vsegen.harness.score.metrics import SILENT_DURATION, errors, silent_error_time
+from vsegen.harness.score.metrics import SILENT_DURATION, errors, silent_error_time, worse_than_zero
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model.estimators import DEFINITIONS
 
@@ -94,7 +95,8 @@ def matrix() -> list[tuple[str, str, Case]]:
 
 def run_case(car: str, disturbance: str, case: Case) -> dict[str, dict[str, float]]:
     """Per sideslip estimator: beta RMSE and max (deg), longest silent stretch (s), time to the
-    first status after the fault (s; inf: never; nan: no onset). One cluster job."""
+    first status after the fault (s; inf: never; nan: no onset), and where it is not better than
+    answering beta = 0, its unflagged RMSE and the bound (deg; else None). One cluster job."""
     config = load_vehicle(REPO / "vehicles" / f"{car}.toml")
     log = case.simulate(config, 1.0 / config.sample_time, SEED)
     onset = FAULT_AT if any(key in disturbance for key in FAULTS_WITH_ONSET) else math.nan
@@ -109,6 +111,7 @@ def run_case(car: str, disturbance: str, case: Case) -> dict[str, dict[str, floa
         result[name] = {
             "rmse": float(np.sqrt(np.mean(e * e))), "max": float(np.abs(e).max()),
             "silent": silent_error_time(log, estimates)[0], "spun": log.notes.get("spun", "no"),
+            "worse": (None if (worse := worse_than_zero(log, estimates)) is None else tuple(np.rad2deg(worse))),
             "to_status": (float(log["t"][np.argmax(flagged)] - onset) if flagged.any() else math.inf)
             if not math.isnan(onset) else math.nan,
         }
@@ -156,6 +159,15 @@ def report(scheduler: str | None) -> list[str]:
               f"{len(silent)} of {len(runs) * len(names)} runs have a silent stretch beyond "
               f"{SILENT_DURATION} s:", ""]
     lines += [f"* {car}, {label}: {name}" for car, _, label, name in silent]
+    worse = [f"* {car}, {case.label}, {disturbance}: {n} ({row[n]['worse'][0]:.2f}° unflagged, bound "
+             f"{row[n]['worse'][1]:.2f}°)" for (car, disturbance, case), row in zip(runs, results)
+             for n in names if n in MODEL_BASED and row[n]["worse"] is not None]
+    lines += ["", "## Better than answering β = 0", "",
+              f"Every model-based estimate ({', '.join(MODEL_BASED)}) must score a β RMSE within 0.7 × "
+              "RMS(β_ref), or 0.1°, over the run, or else over its samples with status 0 (the status "
+              "covers where it does not; `harness.score.metrics.worse_than_zero`, as in docs/silent.md). "
+              f"{len(worse)} of {len(runs) * len([n for n in names if n in MODEL_BASED])} runs break it"
+              + (":" if worse else "."), "", *worse]
     return lines
 
 
