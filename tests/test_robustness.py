@@ -12,6 +12,7 @@ import pytest
 from locations import VEHICLES
 
 from bench.robustness import matrix, run_case
+from bench.silent import MODEL_BASED
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
@@ -19,6 +20,9 @@ from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
 from vsegen.harness.sim.scenarios import Case
 
 BANK = {"bank": 100.0 * math.tan(math.radians(3.0))}
+WORSE_THAN_ZERO_RUNS = 77
+"""Model-based runs of the matrix not better than answering beta = 0 when the rule was first measured
+(#44; 77 of 744): the count may only fall."""
 OFFSET = {"ay_offset": 0.5}
 
 
@@ -67,7 +71,8 @@ def test_switching_continuous_dlc_stays_within_1_5_times_its_undisturbed_rmse(ca
 def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
     """Every disturbance x core manoeuvre and road scenario x sideslip estimator x both cars (the
     matrix of bench.robustness, 992 runs): no stretch over SILENT_DURATION with |beta error| > 2 deg
-    and status 0 before a spin."""
+    and status 0 before a spin; and no more model-based runs worse than answering beta = 0 than
+    today (docs/robustness.md)."""
     runs = matrix()
     with DaskPool(None) as cluster:
         results = cluster.map(run_case, runs)
@@ -75,3 +80,6 @@ def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
               for (car, disturbance, case), rows in zip(runs, results)
               for name, row in rows.items() if row["silent"] > SILENT_DURATION]
     assert not silent
+    worse = [(car, disturbance, case.label, name) for (car, disturbance, case), rows in zip(runs, results)
+             for name, row in rows.items() if name in MODEL_BASED and row["worse"] is not None]
+    assert len(worse) <= WORSE_THAN_ZERO_RUNS, worse
