@@ -49,11 +49,6 @@ def monitored_only(method_inputs: tuple[str, ...], numeric_settings) -> tuple[st
     return tuple(name for name in inputs(method_inputs, numeric_settings).names if name not in method_inputs)
 
 
-def enabled(numeric_settings, inputs: tuple[str, ...]) -> bool:
-    """Whether an estimator reading ``inputs`` has any input check (structural)."""
-    return bool(_on(numeric_settings, inputs))
-
-
 def recovers(numeric_settings, inputs: tuple[str, ...]) -> bool:
     """Whether INPUT_FROZEN is held after a freeze (structural: ``frozen_recovery`` > 0 and a
     check that raises it)."""

@@ -17,7 +17,8 @@ from vsegen.harness.reference.blocks import GRAVITY
 def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_prev: float,
          vx_prev: float, delta: float, vx: float, z):
     """Predict with the previous inputs (``vx_prev``, ``vx`` already clamped), update with
-    z = [a_y, r]; returns (x+, P+, the prior innovation z - h(x-))."""
+    z = [a_y, r]; returns (x+, P+, the prior innovation z - h(x-), the prior's a_y: a_y minus its
+    innovation, as the model's ``ay_model``)."""
     Qd = np.array(settings["process_noise"]) * T
     R = np.array(settings["measurement_noise"])
     if settings["tyre_model"] == "saturating":
@@ -29,14 +30,14 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
         _, _, ay, H = saturating(vehicle, mu, x_pred, delta, vx)
         innovation = np.asarray(z) - np.array([ay, x_pred[1]])
         x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, H, R)
-        return x_new, P_new, innovation
+        return x_new, P_new, innovation, z[0] - innovation[0]
     A, B, _, _ = blocks.bicycle(vehicle, vx_prev)
     Phi, Gamma = blocks.discretise(settings["discretisation"], A, B, T)
     x_pred, P_pred = blocks.kf_predict(x, P, Phi, Gamma, np.array([delta_prev]), Qd)
     _, _, C, D = blocks.bicycle(vehicle, vx)
     innovation = np.asarray(z) - C @ x_pred - D @ np.array([delta])
     x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, C, R)
-    return x_new, P_new, innovation
+    return x_new, P_new, innovation, z[0] - innovation[0]
 
 
 def saturating(vehicle: Mapping[str, float], mu, x, delta: float, vx: float):

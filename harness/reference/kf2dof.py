@@ -73,11 +73,11 @@ def step(config, state, u):
         return min(max(v, s["vx_min"]), vx_max)
 
     vx = clamp(inputs["vx"])
-    x, P, innovation = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
-                                       np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
-                                       inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
+    x, P, innovation, ay_model = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
+                                                 np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
+                                                 inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
     watched, flags = block.watch_inputs(entries, inputs, ok, T, config.vehicle)
-    judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"], inputs["ay"] - innovation[0])
+    judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"], ay_model)
     entries.update(watched | judged)
     status |= flags | judgement
     new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0])

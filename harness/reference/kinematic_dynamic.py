@@ -144,12 +144,11 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
 
 def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
     """The 2-DOF KF (harness.reference.bicycle_kf): predict with the previous inputs, update with
-    z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-), the prior's a_y)."""
+    z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-), the prior's a_y)
+    as bicycle_kf.step."""
     z = np.array([roll_corrected(config, table, u["ay"]) - ay_offset, r_k])
-    x, P, innovation = bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time,
-                                       np.array([vy, r]), P, delta_prev, clamp(config, table, vx_prev), u["delta"],
-                                       clamp(config, table, u["vx"]), z)
-    return x, P, innovation, z[0] - innovation[0]
+    return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, np.array([vy, r]), P,
+                           delta_prev, clamp(config, table, vx_prev), u["delta"], clamp(config, table, u["vx"]), z)
 
 
 def beta(config, table, vy, vx):

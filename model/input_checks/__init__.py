@@ -18,7 +18,6 @@ import importlib
 import pkgutil
 from collections.abc import Mapping
 from dataclasses import dataclass
-from types import ModuleType
 from typing import Protocol
 
 import casadi as ca
@@ -84,11 +83,12 @@ class InputCheck(Protocol):
         """(new state entries, {status bit: 0/1 flag}) on a step; called only when enabled."""
 
 
-_INTERFACE = ("ORDER", "FIELDS", "BITS", "reads", "enabled", "raises", "states", "initial_entries", "monitor")
+_INTERFACE = (*InputCheck.__annotations__, *(name for name in vars(InputCheck) if not name.startswith("_")))
+"""The names every check module must define: :class:`InputCheck`'s."""
 
 
 @functools.cache
-def registered() -> tuple[ModuleType, ...]:
+def registered() -> tuple[InputCheck, ...]:
     """Every input check of this package, in their ORDER."""
     checks = [importlib.import_module(f"{__name__}.{info.name}") for info in pkgutil.iter_modules(__path__)]
     for check in checks:
