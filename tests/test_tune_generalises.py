@@ -64,6 +64,15 @@ def test_a_dry_race_lap_is_no_low_friction_road(revs_lap, revs_car):
     assert lap.low_friction_limit == 0.0
 
 
+def test_a_race_lap_tunes_switchings_dwell_but_not_its_low_friction_threshold(revs_lap, revs_car):
+    """The hand-over: how long the kinematic scheme may stay acts beyond the linear range, which a
+    race lap holds; the threshold acts near the limit of a low-friction road, which it does not."""
+    regimes = {key: t.regime for key, t in DEFINITIONS["switching"].tunable.items()}
+    frozen = frozen_settings(regimes, coverage([revs_lap.window(0.0, 275.0)], revs_car))
+    assert "threshold" in frozen and "kinematic_max_dwell" not in frozen
+    assert "kinematic_max_dwell" in {d.key for d in search.dimensions(revs_car, "switching", tuple(frozen))}
+
+
 def test_settings_of_an_uncovered_regime_keep_their_base_values(saloon, dlc_logs):
     regimes = {key: t.regime for key, t in DEFINITIONS["switching"].tunable.items()}
     frozen = frozen_settings(regimes, coverage([dlc_logs["high"]], saloon))

@@ -27,6 +27,7 @@ from vsegen.model import signals, status
 from vsegen.model.bicycle import sideslip
 from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
+    BEYOND_LINEAR,
     KF_MEASUREMENT_NOISE,
     LOW_FRICTION,
     ROLL_GRADIENT,
@@ -243,11 +244,17 @@ def _schemes(params: Parameters, seed: KinematicDynamic) -> list:
     return [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)]
 
 
+def _dwell_bounded(settings) -> bool:
+    """Whether the kinematic dwell is bounded (``kinematic_max_dwell`` > 0: its counter exists)."""
+    return settings["kinematic_max_dwell"] > 0.0
+
+
 DEFINITIONS = (Definition(
     name=NAME, build=build, schema=SCHEMA,
     tunable={**kf2dof.KF_TUNABLES,
              "threshold": Tunable(0.5, 4.0, log=False, regime=LOW_FRICTION),
              "hysteresis": Tunable(0.0, 1.0, log=False, regime=LOW_FRICTION),
+             "kinematic_max_dwell": Tunable(0.2, 3.0, when=_dwell_bounded, regime=BEYOND_LINEAR),
              **YAW_RATE_CHECK_TUNABLES, "lateral_acceleration_band": Tunable(1.0, 8.0, regime=LOW_FRICTION)},
     status_bits=(*KINEMATIC_DYNAMIC_STATUS, status.KINEMATIC_DWELL_LIMITED, *CHECKS.status_bits),
     monitors=CHECKS.block,
