@@ -20,9 +20,10 @@ from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
 from vsegen.harness.sim.scenarios import Case
 
 BANK = {"bank": 100.0 * math.tan(math.radians(3.0))}
-WORSE_THAN_ZERO_RUNS = 77
-"""Model-based runs of the matrix not better than answering beta = 0 when the rule was first measured
-(#44; 77 of 744): the count may only fall."""
+WORSE_THAN_ZERO_RUNS = 62
+"""Model-based runs of the matrix not better than answering beta = 0 (#44): 77 of 744 when the rule
+was first measured, 62 since ekf_rls flags a learned stiffness below half the file's; the count may
+only fall."""
 OFFSET = {"ay_offset": 0.5}
 
 
