@@ -87,11 +87,16 @@ DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f
                                    "threshold (kinematic_max_dwell)")
 
 
+def _dwell_bounded(settings) -> bool:
+    """Whether the kinematic dwell is bounded (``kinematic_max_dwell`` > 0: its counter exists)."""
+    return settings["kinematic_max_dwell"] > 0.0
+
+
 def extra_states(settings) -> tuple[Signal, ...]:
     """switching's own state entries: the remembered peak (adaptive threshold on), the kinematic
     dwell counter (kinematic_max_dwell > 0) and the learned offset (offset_memory > 0)."""
     return (*((PEAK,) if settings["adaptive_memory"] > 0.0 else ()),
-            *((DWELL,) if settings["kinematic_max_dwell"] > 0.0 else ()),
+            *((DWELL,) if _dwell_bounded(settings) else ()),
             *kinematic_offset.states(settings))
 
 
@@ -242,11 +247,6 @@ def _schemes(params: Parameters, seed: KinematicDynamic) -> list:
         return seed.held(m, v), _output(ca.SX(0), ca.SX(0), m["r_last"], ca.SX(DYN), c["status"])
 
     return [scheme("dynamic", dynamic), scheme("kinematic", kinematic), scheme("hold", held)]
-
-
-def _dwell_bounded(settings) -> bool:
-    """Whether the kinematic dwell is bounded (``kinematic_max_dwell`` > 0: its counter exists)."""
-    return settings["kinematic_max_dwell"] > 0.0
 
 
 DEFINITIONS = (Definition(
