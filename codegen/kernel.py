@@ -96,6 +96,8 @@ def _document_entries(c_text: str, functions, names: dict[str, tuple[str, ...]])
             for i in range(count):
                 label, size = name_of(i), size_of(i)
                 entries = names.get(label, ())
+                if label in _METHOD_STATES:     # the state before the input checks' entries
+                    entries = entries[:size]
                 described = ", ".join(entries) if len(entries) == size else f"{size} entries"
                 lines += textwrap.wrap(f"{kind}[{i}] {label}[{size}]: {described}", 96,
                                        subsequent_indent="    ")
@@ -105,6 +107,11 @@ def _document_entries(c_text: str, functions, names: dict[str, tuple[str, ...]])
         comment = "/*\n" + "".join(f" * {line}\n" for line in lines) + " */\n"
         c_text = c_text.replace(anchor, comment + anchor)
     return c_text
+
+
+_METHOD_STATES = ("state_next", "state_mid")
+"""Results a method's kernel writes from the state's first entry on: all of it, or the entries before
+the input checks' (``model.estimator.CheckSegment``)."""
 
 
 def _work_size(h_text: str) -> int:

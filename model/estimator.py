@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 
-from vsegen.model import status
+from vsegen.model import signals, status
 from vsegen.model.calibration import Parameters
 from vsegen.model.guard import Decisions
 from vsegen.model.layout import Layout
@@ -48,10 +48,74 @@ if TYPE_CHECKING:
     from vsegen.model.monitor_block import MonitorBlock
 
 
+@dataclass(frozen=True)
+class CheckSegment:
+    """The input checks' part of the state: its last entries, which the method only reads. After
+    the method's kernels, a kernel of their own (``checks``) steps them in place on an active
+    sample when their countdown is 0 (every ``check_period``); on the other active samples the
+    generated C counts the countdown down and sums the averaged inputs, on a held one it waits
+    (``model.monitor_block``).
+    The method reads their last run: it sees a run from the next sample on."""
+
+    names: tuple[str, ...]
+    """Their names, the state layout's last entries."""
+    ran: ca.SX
+    """Their values after a run on an active sample (the ``checks`` kernel's result)."""
+    counting: ca.SX
+    """1 while the countdown is above 0."""
+    counted: ca.SX
+    """Their values on such an active sample: the countdown one less, the sample added to the sums
+    of the averaged inputs, the rest kept."""
+    kept: ca.SX
+    """Their values as they came in."""
+
+    def composed(self, active: ca.SX) -> ca.SX:
+        """Their values after a sample that was ``active`` (a held one keeps them)."""
+        return ca.if_else(active, ca.if_else(self.counting, self.counted, self.ran), self.kept)
+
+    def method_part(self, state_sym: ca.SX, expressions: ca.SX) -> ca.SX:
+        """``expressions``' entries before the segment (a method's next state: the segment's
+        entries there must be the state's own, untouched)."""
+        method = state_sym.numel() - len(self.names)
+        for k in range(method, expressions.numel()):
+            if not _keeps(expressions[k], state_sym[k]):
+                raise ValueError(f"the method writes {self.names[k - method]}, an entry of the input checks")
+        return expressions[:method]
+
+    def function(self, name: str, state_sym: ca.SX, input_sym: ca.SX, parameters: Parameters) -> ca.Function:
+        """The ``checks`` kernel: (state, input[, params]) -> the segment after a run."""
+        extra = parameters.inputs()
+        return ca.Function(f"vse_{name}_kernel_checks", [state_sym, input_sym, *extra], [ca.densify(self.ran)],
+                           ["state", "input", *["params"] * len(extra)], ["checks_next"])
+
+
+def hold_entry(states: Layout) -> str:
+    """The state entry that says a sample was held (0 when it was active): ``holding`` or
+    ``hold_reason``."""
+    return next(name for name in (signals.HOLDING.name, signals.HOLD_REASON.name) if name in states.names)
+
+
+def _keeps(expression: ca.SX, entry: ca.SX) -> bool:
+    """Whether the scalar ``expression`` is ``entry`` itself, also as both branches of SX
+    ``if_else`` (which CasADi writes (c ? a : 0) + (!c ? b : 0))."""
+    if ca.is_equal(expression, entry):
+        return True
+    if expression.op() != ca.OP_ADD:
+        return False
+    branches = [expression.dep(i) for i in range(2)]
+    if any(b.op() != ca.OP_IF_ELSE_ZERO for b in branches):
+        return False
+    condition, otherwise = branches[0].dep(0), branches[1].dep(0)
+    complementary = otherwise.op() == ca.OP_NOT and ca.is_equal(otherwise.dep(0), condition)
+    return complementary and all(_keeps(b.dep(1), entry) for b in branches)
+
+
 class _ComposedStep:
     """Operation counts of a structure with a composed ``step`` Function."""
 
     step: ca.Function | None
+    checks: ca.Function | None = None
+    """The input checks' kernel (:class:`CheckSegment`), where the estimator has input checks."""
     header_template = "state_index.h.j2"
     system_headers: tuple[str, ...] = ()
     in_place: tuple[str, ...] = ()
@@ -61,6 +125,15 @@ class _ComposedStep:
 
     def step_operations(self) -> int:
         return self.step.n_instructions()
+
+    @property
+    def checks_kernels(self) -> tuple[ca.Function, ...]:
+        """The input checks' kernel, if any: generated first; it steps its part of the state in place."""
+        return () if self.checks is None else (self.checks,)
+
+    def checks_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        """The entry names of the checks kernel's result (the state's last entries)."""
+        return {} if self.checks is None else {"checks_next": states.names[-self.checks.numel_out(0):]}
 
     def init_operations(self, init: ca.Function) -> int:
         return init.n_instructions()
@@ -101,15 +174,16 @@ class Guarded(_ComposedStep):
     active: ca.Function
     held: ca.Function
     step: ca.Function
+    checks: ca.Function | None = None
     templates = ("init.c.j2", "step_guarded.c.j2")
 
     @property
     def kernel_functions(self) -> tuple[ca.Function, ...]:
-        return self.guard, self.active, self.held
+        return *self.checks_kernels, self.guard, self.active, self.held
 
     @property
     def in_place(self) -> tuple[str, ...]:
-        return self.active.name(), self.held.name()
+        return *(f.name() for f in self.checks_kernels), self.active.name(), self.held.name()
 
     def step_operations(self) -> int:
         """An active sample's: the guard's and the active kernel's (a held one runs the guard and
@@ -121,7 +195,8 @@ class Guarded(_ComposedStep):
         return self.guard.numel_out(0)
 
     def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
-        return {"decisions": tuple(str(flag) for flag in ca.vertsplit(self.held.sx_in("decisions")))}
+        return {"decisions": tuple(str(flag) for flag in ca.vertsplit(self.held.sx_in("decisions"))),
+                **self.checks_names(states)}
 
 
 @dataclass(frozen=True)
@@ -139,14 +214,25 @@ class Schemes(_ComposedStep):
     branches: tuple[tuple[str, ca.Function], ...]
     scratch: Layout
     step: ca.Function | None = None
+    checks: ca.Function | None = None
     templates = ("init.c.j2", "step_schemes.c.j2")
 
     @property
     def kernel_functions(self) -> tuple[ca.Function, ...]:
-        return (self.select, *(fn for _, fn in self.branches))
+        return (*self.checks_kernels, self.select, *(fn for _, fn in self.branches))
+
+    @property
+    def in_place(self) -> tuple[str, ...]:
+        return tuple(f.name() for f in self.checks_kernels)
+
+    @property
+    def mid_entries(self) -> int:
+        """Entries of the select's state (the method's: the input checks' are read in place)."""
+        return self.select.numel_out(0)
 
     def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
-        return {"scratch": self.scratch.names}
+        return {"scratch": self.scratch.names, "state_mid": states.names[:self.mid_entries],
+                **self.checks_names(states)}
 
 
 @dataclass(frozen=True)
@@ -165,11 +251,19 @@ class Repeated(_ComposedStep):
     finish: ca.Function
     count: int
     step: ca.Function | None = None
+    checks: ca.Function | None = None
     templates = ("init.c.j2", "step_repeated.c.j2")
 
     @property
     def kernel_functions(self) -> tuple[ca.Function, ...]:
-        return self.prepare, self.each, self.finish
+        return *self.checks_kernels, self.prepare, self.each, self.finish
+
+    @property
+    def in_place(self) -> tuple[str, ...]:
+        return tuple(f.name() for f in self.checks_kernels)
+
+    def argument_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
+        return self.checks_names(states)
 
 
 RNG_WORDS = 4
@@ -295,6 +389,11 @@ class Estimator:
         return tuple(names[i] for i in sorted(read))
 
     @property
+    def hold_entry(self) -> str:
+        """The state entry that is 0 after an active sample (:func:`hold_entry`)."""
+        return hold_entry(self.states)
+
+    @property
     def operation_counts(self) -> dict[str, int]:
         """CasADi instructions of one step and of init (a particle filter's for its particle
         count, without the template's draws and resampling)."""
@@ -388,10 +487,15 @@ class Definition:
 
 def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
                    state_sym: ca.SX, init_state: ca.SX, next_state: ca.SX, output: ca.SX,
-                   parameters: Parameters):
-    """The ``init`` and ``step`` Functions with the naming every estimator uses."""
+                   parameters: Parameters, checks: CheckSegment | None = None):
+    """The ``init`` and ``step`` Functions with the naming every estimator uses; with ``checks``,
+    the step runs the input checks first and the method (``next_state``, ``output``) on what they
+    left (:class:`CheckSegment`)."""
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
+    if checks is not None:
+        method = checks.method_part(state_sym, next_state)
+        next_state = ca.vertcat(method, checks.composed(method[states.index(hold_entry(states))] <= 0))
     # dense: the C copies flat vectors, so a structural zero (e.g. of SX.eye) must be stored too
     init_state, next_state, output = (ca.densify(e) for e in (init_state, next_state, output))
     init = ca.Function(f"vse_{name}_kernel_init", [input_sym, *extra], [init_state],
@@ -409,13 +513,17 @@ def make_functions(name: str, inputs: Layout, states: Layout, outputs: Layout, i
 
 def make_guarded(name: str, inputs: Layout, states: Layout, outputs: Layout, input_sym: ca.SX,
                  state_sym: ca.SX, init_state: ca.SX, next_state: ca.SX, output: ca.SX,
-                 parameters: Parameters, decisions: Decisions) -> tuple[ca.Function, Guarded]:
+                 parameters: Parameters, decisions: Decisions,
+                 checks: CheckSegment | None = None) -> tuple[ca.Function, Guarded]:
     """``init`` and the :class:`Guarded` structure of a step whose ``next_state`` and ``output``
     are written with the symbolic guard ``decisions`` (``model.guard.symbolic``): the composed
     step takes their values, the active kernel the values of an active sample (where every hold
-    and select falls away), the held kernel the guard's decisions as its third argument."""
+    and select falls away), the held kernel the guard's decisions as its third argument. With
+    ``checks``, the method's kernels write the state before their segment (:class:`CheckSegment`)."""
     init, step = make_functions(name, inputs, states, outputs, input_sym, state_sym, init_state,
-                                decisions.actual(next_state), decisions.actual(output), parameters)
+                                decisions.actual(next_state), decisions.actual(output), parameters, checks)
+    if checks is not None:
+        next_state = checks.method_part(state_sym, next_state)
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
     arguments, names = [state_sym, input_sym], ["state", "input"]
@@ -427,7 +535,8 @@ def make_guarded(name: str, inputs: Layout, states: Layout, outputs: Layout, inp
     held = ca.Function(f"vse_{name}_kernel_held", [*arguments, decisions.symbols, *extra],
                        _shared(decisions.when_held(next_state), decisions.when_held(output)),
                        [*names, "decisions", *extra_names], ["state_next", "output"])
-    return init, Guarded(guard, active, held, step)
+    kernel = None if checks is None else checks.function(name, state_sym, input_sym, parameters)
+    return init, Guarded(guard, active, held, step, kernel)
 
 
 def _shared(*results: ca.SX) -> list[ca.SX]:
@@ -443,23 +552,33 @@ def _shared(*results: ca.SX) -> list[ca.SX]:
 def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, input_sym: ca.SX,
                  mid_state: ca.SX, scratch_expr: ca.SX,
                  branches: list[tuple[str, ca.SX, ca.SX, ca.SX, ca.SX, ca.SX]],
-                 parameters: Parameters) -> tuple[Schemes, ca.SX, ca.SX]:
-    """Functions of a switching step and the composed (next_state, output) expressions.
+                 parameters: Parameters, checks: CheckSegment | None = None) -> tuple[Schemes, ca.SX, ca.SX]:
+    """Functions of a switching step and the composed (next_state, output) expressions; the
+    composed step is the method's (``make_functions`` runs the ``checks`` after it).
 
     ``branches``: (label, mid symbol, scratch symbol, input symbol, next state, output) per scheme,
-    in index order; each branch's expressions use its own symbols.
+    in index order; each branch's expressions use its own symbols. With ``checks``, the select and
+    the schemes carry the state before the input checks' segment, which they only read.
     """
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
+
+    def method(symbols: ca.SX, expressions: ca.SX) -> tuple[ca.SX, ca.SX]:
+        if checks is None:
+            return symbols, expressions
+        kept = checks.method_part(symbols, expressions)
+        return symbols[:kept.numel()], kept
+
     select = ca.Function(f"vse_{name}_kernel_select", [state_sym, input_sym, *extra],
-                         [ca.densify(mid_state), ca.densify(scratch_expr)],
+                         [ca.densify(method(state_sym, mid_state)[1]), ca.densify(scratch_expr)],
                          ["state", "input", *extra_names],
                          ["state_mid", "scratch"])
     functions = []
     for label, mid_sym, scratch_sym, input_b, next_state, output in branches:
+        mid_part, next_part = method(mid_sym, next_state)
         functions.append((label, ca.Function(
-            f"vse_{name}_kernel_{label}", [mid_sym, input_b, scratch_sym, *extra],
-            [ca.densify(next_state), ca.densify(output)],
+            f"vse_{name}_kernel_{label}", [mid_part, input_b, scratch_sym, *extra],
+            [ca.densify(next_part), ca.densify(output)],
             ["state_mid", "input", "scratch", *extra_names],
             ["state_next", "output"])))
     mid, scr = select(state_sym, input_sym, *extra)
@@ -472,26 +591,34 @@ def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, i
             chosen = scr[0] == index
             composed_state = ca.if_else(chosen, branch_state, composed_state)
             composed_output = ca.if_else(chosen, branch_output, composed_output)
-    return Schemes(select, tuple(functions), scratch), composed_state, composed_output
+    if checks is None:
+        return Schemes(select, tuple(functions), scratch), composed_state, composed_output
+    untouched = state_sym[composed_state.numel():]        # the segment, as the method sees it
+    return (Schemes(select, tuple(functions), scratch, checks=checks.function(name, state_sym, input_sym, parameters)),
+            ca.vertcat(composed_state, untouched), composed_output)
 
 
 def make_repeated(name: str, state_sym: ca.SX, input_sym: ca.SX, items: list[ca.SX],
                   shared: ca.SX, each: ca.Function, results_sym: ca.SX, next_state: ca.SX,
-                  output: ca.SX, parameters: Parameters) -> tuple[Repeated, ca.SX, ca.SX]:
-    """The Functions of a repeated step and the composed (next_state, output) expressions.
+                  output: ca.SX, parameters: Parameters,
+                  checks: CheckSegment | None = None) -> tuple[Repeated, ca.SX, ca.SX]:
+    """The Functions of a repeated step and the composed (next_state, output) expressions of the
+    method (``make_functions`` runs the ``checks`` after it).
 
     ``items`` and ``shared`` are expressions of the state and input; ``each`` maps (shared, item
     [, params]) to one result; ``next_state`` and ``output`` use ``results_sym``, the results of
-    all items back to back.
+    all items back to back. With ``checks``, ``finish`` writes the state before their segment.
     """
     extra = parameters.inputs()
     extra_names = ["params"] * len(extra)
     prepare = ca.Function(f"vse_{name}_kernel_prepare", [state_sym, input_sym, *extra],
                           [ca.densify(ca.vertcat(*items)), ca.densify(shared)],
                           ["state", "input", *extra_names], ["items", "shared"])
+    written = next_state if checks is None else checks.method_part(state_sym, next_state)
     finish = ca.Function(f"vse_{name}_kernel_finish", [state_sym, input_sym, results_sym, *extra],
-                         [ca.densify(next_state), ca.densify(output)],
+                         [ca.densify(written), ca.densify(output)],
                          ["state", "input", "results", *extra_names], ["state_next", "output"])
     results = ca.vertcat(*[each(shared, item, *extra) for item in items])
     composed_state, composed_output = ca.substitute([next_state, output], [results_sym], [results])
-    return Repeated(prepare, each, finish, len(items)), composed_state, composed_output
+    kernel = None if checks is None else checks.function(name, state_sym, input_sym, parameters)
+    return Repeated(prepare, each, finish, len(items), checks=kernel), composed_state, composed_output

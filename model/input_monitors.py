@@ -16,12 +16,27 @@ from vsegen.model import signals, status
 from vsegen.model.filters import held_flag
 from vsegen.model.input_checks import Watch, registered
 from vsegen.model.layout import Layout
+from vsegen.model.schema import nonnegative
 from vsegen.model.signals import Signal
 
 RECOVERY_STATE = Signal("frozen_recovery_left", "-", "samples INPUT_FROZEN stays raised after a frozen input "
-                        "moved again (frozen_recovery)")
-FIELDS = tuple(field for check in registered() for field in check.FIELDS)
-"""The checks' fields (``frozen_recovery``, the hold over them all, with the frozen-signal monitor's)."""
+                        "moved again (frozen_recovery; samples of the checks' period)")
+COUNTDOWN = Signal("checks_countdown", "-", "input checks: active samples to their next run (check_period)")
+AVERAGED = ("ay", "r")
+"""The noisy inertial inputs the checks read as their means over their period (summed on every
+active sample between two runs, where the method reads them and they are plausible): a sample a
+period stands for would carry its whole noise. (A check that compares r with a signal read at the
+sample, the wheel speeds, reads ``Watch.raw``.)"""
+CODE = Signal("checks_code", "-", "input checks: the status bits of their last run")
+CHECK_PERIOD = nonnegative(
+    "check_period", "s", "beyond the papers: the input checks (frozen signals, cross-checks, wheel yaw "
+    "rate) run after the method on an active sample this often, in whole samples (at least one), "
+    "their filters and counters stepped at that period, their status bits kept in between: they "
+    "watch for faults that last tenths of a second, the filter runs every sample; 0 = every sample",
+    default=0.1)
+FIELDS = (CHECK_PERIOD, *(field for check in registered() for field in check.FIELDS))
+"""``check_period``, then the checks' fields (``frozen_recovery``, the hold over them all, with the
+frozen-signal monitor's)."""
 STATUS_BITS = tuple(dict.fromkeys(bit for check in registered() for bit in check.BITS))
 """The bits the checks can raise in every estimator that has them (YAW_RATE_MISMATCH where the
 yaw-rate check is on: every such estimator can be given the wheel speeds, :func:`inputs`)."""
@@ -57,17 +72,45 @@ def recovers(numeric_settings, inputs: tuple[str, ...]) -> bool:
 
 
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
-    """The checks' state entries (those that are on), then the recovery hold's."""
-    return (*(entry for check in _on(numeric_settings, inputs) for entry in check.states(numeric_settings, inputs)),
-            *((RECOVERY_STATE,) if recovers(numeric_settings, inputs) else ()))
+    """The checks' state entries (those that are on), the recovery hold's, then their countdown
+    and status code; none when every check is off."""
+    checks = _on(numeric_settings, inputs)
+    if not checks:
+        return ()
+    return (*(entry for check in checks for entry in check.states(numeric_settings, inputs)),
+            *((RECOVERY_STATE,) if recovers(numeric_settings, inputs) else ()),
+            *(sum_state(name) for name in averaged(inputs)), COUNTDOWN, CODE)
+
+
+def averaged(inputs: tuple[str, ...]) -> tuple[str, ...]:
+    """The inputs of :data:`AVERAGED` an estimator reading ``inputs`` has."""
+    return tuple(name for name in AVERAGED if name in inputs)
+
+
+def sum_state(name: str) -> Signal:
+    """The state entry summing input ``name`` over the active samples since the checks' last run."""
+    return Signal(f"checks_sum_{name}", signals.INPUT[name].signal.unit,
+                  f"input checks: sum of {name} since their last run")
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
-    """The checks' entries at init from the first sample ``first`` (neutralised inputs)."""
+    """The checks' entries at init from the first sample ``first`` (neutralised inputs); they run
+    on the first step."""
+    checks = _on(numeric_settings, inputs)
+    if not checks:
+        return {}
     entries = {}
-    for check in _on(numeric_settings, inputs):
+    for check in checks:
         entries |= check.initial_entries(first, numeric_settings, inputs)
-    return entries | ({RECOVERY_STATE.name: ca.SX(0)} if recovers(numeric_settings, inputs) else {})
+    return (entries | ({RECOVERY_STATE.name: ca.SX(0)} if recovers(numeric_settings, inputs) else {})
+            | {sum_state(name).name: ca.SX(0) for name in averaged(inputs)}
+            | {COUNTDOWN.name: ca.SX(0), CODE.name: ca.SX(0)})
+
+
+def period(numeric_settings, sample_time: float) -> int:
+    """Samples between two runs of the checks: ``check_period`` in whole samples, at least one
+    (structural: the number decides the code, also in calibratable mode)."""
+    return max(1, round(numeric_settings["check_period"] / sample_time))
 
 
 def monitor(watch: Watch) -> tuple[dict, ca.SX]:

@@ -33,7 +33,7 @@ from functools import cached_property
 import casadi as ca
 
 from vsegen.model import consistency, input_monitors, status
-from vsegen.model.estimator import Derived
+from vsegen.model.estimator import CheckSegment, Derived
 from vsegen.model.filters import held_flag
 from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
@@ -90,6 +90,9 @@ class Step:
     updates: dict
     code: ca.SX
     first_inconsistent: ca.SX = ca.SX(0)
+    checks: CheckSegment | None = None
+    """The input checks' segment (the input monitors' stage, when a check is on): the structure
+    builders of ``model.estimator`` take it."""
 
 
 @dataclass(frozen=True)
@@ -122,10 +125,16 @@ class MonitorBlock:
 
     @cached_property
     def states(self) -> tuple[Signal, ...]:
-        """The state entries of the checks that are on."""
+        """The state entries of the model checks that are on (the consistency monitor's and the
+        linear-range hold's)."""
         return (*(consistency.STATES if self.consistency else ()),
-                *((consistency.LINEAR_RANGE_STATE,) if self.linear_range_held else ()),
-                *input_monitors.states(self.numeric, self.inputs.names))
+                *((consistency.LINEAR_RANGE_STATE,) if self.linear_range_held else ()))
+
+    @cached_property
+    def segment(self) -> tuple[Signal, ...]:
+        """The input checks' state entries, the last of an estimator's state (``CheckSegment``);
+        none when every check is off."""
+        return input_monitors.states(self.numeric, self.inputs.names)
 
     def initial_entries(self, first: dict) -> dict:
         """The entries at the first sample ``first`` (its neutralised inputs)."""
@@ -133,14 +142,40 @@ class MonitorBlock:
                 **({consistency.LINEAR_RANGE_STATE.name: ca.SX(0)} if self.linear_range_held else {}),
                 **input_monitors.initial_entries(first, self.numeric, self.inputs.names)}
 
+    def check_time(self, sample_time: float) -> float:
+        """s between two runs of the input checks (``check_period`` in whole samples)."""
+        return input_monitors.period(self.numeric, sample_time) * sample_time
+
     def watch_inputs(self, s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
                      vehicle) -> Step:
-        """The input monitors' stage from the state entries ``s`` as they came in, the raw inputs
-        ``u``, their plausibility flags and the guard's ``active`` flag (a holding estimator holds
-        them); ``settings`` and ``vehicle`` numbers or calibration symbols."""
-        updates, code = input_monitors.monitor(Watch(s, u, plausible, active, settings, self.numeric, sample_time,
-                                                     self.inputs.names, vehicle, self.monitored))
-        return Step(updates, code)
+        """The input monitors' stage from the state entries ``s``, the raw inputs ``u``, their
+        plausibility flags and the guard's ``active`` flag; ``settings`` and ``vehicle`` numbers or
+        calibration symbols.
+
+        The checks run after the method, on an active sample whose countdown is 0 (every
+        ``check_period``), stepped at that period, in a kernel of their own
+        (``model.estimator.CheckSegment``): on such a sample every input the method reads is
+        plausible, so only the monitored-only inputs are judged there. a_y and r are read as their
+        means over the period (``model.input_monitors.AVERAGED``). The method reads their last run:
+        its updates keep their entries, its code is ``active`` times their kept code."""
+        if not self.segment:
+            return Step({}, ca.SX(0))
+        period = input_monitors.period(self.numeric, sample_time)
+        sums = {name: input_monitors.sum_state(name).name for name in input_monitors.averaged(self.inputs.names)}
+        means = {name: (s[entry] + u[name]) / period for name, entry in sums.items()}
+        judged = {name: plausible[name] if name in self.monitored else ca.SX(1) for name in plausible}
+        updates, code = input_monitors.monitor(Watch(s, {**u, **means}, judged, ca.SX(1), settings, self.numeric,
+                                                     period * sample_time, self.inputs.names, vehicle,
+                                                     self.monitored, u))
+        countdown, kept_code = input_monitors.COUNTDOWN.name, input_monitors.CODE.name
+        names = tuple(entry.name for entry in self.segment)
+        ran = {**{n: updates.get(n, s[n]) for n in names}, **dict.fromkeys(sums.values(), ca.SX(0)),
+               countdown: ca.SX(period - 1), kept_code: code}
+        counted = {**{n: s[n] for n in names}, **{entry: s[entry] + u[name] for name, entry in sums.items()},
+                   countdown: s[countdown] - 1}
+        segment = CheckSegment(names, ca.vertcat(*(ran[n] for n in names)), s[countdown] > 0,
+                               ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)))
+        return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,
                     ay_model=None, concerns=None, beyond: tuple = (), held_here: bool = True) -> Step:

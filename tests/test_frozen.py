@@ -1,5 +1,7 @@
 """The frozen-signal monitor (model.input_checks.frozen): a stuck a_x, a_y or r raises INPUT_FROZEN within
-frozen_time, a live or quantised signal never does, and frozen_time = 0 removes it."""
+frozen_time (in whole check periods) and one check period (the checks run every check_period, after
+the method, which reports their last run), a live or quantised signal never does, and frozen_time = 0
+removes it."""
 
 from __future__ import annotations
 
@@ -14,10 +16,19 @@ from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.project.vehicles import load_vehicle
 from vsegen.harness.score.metrics import SILENT_DURATION, errors, silent_error_time
 from vsegen.harness.sim.scenarios import Case
+from vsegen.model import input_monitors
 from vsegen.model.estimators import build
 from vsegen.model.status import INPUT_FROZEN
 
 MONITORED = ("kf2dof", "switching", "fusion", "ekf_rls", "ukf", "aukf")
+
+
+def _detection_time(config, name) -> float:
+    """s from the first frozen sample to the latest a freeze is reported: frozen_time in whole
+    check periods, one period for the phase of the countdown, and the sample the method waits."""
+    settings, T = config.settings(name), config.sample_time
+    period = input_monitors.period(settings, T) * T
+    return round(settings["frozen_time"] / period) * period + period + T
 
 
 def _frozen_times(config, name, case: Case) -> np.ndarray:
@@ -31,9 +42,10 @@ def _frozen_times(config, name, case: Case) -> np.ndarray:
 def test_a_frozen_inertial_signal_raises_input_frozen_within_frozen_time(config, name, channel):
     frozen_time, recovery = config.settings(name)["frozen_time"], config.settings(name)["frozen_recovery"]
     flagged = _frozen_times(config, name, Case.of("dlc", speed_kmh=80.0, freeze=f"{channel}:3:1.5"))
-    assert flagged.size and 3.0 < flagged[0] <= 3.0 + frozen_time + 1e-9
-    # lowered when the signal lives again (at 4.5 s), frozen_recovery later where it is set
-    assert 4.5 + recovery - 2 * config.sample_time < flagged[-1] < 4.5 + recovery + 1e-9
+    period = input_monitors.period(config.settings(name), config.sample_time) * config.sample_time
+    assert flagged.size and 3.0 + frozen_time <= flagged[0] <= 3.0 + _detection_time(config, name) + 1e-9
+    # lowered when the signal lives again (at 4.5 s) and the checks have run, frozen_recovery later
+    assert 4.5 + recovery - 2 * config.sample_time < flagged[-1] <= 4.5 + recovery + period + 1e-9
 
 
 @pytest.mark.parametrize("name", ["switching", "fusion"])
@@ -43,7 +55,7 @@ def test_under_a_frozen_yaw_rate_the_model_based_scheme_carries_the_estimate(con
     log = Case.of("dlc", speed_kmh=80.0, freeze="r:3:1.5").simulate(config, 1.0 / config.sample_time, 1)
     estimates = run_estimator(config, name, log)
     assert np.rad2deg(np.abs(errors(estimates["beta"], log["beta_ref"]))).max() < 1.0
-    detected = (log["t"] > 3.0 + config.settings(name)["frozen_time"] + config.sample_time) & (log["t"] < 4.5)
+    detected = (log["t"] > 3.0 + _detection_time(config, name)) & (log["t"] < 4.5)
     scheme = estimates["mode"] if name == "switching" else estimates["weight"]      # mode 0: the KF
     assert np.count_nonzero(detected) > 100 and np.all(scheme[detected] == 0)
 

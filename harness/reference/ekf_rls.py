@@ -43,7 +43,8 @@ def names(config):
 def states(config) -> tuple[str, ...]:
     s = config.settings(TABLE)
     kinematic = s["stiffness_regressor"] == "kinematic_slip"
-    return (*STATES, *(KINEMATIC if kinematic else ()), *_monitors(config).states)
+    block = _monitors(config)
+    return (*STATES, *(KINEMATIC if kinematic else ()), *block.states, *block.segment)
 
 
 def _loads(v, ax, ay):
@@ -120,8 +121,9 @@ def step(config, state, u):
     inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5, block.monitored)
+    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle)   # beyond the paper
     if not active:
-        held = dict(x, holding=1.0)
+        held = dict(x, holding=1.0) | watched
         return (np.array([held[k] for k in names]),
                 np.array([0.0, 0.0, 0.0, x["r_ekf"], 0.0, x["c_front"], x["c_rear"], float(status)]))
     delta, vx, ax, r = inputs["delta"], inputs["vx"], inputs["ax"], inputs["r"]
@@ -138,7 +140,6 @@ def step(config, state, u):
     x_pred = xe + T * _f(v, xe, delta, vx, x["c_front"], x["c_rear"])
 
     new, y, A, loads = _regression(s, v, T, x, x_pred, delta, vx, ax, ay, r, r_dot)
-    watched, flags = block.watch_inputs(x, inputs, ok, T, config.vehicle)
     new |= watched                          # the input monitors (beyond the paper)
     status |= flags
     X, P, cf, cr = _rls(s, v, T, x, y, A, loads, trusted=flags == 0)

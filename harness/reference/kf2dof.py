@@ -26,15 +26,11 @@ def input_names(config) -> tuple[str, ...]:
     return _monitors(config).inputs
 
 
-def _monitor_states(config) -> tuple[str, ...]:
-    """The monitor block's state entries (those that are on)."""
-    return _monitors(config).states
-
-
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
+    block = _monitors(config)
     return (input_names(config), ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-                     *_monitor_states(config), "holding"), OUTPUTS)
+                     *block.states, "holding", *block.segment), OUTPUTS)
 
 
 def _settings(config):
@@ -49,7 +45,7 @@ def init(config, u0) -> np.ndarray:
     P0 = np.array(s["initial_covariance"])
     entries = block.initial(first)
     return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
-                     *(entries[k] for k in _monitor_states(config)), holding])
+                     *(entries[k] for k in block.states), holding, *(entries[k] for k in block.segment)])
 
 
 def step(config, state, u):
@@ -57,28 +53,29 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(block.inputs, u))
-    entries = dict(zip(block.states, state[7:-1]))    # the monitors' entries when they are on
+    x = dict(zip(names(config)[1], state))
+    entries = {k: x[k] for k in block.states}    # the model checks' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
-    holding = state[-1]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
-                                         holding > 0.5, block.monitored)
+                                         x["holding"] > 0.5, block.monitored)
+    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle)
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])
         new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep,
-                        *entries.values(), 1.0])
+                        *entries.values(), 1.0, *(watched[k] for k in block.segment)])
         return new, np.array([0.0, 0.0, r, float(status)])
 
     def clamp(v):
         return min(max(v, s["vx_min"]), vx_max)
 
     vx = clamp(inputs["vx"])
-    x, P, innovation, ay_model = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
+    x_new, P, innovation, ay_model = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
                                                  np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
                                                  inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
-    watched, flags = block.watch_inputs(entries, inputs, ok, T, config.vehicle)
     judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"], ay_model)
-    entries.update(watched | judged)
+    entries.update(judged)
     status |= flags | judgement
-    new = np.array([x[0], x[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0])
-    return new, np.array([math.atan2(x[0], vx), x[0], x[1], float(status)])
+    new = np.array([x_new[0], x_new[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0,
+                    *(watched[k] for k in block.segment)])
+    return new, np.array([math.atan2(x_new[0], vx), x_new[0], x_new[1], float(status)])

@@ -30,13 +30,14 @@ def median_length(config, table) -> int:
 
 def state_names(config, table, block, extra: tuple[str, ...] = ()) -> tuple[str, ...]:
     """The state entries; ``block`` the estimator's monitor block
-    (``harness.reference.monitor_block``), ``extra`` its own entries (0 at init, kept while holding)."""
+    (``harness.reference.monitor_block``: its model checks', and last its input checks'), ``extra``
+    its own entries (0 at init, kept while holding)."""
     n = median_length(config, table)
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
             "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
             "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-            *block.states, "holding", *extra)
+            *block.states, "holding", *extra, *block.segment)
 
 
 def prefilter(config, table):
@@ -89,8 +90,8 @@ def init(config, table, block, u0, extra: tuple[str, ...] = ()):
     n = median_length(config, table)
     monitor = block.initial(first)
     return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *monitor.values(), holding,
-                     *([0.0] * len(extra))])
+                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *(monitor[k] for k in block.states),
+                     holding, *([0.0] * len(extra)), *(monitor[k] for k in block.segment)])
 
 
 def held(config, table, x, inputs, ok):
@@ -167,12 +168,12 @@ def step(config, table, block, state, u, scheme, extra: tuple[str, ...] = ()):
     inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5, block.monitored)
+    watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle)
     if not active:
-        new = held(config, table, x, inputs, ok)
+        new = held(config, table, x, inputs, ok) | watched
         return (np.array([new[k] for k in names]),
                 np.array([0.0, 0.0, x["r_last"], DYN, status]))
     updates, r_k, ay_f, suspect = preprocess(config, table, x, inputs)
-    monitor, flags = block.watch_inputs(x, inputs, ok, config.sample_time, config.vehicle)
     status += (blocks.REFERENCE_SUSPECT if suspect else 0) + flags
-    new, output = scheme(x, {**updates, **monitor}, r_k, ay_f, status, inputs)
-    return np.array([new[k] for k in names]), np.array(output)
+    new, output = scheme(x, updates, r_k, ay_f, status, inputs)
+    return np.array([(new | watched)[k] for k in names]), np.array(output)

@@ -57,9 +57,15 @@ class MonitorBlock:
 
     @property
     def states(self) -> tuple[str, ...]:
-        """The entries of the checks that are on: the consistency monitor's, the input monitors'."""
+        """The entries of the model checks that are on: the consistency monitor's, the linear-range
+        hold's."""
         return (*(blocks.MONITOR_STATES if self.consistent else ()),
-                *(("linear_range_hold_left",) if self.range_held else ()), *monitors.states(self.settings, self.inputs))
+                *(("linear_range_hold_left",) if self.range_held else ()))
+
+    @property
+    def segment(self) -> tuple[str, ...]:
+        """The input monitors' entries: the last of an estimator's state."""
+        return monitors.states(self.settings, self.inputs)
 
     def initial(self, first: Mapping[str, float]) -> dict:
         """The entries at the first sample ``first`` (its neutralised inputs)."""
@@ -67,9 +73,18 @@ class MonitorBlock:
                 **({"linear_range_hold_left": 0.0} if self.range_held else {}),
                 **monitors.initial(self.settings, self.inputs, first)}
 
-    def watch_inputs(self, x, u, ok, T: float, vehicle) -> tuple[dict, int]:
-        """(new entries, status bits) of the input monitors; on an active sample only."""
-        return monitors.step(x, u, ok, self.settings, T, self.inputs, vehicle)
+    def check_time(self, T: float) -> float:
+        """s between two runs of the input checks."""
+        return monitors.period(self.settings, T) * T
+
+    def watch_inputs(self, x, u, ok, active: bool, T: float, vehicle) -> tuple[dict, int]:
+        """(the input monitors' entries after the sample, the status bits the method reports) on
+        every sample: the checks run after the method, which reports their last run's code while
+        ``active``, else 0."""
+        if not self.segment:
+            return {}, 0
+        new = monitors.run(x, u, ok, active, self.settings, T, self.inputs, vehicle)
+        return new, int(x["checks_code"]) if active else 0
 
     def judge_model(self, x, innovation, T: float, ay: float, ay_model: float | None = None,
                     concerns: bool = True, beyond: bool = False) -> tuple[dict, int, bool]:

@@ -1,6 +1,7 @@
 """The input monitors in plain Python (model.input_monitors): the input checks of
 ``harness.reference.input_checks`` (one module each) and, over them all, the recovery hold of
-INPUT_FROZEN."""
+INPUT_FROZEN. They run after the method on an active sample every check_period (in whole samples,
+at least one), stepped at that period, and keep their status bits in between (:func:`run`)."""
 
 from __future__ import annotations
 
@@ -36,26 +37,65 @@ def _recovers(settings, inputs) -> bool:
 
 
 def states(settings, inputs) -> tuple[str, ...]:
-    """The state entries of the checks that are on, in their order, then the recovery hold's."""
+    """The state entries of the checks that are on, in their order, the recovery hold's, then the
+    countdown to their next run and the status bits of their last; none when all are off."""
+    if not _on(settings, inputs):
+        return ()
     return (*(name for check in _on(settings, inputs) for name in check.states(settings, inputs)),
-            *(("frozen_recovery_left",) if _recovers(settings, inputs) else ()))
+            *(("frozen_recovery_left",) if _recovers(settings, inputs) else ()),
+            *(f"checks_sum_{name}" for name in averaged(inputs)), "checks_countdown", "checks_code")
+
+
+def averaged(inputs) -> tuple[str, ...]:
+    """The noisy inertial inputs the checks read as their means over their period (summed on every
+    active sample between two runs)."""
+    return tuple(name for name in ("ay", "r") if name in inputs)
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
-    """The entries at init from the first sample's (neutralised) inputs ``first``."""
+    """The entries at init from the first sample's (neutralised) inputs ``first``; the checks run
+    on the first step."""
+    if not _on(settings, inputs):
+        return {}
     entries = {}
     for check in _on(settings, inputs):
         entries |= check.initial(settings, inputs, first)
-    return entries | ({"frozen_recovery_left": 0.0} if _recovers(settings, inputs) else {})
+    return entries | ({"frozen_recovery_left": 0.0} if _recovers(settings, inputs) else {}) | {
+        **{f"checks_sum_{name}": 0.0 for name in averaged(inputs)}, "checks_countdown": 0.0, "checks_code": 0.0}
+
+
+def period(settings, T: float) -> int:
+    """Samples between two runs of the checks."""
+    return max(1, round(settings["check_period"] / T))
+
+
+def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], active: bool, settings,
+        T: float, inputs, vehicle: Mapping[str, float]) -> dict:
+    """The checks' new entries after a sample (every sample): a held sample keeps them; on an
+    ``active`` one, while their countdown runs, the countdown one less and a_y and r added to their
+    sums; when it is 0, a run at their period on the period's mean a_y and r (the other inputs
+    this sample's) and the countdown and sums restarted."""
+    kept = {name: x[name] for name in states(settings, inputs)}
+    if not active:
+        return kept
+    sums = {name: f"checks_sum_{name}" for name in averaged(inputs)}
+    if x["checks_countdown"] > 0:
+        return kept | {entry: x[entry] + u[name] for name, entry in sums.items()} | {
+            "checks_countdown": x["checks_countdown"] - 1}
+    n = period(settings, T)
+    means = {name: (x[entry] + u[name]) / n for name, entry in sums.items()}
+    new, code = step(x, u | means, ok, settings, n * T, inputs, vehicle, raw=u)
+    return kept | new | dict.fromkeys(sums.values(), 0.0) | {"checks_countdown": float(n - 1),
+                                                              "checks_code": float(code)}
 
 
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
-         inputs, vehicle: Mapping[str, float]) -> tuple[dict, int]:
-    """(new entries, status bits) of the checks that are on; call only on an active sample (a
-    holding estimator holds its monitors)."""
+         inputs, vehicle: Mapping[str, float], raw: Mapping[str, float]) -> tuple[dict, int]:
+    """(new entries, status bits) of one run of the checks that are on at period ``T``, on an
+    active sample: ``u`` the inputs (a_y and r their period's means), ``raw`` the sample's own."""
     new, code = {}, 0
     for check in _on(settings, inputs):
-        checked, bits = check.step(x, u, ok, settings, T, inputs, vehicle)
+        checked, bits = check.step(x, u, ok, settings, T, inputs, vehicle, raw)
         new, code = new | checked, code | bits
     if _recovers(settings, inputs):             # INPUT_FROZEN held while the estimate recovers
         new["frozen_recovery_left"], frozen = blocks.held_flag(

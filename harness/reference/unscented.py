@@ -55,7 +55,7 @@ class Variant:
         extra = ((*(f"qmean_{n}" for n in STATE), *(f"qvar_{n}" for n in STATE), "fading")
                  if self.adaptive else ())
         block = self.monitors(config)
-        return block.inputs, (*STATE, *COVARIANCE, *extra, *block.states, "hold_reason"), OUTPUTS
+        return block.inputs, (*STATE, *COVARIANCE, *extra, *block.states, "hold_reason", *block.segment), OUTPUTS
 
     def init(self, config, u0):
         s, block = config.settings(self.table), self.monitors(config)
@@ -63,9 +63,10 @@ class Variant:
         first, holding = blocks.first_sample(config.limits, inputs, s["vx_min"], s["vx_resume"], block.monitored)
         x0 = [min(max(first["vx"], s["vx_min"]), config.limits["vx_max"]), 0, 0, 0, 0, 0]
         extra = [0.0] * N + list(s["process_noise"]) + [s["forgetting_factor"]] if self.adaptive else []
-        watched = list(block.initial(first).values())
-        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra + watched
-                        + [2 * holding], dtype=float)
+        entries = block.initial(first)
+        return np.array(x0 + blocks.packed(np.diag(s["initial_covariance"])) + extra
+                        + [entries[k] for k in block.states] + [2 * holding]
+                        + [entries[k] for k in block.segment], dtype=float)
 
     def step(self, config, state, u):
         s, block = config.settings(self.table), self.monitors(config)
@@ -74,12 +75,12 @@ class Variant:
         inputs = dict(zip(input_names, u))
         active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                               x["hold_reason"] > 0.5, block.monitored)
+        watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle)
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
-            held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0)
+            held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0) | watched
             return (np.array([held[k] for k in state_names]),
                     np.array([0.0, x["u"], x["v"], x["gamma"], x["moment"], x["ax"], x["ay"],
                               float(status)]))
-        watched, flags = block.watch_inputs(x, inputs, ok, config.sample_time, config.vehicle)  # state as it came
         if x["hold_reason"] > 1.5:  # back from a low-speed hold: restart here (the held speed is stale)
             x = dict(zip(state_names, self.init(config, u)))
         X = np.array([x[k] for k in STATE], dtype=LD)

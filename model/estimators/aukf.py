@@ -155,6 +155,7 @@ def layouts(settings, adaptive: bool, vehicle) -> tuple[Layout, Layout, Layout]:
            Signal("fading", "-", "f^(k+1), for the Sage-Husa weight d_k")) if adaptive else ()),
         *block.states,
         signals.HOLD_REASON,
+        *block.segment,
     ))
     outputs = Layout((
         Signal("beta", "rad", "sideslip angle atan2(v, u)"),
@@ -342,11 +343,12 @@ def _step(sym: _Symbols, init_state: ca.SX, f: _Filter) -> Estimator:
 
     x_new, P_new, innovation, correction = _update(settings, u, active, x_pred, spread, f.Q)
     extra = _sage_husa(sym, f, propagated, spread, x_new, P_new, correction) if sym.adaptive else {}
-    next_state, output = _finish(sym, init_state, f, x_new, P_new, innovation, x_pred[MEASURED[1]], repaired, extra)
+    next_state, output, checks = _finish(sym, init_state, f, x_new, P_new, innovation, x_pred[MEASURED[1]],
+                                         repaired, extra)
     repeated, next_state, output = make_repeated(name, sym.state, sym.inputs, offsets, shared, each,
-                                                 results, ca.cse(next_state), ca.cse(output), params)
+                                                 results, ca.cse(next_state), ca.cse(output), params, checks)
     init, step = make_functions(name, sym.inputs_layout, sym.states, sym.outputs, sym.inputs, sym.state,
-                                init_state, next_state, output, params)
+                                init_state, next_state, output, params, checks)
     return _estimator(sym, init, replace(repeated, step=step))
 
 
@@ -389,9 +391,9 @@ def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, corr
 
 
 def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, ay_model, repaired, extra: dict):
-    """(next state, output): the update, the hold, or a restart (beyond the spec: the innovation
-    monitor's first firing or an estimate outside the plausible envelope), and the status;
-    ``ay_model`` the prior's a_y (for the linear-range flag)."""
+    """(next state, output, the input checks' segment): the update, the hold, or a restart (beyond
+    the spec: the innovation monitor's first firing or an estimate outside the plausible envelope),
+    and the status; ``ay_model`` the prior's a_y (for the linear-range flag)."""
     settings, u, guard, kept, states = sym.settings, sym.u, sym.guard, sym.kept, sym.states
     active = guard.active
 
@@ -424,7 +426,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, ay_
         "status": code,
     })
     next_state = ca.if_else(active, ca.if_else(restarted, restart, updated), held)
-    return next_state, output
+    return next_state, output, watched.checks
 
 
 def _estimator(sym: _Symbols, init: ca.Function, repeated) -> Estimator:

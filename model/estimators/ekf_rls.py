@@ -203,7 +203,8 @@ def states(settings) -> Layout:
     """The state layout: ``kinematic_slip`` adds its integral method and low-passed signals, the
     monitor block its entries."""
     kinematic = KINEMATIC_STATES.signals if settings["stiffness_regressor"] == "kinematic_slip" else ()
-    return Layout((*STATES.signals, *kinematic, *CHECKS.block(settings).states))
+    block = CHECKS.block(settings)
+    return Layout((*STATES.signals, *kinematic, *block.states, *block.segment))
 
 
 def axle_stiffness(regressor: str, c0, loads) -> tuple[ca.SX, ca.SX]:
@@ -341,7 +342,7 @@ def build(params: Parameters) -> Estimator:
                                 watched)
     init_state = _initial_state(config, settings, choices, layout, block, u, stiffness.kinematic)
     init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
-                                   next_state, output, params, decisions)
+                                   next_state, output, params, decisions, watched.checks)
     per_sample = choices["forgetting_factor"] ** (params.numeric.sample_time / REFERENCE_PERIOD)
     return Estimator(NAME, "sideslip: EKF with RLS cornering stiffness fused with the integral "
                            "method by the stiffness rate (seed 001)",

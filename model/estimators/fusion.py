@@ -129,7 +129,7 @@ def build(params: Parameters) -> Estimator:
         "status": code,
     })
     init, structure = make_guarded(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
-                                   seed.initial_state(u), next_state, output, params, decisions)
+                                   seed.initial_state(u), next_state, output, params, decisions, pre.checks)
     return Estimator(NAME, "sideslip by weighted fusion of a kinematic and a KF scheme "
                      "(seed 000's comparison method)", seed.inputs, layout, OUTPUTS, init, structure, params,
                      seed.notes())

@@ -60,6 +60,7 @@ def states(settings) -> Layout:
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
         *CHECKS.block(settings).states,
         signals.HOLDING,
+        *CHECKS.block(settings).segment,
     ))
 
 OUTPUTS = Layout((
@@ -215,7 +216,7 @@ def build(params: Parameters) -> Estimator:
 
     init_state = _initial_state(params, layout, block, u, P0)
     init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
-                                   next_state, output, params, decisions)
+                                   next_state, output, params, decisions, watched.checks)
     return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
                      in_layout, layout, OUTPUTS, init, structure, params, zoh_note(params))
 

@@ -14,7 +14,7 @@ import casadi as ca
 from vsegen.model import filters, kalman, signals, status
 from vsegen.model.bicycle import stability_factor
 from vsegen.model.calibration import Parameters, matrix
-from vsegen.model.estimator import BEYOND_LINEAR, Tunable
+from vsegen.model.estimator import BEYOND_LINEAR, CheckSegment, Tunable
 from vsegen.model.estimators import kf2dof
 from vsegen.model.guard import Guard, first_sample, hold, input_guard, model_speed, plausibility, previous_inputs
 from vsegen.model.input_checks import frozen
@@ -76,9 +76,11 @@ def window(params: Parameters, table: str) -> int:
     return filters.median_window(1.0 / numeric.sample_time, numeric.settings(table)["median_span"])
 
 
-def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal, ...] = ()) -> Layout:
+def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal, ...] = (),
+           segment: tuple[Signal, ...] = ()) -> Layout:
     """The state layout; ``extra`` are an estimator's own entries (0 at init, kept while holding),
-    ``monitors`` its monitor block's (``model.monitor_block``)."""
+    ``monitors`` its monitor block's model checks', ``segment`` its input checks' (last;
+    ``model.monitor_block``)."""
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -99,6 +101,7 @@ def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal
         *monitors,
         signals.HOLDING,
         *extra,
+        *segment,
     ))
 
 
@@ -131,6 +134,8 @@ class Preprocessed:
     kinematic_inputs_frozen: ca.SX = ca.SX(0)
     """1 while a_y or r, the kinematic integrator's inputs, is frozen (``model.input_checks.frozen``): the
     model-based scheme must carry the estimate then."""
+    checks: CheckSegment | None = None
+    """The input checks' segment (``model.monitor_block``), for the structure builder."""
 
 
 class KinematicDynamic:
@@ -147,7 +152,7 @@ class KinematicDynamic:
         self.monitors = checks.block(params.numeric.settings(table))
         self.inputs = self.monitors.inputs
         """The input layout: the KF's inputs and what the monitors read beside them."""
-        self.layout = states(self.n_median, extra, self.monitors.states)
+        self.layout = states(self.n_median, extra, self.monitors.states, self.monitors.segment)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
@@ -209,8 +214,9 @@ class KinematicDynamic:
             "ay_rejections": keep("ay_rejections", ay_check.rejections),
             **watched.updates,
         }
-        frozen_inputs = frozen.any_frozen(watched.updates, settings, self.T, KINEMATIC_INPUTS)
-        return Preprocessed(guard, r_check.value, filters.median(history), code, updates, frozen_inputs)
+        frozen_inputs = frozen.any_frozen(s, settings, self.monitors.check_time(self.T), KINEMATIC_INPUTS)
+        return Preprocessed(guard, r_check.value, filters.median(history), code, updates, frozen_inputs,
+                            watched.checks)
 
     def held(self, m: dict, v: dict, plausible: dict | None = None) -> dict:
         """State while holding (§2.10): integrator and KF reset, P = P_0, mode DYN, last

@@ -29,6 +29,7 @@ from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
     BEYOND_LINEAR,
     KF_MEASUREMENT_NOISE,
+    CheckSegment,
     LOW_FRICTION,
     ROLL_GRADIENT,
     TYRE_FRICTION,
@@ -165,18 +166,18 @@ def build(params: Parameters) -> Estimator:
     layout = seed.layout
     state, s = layout.symbols("state")
     inputs, u = seed.inputs.symbols("input")
-    mid, scratch = _select(seed, s, u)
+    mid, scratch, checks = _select(seed, s, u)
     schemes, next_state, out = make_schemes(
-        NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch, _schemes(params, seed), params)
+        NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch, _schemes(params, seed), params, checks)
     init, step = make_functions(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
-                                seed.initial_state(u), next_state, out, params)
+                                seed.initial_state(u), next_state, out, params, checks)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
                      seed.inputs, layout, OUTPUTS, init, replace(schemes, step=step), params, seed.notes())
 
 
-def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX]:
-    """(state entries after the select, the packed SCRATCH): pre-processing, the remembered peak,
-    the scheme wanted and its dwell bound, the learned offset."""
+def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX, CheckSegment | None]:
+    """(state entries after the select, the packed SCRATCH, the input checks' segment):
+    pre-processing, the remembered peak, the scheme wanted and its dwell bound, the learned offset."""
     T = seed.T
     pre = seed.preprocess(s, u)
     active = pre.guard.active
@@ -199,7 +200,7 @@ def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX]:
     scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
                             "mode_prev": s["mode"], "status": status})
-    return mid, scratch
+    return mid, scratch, pre.checks
 
 
 def _output(beta, vy, r, mode_value, code):

@@ -51,6 +51,9 @@ class Watch:
     monitored: tuple[str, ...]
     """The inputs only the monitors read (``model.guard.input_guard``'s ``monitored``): they may
     be implausible on an active sample."""
+    raw: Mapping
+    """The sample's own inputs: ``u`` holds the noisy inertial ones (``model.input_monitors.AVERAGED``)
+    as their means over the checks' period instead (a bit-for-bit test wants the sample)."""
 
 
 class InputCheck(Protocol):

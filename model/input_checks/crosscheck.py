@@ -5,10 +5,13 @@ The checks look at *quasi-steady* driving only, where the kinematics give a rela
 inputs that no tyre parameter enters. A sample is quasi-steady when the steer angle has stayed
 near the value delta_0 it had ``steady_time`` ago, |delta - delta_0| v_x^2 / l <= ``steady_band``
 (the change of a_y the steer change would ask for in a kinematic turn; the stretch restarts
-whenever it leaves the band), so the yaw rate and the lateral velocity have settled:
+whenever it leaves the band), so the yaw rate and the lateral velocity have settled. The checks
+run every ``check_period`` (model.input_monitors), so a steer angle can leave the band and come back
+between two runs: the lateral check and the steering-angle zero also want the yaw rate *settled*,
+|r - r_last run| v_x <= ``settle_band`` (a transient's v_y' is no offset; above the gyro noise):
 
 * **lateral check** (status LATERAL_INCONSISTENT): with v_y' = 0 the lateral specific force is
-  a_y = r v_x. While quasi-steady and |a_y| <= ``lateral_check_range`` (where body roll adds at
+  a_y = r v_x. While quasi-steady, settled and |a_y| <= ``lateral_check_range`` (where body roll adds at
   most about 0.1 m/s^2 to a body-fixed accelerometer), the residual a_y - r v_x is averaged,
 
       e_k = e_k-1 + (1 - exp(-T / lateral_check_time)) (a_y - r v_x - e_k-1),
@@ -16,7 +19,7 @@ whenever it leaves the band), so the yaw rate and the lateral velocity have sett
   and held outside those stretches. |e| > ``lateral_check_limit`` raises the bit: a road bank
   (g sin(phi_r) in a_y: 0.51 m/s^2 for 3 deg), an accelerometer offset or mounting tilt, a yaw-rate
   or speed error. Every estimator that integrates a_y or trusts a_y against r is suspect then.
-* **steering-angle zero** (status STEERING_OFFSET): driving straight (quasi-steady, |a_y| <=
+* **steering-angle zero** (status STEERING_OFFSET): driving straight (quasi-steady, settled, |a_y| <=
   ``steering_offset_range``, v_x >= ``steering_offset_speed``), the road-wheel angle of the
   kinematic (Ackermann) turn is l r / v_x; understeer adds K_us a_y, below 0.001 rad per m/s^2 for
   passenger cars, so the zero is learned as
@@ -63,6 +66,9 @@ FIELDS = (
     positive("steady_band", "m/s^2", "a quasi-steady stretch ends when the steer angle has moved "
              "so far that a kinematic turn would change a_y by this, |delta - delta_0| v_x^2 / l",
              default=0.2),
+    positive("settle_band", "m/s^2", "the lateral check and the steering zero sample only while the yaw "
+             "rate has moved less than this over v_x since the checks' last run (|r - r_last| v_x: settled, "
+             "no transient; above the gyro's noise)", default=0.6),
     nonnegative("lateral_check_limit", "m/s^2", "beyond the papers: the mean of a_y - r v_x in "
                 "quasi-steady driving beyond this raises status 8192 LATERAL_INCONSISTENT (a road "
                 "bank, an accelerometer offset or tilt, a yaw-rate or speed error); 0 = no check",
@@ -82,8 +88,8 @@ FIELDS = (
     nonnegative("steer_check_limit", "m/s^2", "beyond the papers: at a constant steer angle, a "
                 "change of the path's lateral acceleration (r - kappa_0 v_x) v_x beyond this raises "
                 "status 2048 INPUT_FROZEN (a frozen steering-angle signal); 0 = no check", default=0.0),
-    positive("steer_check_time", "s", "time constant of the steer check's low-passed path curvature",
-             default=0.1),
+    positive("steer_check_time", "s", "time constant of the steer check's low-passed path curvature (of "
+             "the check period's mean yaw rate, itself an average)", default=0.05),
     positive("steer_check_range", "m/s^2", "the steer check runs only while |a_y| is below this (the "
              "friction limit, where the path bends away at a held steer angle, lies beyond it)",
              default=6.0),
@@ -91,8 +97,9 @@ FIELDS = (
 
 _STEADY = (Signal("steady_delta", "rad", "cross-checks: steer angle at the start of the quasi-steady "
                   "stretch"),
-           Signal("steady_samples", "-", "cross-checks: samples the stretch has lasted (at most "
-                  "steady_time / T)"))
+           Signal("steady_samples", "-", "cross-checks: runs the stretch has lasted (at most "
+                  "steady_time / check_period)"),
+           Signal("steady_r", "rad/s", "cross-checks: yaw rate at their last run"))
 _CHECKS = (
     ("lateral_check_limit", status.LATERAL_INCONSISTENT,
      (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x in quasi-steady driving"),)),
@@ -139,8 +146,8 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
     """The entries at init: a stretch starting at the first sample, nothing learned."""
-    return {entry.name: first["delta"] if entry.name == "steady_delta" else ca.SX(0)
-            for entry in states(numeric_settings, inputs)}
+    firsts = {"steady_delta": first["delta"], "steady_r": first["r"]}
+    return {entry.name: firsts.get(entry.name, ca.SX(0)) for entry in states(numeric_settings, inputs)}
 
 
 def monitor(watch: Watch) -> tuple[dict, dict]:
@@ -153,16 +160,18 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     moved = ca.fabs(u["delta"] - s["steady_delta"]) * u["vx"] * u["vx"] > settings["steady_band"] * wheelbase
     samples = (1 - moved) * ca.fmin(s["steady_samples"] + 1, limit)
     steady = samples >= limit
-    updates = {"steady_delta": moved * u["delta"] + (1 - moved) * s["steady_delta"], "steady_samples": samples}
+    settled = steady * (ca.fabs(u["r"] - s["steady_r"]) * u["vx"] <= settings["settle_band"])
+    updates = {"steady_delta": moved * u["delta"] + (1 - moved) * s["steady_delta"], "steady_samples": samples,
+               "steady_r": u["r"]}
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
-        sampled = steady * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
+        sampled = settled * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
         residual = low_pass(s["lateral_residual"], u["ay"] - u["r"] * u["vx"], settings["lateral_check_time"],
                             sample_time, sampled)
         updates["lateral_residual"] = residual
         raised[status.LATERAL_INCONSISTENT] = ca.fabs(residual) > settings["lateral_check_limit"]
     if _on(numeric_settings, "steering_offset_limit"):
-        sampled = steady * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
+        sampled = settled * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
         kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
         offset = low_pass(s["steering_offset"], kinematic_zero, settings["steering_offset_time"], sample_time,

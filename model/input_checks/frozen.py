@@ -97,8 +97,9 @@ def samples_limit(settings, sample_time: float):
 
 
 def any_frozen(updates: dict, settings, sample_time: float, names: tuple[str, ...]) -> ca.SX:
-    """1 while one of the channels ``names`` is frozen, from the monitor's new entries ``updates``
-    (:func:`monitor`'s); 0 when the monitor is off or watches none of them."""
+    """1 while one of the channels ``names`` is frozen, from the monitor's entries ``updates``
+    (the state's: its last run; ``sample_time`` the checks' period); 0 when the monitor is off or
+    watches none of them."""
     counts = [updates[f"frozen_{c}_repeats"] for c in names if f"frozen_{c}_repeats" in updates]
     if not counts:
         return ca.SX(0)
@@ -110,7 +111,7 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     """(new state entries, {INPUT_FROZEN: 1 while a channel is frozen}) on a step; call only when
     :func:`enabled`. An implausible sample is no repetition, and a holding estimator holds the
     monitor too."""
-    s, u, plausible, active = watch.s, watch.u, watch.plausible, watch.active
+    s, u, plausible, active = watch.s, watch.raw, watch.plausible, watch.active
     limit = samples_limit(watch.settings, watch.sample_time)
     updates, frozen = {}, ca.SX(0)
     for c in channels(watch.inputs):

@@ -51,7 +51,8 @@ FIELDS = (
                 "non-driven wheels' yaw rate beyond this raises status 32768 YAW_RATE_MISMATCH (a "
                 "gyro offset, drift or freeze, a yaw-rate scale typed wrong); above 0 the estimator "
                 "also reads a_x and that axle's wheel speeds; 0 = no check", default=0.0),
-    positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean", default=0.2),
+    positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean (three check periods: it "
+             "reads r and the wheel speeds of the sample it runs on)", default=0.3),
     positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
              "(no braking or drive torque to make the wheels slip)", default=1.0),
     nonnegative("wheel_check_scale", "-", "beyond the papers: the yaw-rate check's mean beyond this "
@@ -111,7 +112,7 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     :func:`enabled`. A sample where an input the estimator's guard does not decide on (it does
     not hold for an input only this check reads) is implausible is skipped; the others are
     plausible on every active sample."""
-    s, u, active, settings, numeric_settings = watch.s, watch.u, watch.active, watch.settings, watch.numeric
+    s, u, active, settings, numeric_settings = watch.s, watch.raw, watch.active, watch.settings, watch.numeric
     sample_time, vehicle = watch.sample_time, watch.vehicle
     readable = {name: watch.plausible[name] for name in watch.monitored}
     left, right = wheels(numeric_settings)

@@ -4,8 +4,9 @@ equations, not from the model's code; found here, so a new check is one new modu
 Each module provides ``ORDER`` (its place among the checks), ``reads(settings)`` (the inputs it
 reads beside the method's), ``enabled(settings, inputs)``, ``raises(settings, inputs)`` (the
 status bits it raises as configured, OR-ed), ``states(settings, inputs)``,
-``initial(settings, inputs, first)`` and ``step(x, u, ok, settings, T, inputs, vehicle)`` ->
-(new entries, status bits), called on an active sample only (a holding estimator holds them).
+``initial(settings, inputs, first)`` and ``step(x, u, ok, settings, T, inputs, vehicle, raw)`` ->
+(new entries, status bits), called on an active sample when the checks run (every check_period,
+``T`` that period; ``u`` holds a_y and r as the period's means, ``raw`` the sample's own inputs).
 """
 
 from __future__ import annotations

@@ -39,16 +39,17 @@ def states(settings, inputs) -> tuple[str, ...]:
     """The quasi-steady detector's, then each check's that is on."""
     if not enabled(settings, inputs):
         return ()
-    return ("steady_delta", "steady_samples",
+    return ("steady_delta", "steady_samples", "steady_r",
             *(name for key, (_, names) in CHECKS.items() if _on(settings, key) for name in names))
 
 
 def initial(settings, inputs, first) -> dict:
-    """A quasi-steady stretch starting at the first sample's steer angle, nothing learned."""
-    return {name: first["delta"] if name == "steady_delta" else 0.0 for name in states(settings, inputs)}
+    """A quasi-steady stretch starting at the first sample's steer angle and yaw rate, nothing learned."""
+    firsts = {"steady_delta": first["delta"], "steady_r": first["r"]}
+    return {name: firsts.get(name, 0.0) for name in states(settings, inputs)}
 
 
-def step(x, u, ok, settings, T: float, inputs, vehicle) -> tuple[dict, int]:
+def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]:
     """(new entries, status bits) of the checks that are on."""
     wheelbase = vehicle["wheelbase"]
     new, code = {}, 0
@@ -59,15 +60,17 @@ def step(x, u, ok, settings, T: float, inputs, vehicle) -> tuple[dict, int]:
         new["steady_delta"] = x["steady_delta"]
         new["steady_samples"] = min(x["steady_samples"] + 1.0, steady_samples)
     steady = new["steady_samples"] >= steady_samples
+    settled = steady and abs(u["r"] - x["steady_r"]) * u["vx"] <= settings["settle_band"]   # r too, since the last run
+    new["steady_r"] = u["r"]
     if _on(settings, "lateral_check_limit"):
         residual = x["lateral_residual"]
-        if steady and abs(u["ay"]) <= settings["lateral_check_range"]:
+        if settled and abs(u["ay"]) <= settings["lateral_check_range"]:
             residual = blocks.low_pass(residual, u["ay"] - u["r"] * u["vx"], T, settings["lateral_check_time"])
         new["lateral_residual"] = residual
         code |= blocks.LATERAL_INCONSISTENT if abs(residual) > settings["lateral_check_limit"] else 0
     if _on(settings, "steering_offset_limit"):
         offset = x["steering_offset"]
-        if (steady and abs(u["ay"]) <= settings["steering_offset_range"]
+        if (settled and abs(u["ay"]) <= settings["steering_offset_range"]
                 and u["vx"] >= settings["steering_offset_speed"]):
             offset = blocks.low_pass(offset, u["delta"] - wheelbase * u["r"] / u["vx"], T,
                                      settings["steering_offset_time"])

@@ -47,8 +47,11 @@ def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
     return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
 
 
-def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs, vehicle) -> tuple[dict, int]:
-    """(new entries, INPUT_FROZEN or 0); an implausible sample is no repetition."""
+def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs, vehicle,
+         raw: Mapping[str, float]) -> tuple[dict, int]:
+    """(new entries, INPUT_FROZEN or 0) from the sample's own inputs ``raw`` (bit for bit, not
+    the period's means ``u``); an implausible sample is no repetition."""
+    u = raw
     limit = blocks.whole_samples(settings["frozen_time"], T)
     new, frozen = {}, False
     for c in (c for c in CHANNELS if c in inputs):

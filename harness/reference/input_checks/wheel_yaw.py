@@ -42,7 +42,10 @@ def initial(settings, inputs, first) -> dict:
     return dict.fromkeys(states(settings, inputs), 0.0)
 
 
-def step(x, u, ok, settings, T: float, inputs, vehicle) -> tuple[dict, int]:
+def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]:
+    """(new entries, YAW_RATE_MISMATCH or 0) from the sample's own r and wheel speeds ``raw``
+    (read at the same instant; not the period's mean r)."""
+    u = raw
     left, right = _axle(settings)
     scale = settings["wheel_check_scale"] > 0
     new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
