@@ -34,8 +34,9 @@ def test_the_estimator_takes_inputs_states_and_bits_from_its_block(config, name)
     block = DEFINITIONS[name].monitors(config.settings(name))
     estimator = build(name, config)
     assert estimator.inputs.names == block.inputs.names
-    assert set(s.name for s in block.states) <= set(estimator.states.names)
-    assert block.states, "the shipped file switches checks on"
+    assert set(s.name for s in (*block.states, *block.segment)) <= set(estimator.states.names)
+    assert block.segment, "the shipped file switches checks on"
+    assert estimator.states.names[-len(block.segment):] == tuple(s.name for s in block.segment)
     assert set(block.checks.status_bits) <= set(DEFINITIONS[name].status_bits)
     assert monitor_only_inputs(config, name) == block.monitored
 
@@ -44,9 +45,10 @@ def test_the_estimator_takes_inputs_states_and_bits_from_its_block(config, name)
 def test_checks_switched_off_leave_no_state(config, name):
     quiet = config.with_settings(name, **{k: v for k, v in ALL_OFF.items() if k in config.settings(name)})
     block = DEFINITIONS[name].monitors(quiet.settings(name))
-    assert block.states == ()
+    assert block.states == () and block.segment == ()
     names = set(build(name, quiet).states.names)
-    monitored = {s.name for s in DEFINITIONS[name].monitors(config.settings(name)).states}
+    shipped = DEFINITIONS[name].monitors(config.settings(name))
+    monitored = {s.name for s in (*shipped.states, *shipped.segment)}
     assert not names & monitored
 
 
@@ -102,7 +104,7 @@ def test_model_and_reference_find_the_same_input_checks_in_the_same_order():
 
 
 TOY_MODEL = '''
-"""A check written in a test: v_x above 30 m/s for more than 3 samples raises INPUT_FROZEN."""
+"""A check written in a test: v_x above 30 m/s on more than 3 runs raises INPUT_FROZEN."""
 import casadi as ca
 from vsegen.model import status
 from vsegen.model.signals import Signal
@@ -137,7 +139,7 @@ def states(settings, inputs):
     return ("toy_fast_samples",)
 def initial(settings, inputs, first):
     return {"toy_fast_samples": 0.0}
-def step(x, u, ok, settings, T, inputs, vehicle):
+def step(x, u, ok, settings, T, inputs, vehicle, raw):
     count = x["toy_fast_samples"] + 1 if u["vx"] > 30 else 0.0
     return {"toy_fast_samples": count}, 2048 if count > 3 else 0
 '''
@@ -178,4 +180,7 @@ def test_a_check_added_as_one_module_per_tree_reaches_the_estimators_equal_to_th
         np.testing.assert_allclose(state, reference_state, rtol=1e-9, atol=1e-12)
         assert output[-1] == reference_output[-1]
         statuses.append(int(output[-1]))
-    assert statuses[2] & status.INPUT_FROZEN == 0 and statuses[3] & status.INPUT_FROZEN    # 4th sample > 30 m/s
+    # the checks run on samples 0, P, 2P, ...; on the 4th run above 30 m/s the bit is raised, and
+    # the method reports it from the next sample on
+    period = input_monitors.period(config.settings("kf2dof"), config.sample_time)
+    assert statuses[3 * period] & status.INPUT_FROZEN == 0 and statuses[3 * period + 1] & status.INPUT_FROZEN

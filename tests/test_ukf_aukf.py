@@ -297,7 +297,8 @@ def test_an_estimate_outside_the_envelope_restarts_the_filter(config, variant):
     restart = np.array(est.init(inputs[300])).ravel()
     restart[est.states.index("hold_reason")] = 0
     assert states[301][est.states.index("residual")] > 0.0    # the consistency monitor's mean carries on,
-    for entry in DEFINITIONS["ukf"].monitors(config.settings("ukf")).states:   # as every check's entries do
+    block = DEFINITIONS["ukf"].monitors(config.settings("ukf"))
+    for entry in (*block.states, *block.segment):                  # as every check's entries do
         restart[est.states.index(entry.name)] = states[301][est.states.index(entry.name)]
     assert states[301] == pytest.approx(restart, rel=1e-12, abs=1e-15)
     assert out[300, 1] == inputs[300, est.inputs.index("vx")] and out[300, 0] == 0.0

@@ -39,7 +39,7 @@ def test_verify_writes_junit_and_json_with_every_scenario_and_signal(tmp_path, v
     assert f"wrote {coverage}: model decisions both ways or justified" in " ".join(result.stdout.split())
     text = coverage.read_text()
     row = next(line for line in text.splitlines() if line.startswith("| c_class | kf2dof |"))
-    assert "| double-baked | 38/38 (100.0 %) |" in row and row.split(" | ")[6] == "0"    # none not justified
+    assert "| double-baked | 46/46 (100.0 %) |" in row and row.split(" | ")[6] == "0"    # none not justified
     assert "## c_class / kf2dof" in text and "speed clamp's upper bound" in text
 
 

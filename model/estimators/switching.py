@@ -29,10 +29,10 @@ from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import (
     BEYOND_LINEAR,
     KF_MEASUREMENT_NOISE,
-    CheckSegment,
     LOW_FRICTION,
     ROLL_GRADIENT,
     TYRE_FRICTION,
+    CheckSegment,
     Definition,
     Estimator,
     Tunable,
