@@ -4,8 +4,11 @@ the cross-checks of the inputs against each other, the yaw rate against the non-
 and, over them all, the recovery hold of INPUT_FROZEN.
 
 The monitor block (``model.monitor_block``) takes from here the schema fields, the inputs the
-checks add to the method's, the state entries and their initial values, and each step's updates
-and status code; each check that is off (its setting 0) has no state and no code.
+checks add to the method's, the state entries and their initial values (the checks', then the
+sums of the averaged inputs, the countdown to the next run and the last run's status code), and
+a run's updates and status code; each check that is off (its setting 0) has no state and no code.
+The checks run every ``check_period`` (:func:`period`), after the method, in a kernel of their own
+(``model.estimator.CheckSegment``).
 """
 
 from __future__ import annotations

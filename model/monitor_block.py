@@ -11,11 +11,13 @@ From the numeric settings it builds one :class:`MonitorBlock` (``CHECKS.block``,
 * the input layout (the method's inputs plus what the monitors read beside them) and the inputs
   only the monitors read (an implausible one never holds the estimator, ``model.guard``);
 * its state entries and their values at the first sample;
-* each step's state updates and status code, in two stages, since the checks look at different
-  moments of the step: :meth:`MonitorBlock.watch_inputs` before the method runs (the input
-  monitors of ``model.input_monitors``: frozen signals, the cross-checks, the yaw rate against the
-  wheels) and :meth:`MonitorBlock.judge_model` after its filter's update (the consistency monitor
-  of ``model.consistency`` and the linear-range flag).
+* each step's state updates and status code, in two stages: :meth:`MonitorBlock.watch_inputs`,
+  the input monitors of ``model.input_monitors`` (frozen signals, the cross-checks, the yaw rate
+  against the wheels), which run after the method every ``check_period`` in a kernel of their own
+  on the state's last entries (``model.estimator.CheckSegment``: a check watches for faults that
+  last tenths of a second, so it costs a share of the samples), and
+  :meth:`MonitorBlock.judge_model` after the filter's update (the consistency monitor of
+  ``model.consistency`` and the linear-range flag), every sample.
 
 A check whose setting is 0 has no state and generates no code. A new input check is one new
 module of ``model.input_checks`` (found there, combined by ``model.input_monitors``); a new check of

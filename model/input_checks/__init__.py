@@ -6,9 +6,11 @@ check is one new module (and its twin in ``harness/reference/input_checks``); no
 wiring changes. ``model.input_monitors`` combines the checks that are on: their schema fields,
 inputs, state entries and status bits, and each step's updates and status code.
 
-The checks run before the method, on the raw inputs (:class:`Watch`); a check whose setting is 0
-has no state and generates no code. Flags and selections are arithmetic, so an active guarded
-kernel has no branch (``model.guard``).
+The checks run after the method, every ``check_period`` on an active sample, in a kernel of their
+own (``model.estimator.CheckSegment``): :class:`Watch` gives them that period as their sample time,
+a_y and r as the period's means and the sample's own inputs. A check whose setting is 0 has no
+state and generates no code. Flags and selections are arithmetic, so the kernel has no branch
+(``model.guard``).
 """
 
 from __future__ import annotations

@@ -6,15 +6,16 @@ inputs that no tyre parameter enters. A sample is quasi-steady when the steer an
 near the value delta_0 it had ``steady_time`` ago, |delta - delta_0| v_x^2 / l <= ``steady_band``
 (the change of a_y the steer change would ask for in a kinematic turn; the stretch restarts
 whenever it leaves the band), so the yaw rate and the lateral velocity have settled. The checks
-run every ``check_period`` (model.input_monitors), so a steer angle can leave the band and come back
-between two runs: the lateral check and the steering-angle zero also want the yaw rate *settled*,
-|r - r_last run| v_x <= ``settle_band`` (a transient's v_y' is no offset; above the gyro noise):
+run every ``check_period`` T_c (model.input_monitors) on the period's mean a_y and r, so a steer
+angle can leave the band and come back between two runs: the lateral check and the steering-angle
+zero also want the yaw rate *settled*, |r - r_last run| v_x <= ``settle_band`` (a transient's v_y'
+is no offset; above the gyro noise):
 
 * **lateral check** (status LATERAL_INCONSISTENT): with v_y' = 0 the lateral specific force is
   a_y = r v_x. While quasi-steady, settled and |a_y| <= ``lateral_check_range`` (where body roll adds at
   most about 0.1 m/s^2 to a body-fixed accelerometer), the residual a_y - r v_x is averaged,
 
-      e_k = e_k-1 + (1 - exp(-T / lateral_check_time)) (a_y - r v_x - e_k-1),
+      e_k = e_k-1 + (1 - exp(-T_c / lateral_check_time)) (a_y - r v_x - e_k-1),
 
   and held outside those stretches. |e| > ``lateral_check_limit`` raises the bit: a road bank
   (g sin(phi_r) in a_y: 0.51 m/s^2 for 3 deg), an accelerometer offset or mounting tilt, a yaw-rate
@@ -24,7 +25,7 @@ between two runs: the lateral check and the steering-angle zero also want the ya
   kinematic (Ackermann) turn is l r / v_x; understeer adds K_us a_y, below 0.001 rad per m/s^2 for
   passenger cars, so the zero is learned as
 
-      d_k = d_k-1 + (1 - exp(-T / steering_offset_time)) (delta - l r / v_x - d_k-1)
+      d_k = d_k-1 + (1 - exp(-T_c / steering_offset_time)) (delta - l r / v_x - d_k-1)
 
   and |d| > ``steering_offset_limit`` raises the bit: the steering-angle sensor's zero is off (a
   service calibration, an alignment or a sensor exchange), so every model-based scheme sees a
@@ -33,7 +34,7 @@ between two runs: the lateral check and the steering-angle zero also want the ya
   curvature r / v_x stays constant once settled (understeer changes it by a few per cent with the
   speed). With the curvature low-passed,
 
-      kappa_k = kappa_k-1 + (1 - exp(-T / steer_check_time)) (r / v_x - kappa_k-1),
+      kappa_k = kappa_k-1 + (1 - exp(-T_c / steer_check_time)) (r / v_x - kappa_k-1),
 
   kappa_0 = kappa when the stretch turns quasi-steady, the change of the lateral acceleration the
   path asks for, (kappa - kappa_0) v_x^2, is checked while the stretch lasts and |a_y| <=

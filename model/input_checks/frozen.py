@@ -5,10 +5,11 @@ silently wrong estimate.
 The monitored channels are the estimator's inertial inputs among a_x, a_y and r: in operation
 their sensor noise lies far above their resolution (seed 000 Table 2: 0.3 m/s^2 and 1 deg/s against
 ESC resolutions of about 0.01 m/s^2 and 0.1 deg/s), so a real signal never repeats bit for bit for
-long. Per channel c, with u_c held at its last plausible value (model.guard):
+long. Per channel c, on each run of the checks (every check_period T_c, on the sample itself, not
+the period's mean), with u_c held at its last plausible value (model.guard):
 
     n_c,k = min(n_c,k-1 + 1, N)   if u_c,k == u_c,k-1 (bit for bit),   else 0,
-    N = frozen_time / T (rounded to whole samples),
+    N = frozen_time / T_c (rounded to whole runs),
 
 and the status bit INPUT_FROZEN is raised on an active sample while any n_c reaches N (within
 ``frozen_time`` of the freeze). An implausible sample (NaN, out of range) does not count as a

@@ -11,9 +11,10 @@ makes a driven wheel slip, and so does braking (the unloaded inner wheel of a br
 most: 3 times the yaw rate in the downhill braking bend), so the check samples only while the
 car neither brakes nor accelerates hard, |a_x| <= ``wheel_check_ax`` (the speed in the logs comes
 from the wheels, so their slip does not show against it). The gyro is compared with r_w through a
-low-pass, held between samples,
+low-pass, held between samples, on each run of the checks (every check_period T_c, on the
+sample's own r and wheel speeds: read at the same instant),
 
-    m_k = m_k-1 + (1 - exp(-T / wheel_check_time)) (r - r_w - m_k-1),
+    m_k = m_k-1 + (1 - exp(-T_c / wheel_check_time)) (r - r_w - m_k-1),
 
 and |m| > ``wheel_check_limit`` raises status YAW_RATE_MISMATCH: a gyro offset or drift, a frozen
 or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. A yaw-rate *scale*
