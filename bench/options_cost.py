@@ -43,7 +43,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
             continue
         shipped, off = (instructions_per_step(name, which, log, folder) for which in (config, variant))
         lines.append(f"| {name} | {', '.join(on)} | {shipped:.1f} | {off:.1f} | "
-                     f"+{shipped - off:.0f} ({100 * (shipped / off - 1):.0f} %) |")
+                     f"+{shipped - off:.0f} ({100 * (shipped / off - 1):.1f} %) |")
     return lines + ["", *_tyre_model_rows(vehicle, config, log, folder)]
 
 

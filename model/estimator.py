@@ -395,9 +395,12 @@ class Estimator:
 
     @property
     def operation_counts(self) -> dict[str, int]:
-        """CasADi instructions of one step and of init (a particle filter's for its particle
-        count, without the template's draws and resampling)."""
+        """CasADi instructions of one step, of a run of the input checks (0 without them) and of
+        init (a particle filter's for its particle count, without the template's draws and
+        resampling)."""
+        checks = getattr(self.structure, "checks", None)
         return {"step": self.structure.step_operations(),
+                "checks": 0 if checks is None else checks.n_instructions(),
                 "init": self.structure.init_operations(self.init)}
 
 

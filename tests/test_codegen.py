@@ -58,7 +58,7 @@ def test_every_file_is_traceable_and_marked(config, files):
         assert config.parameter_hash("kf2dof") in head
         assert "Vehicle c_class" in head and "Options: real=double, params=baked" in head
         assert f"CasADi {ca.__version__}" in head
-        assert re.search(r"Operations: step \d+, init \d+", head)
+        assert re.search(r"Operations: step \d+, (input checks \d+ a run \(every check_period\), )?init \d+", head)
         assert "template " in head or "CasADi CodeGenerator" in head
         assert str(Path.home()) not in text and "/tmp" not in text and "/work" not in text
         assert not re.search(r"20\d\d-\d\d-\d\d", text), "no dates in generated files"

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9b2f10feabf1e4e44230bb0cd8f4ea203be8eef59e84fa21927c886d6b2d239d
- * Operations: step 7836, init 126 (CasADi SX instructions).
+ * Operations: step 7836, input checks 177 a run (every check_period), init 126 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

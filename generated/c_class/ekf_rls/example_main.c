@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 6cd0711c97926f0dd37baa320fa08aab60b42d9f055e350e49c24c7c155dabf1
- * Operations: step 468, init 122 (CasADi SX instructions).
+ * Operations: step 468, input checks 216 a run (every check_period), init 122 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

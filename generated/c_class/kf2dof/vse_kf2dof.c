@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 98bba5e1056b3e4e45404bd94b19ce6684c6a77e6145c2784d313ff3595243bd
- * Operations: step 451, init 65 (CasADi SX instructions).
+ * Operations: step 451, input checks 141 a run (every check_period), init 65 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 4e9dfc63fc8dae07ec787c88991c43aa0dcacd90e0a429bbd85cdc5c7ccac5fc
- * Operations: step 1178, init 94 (CasADi SX instructions).
+ * Operations: step 1178, input checks 238 a run (every check_period), init 94 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

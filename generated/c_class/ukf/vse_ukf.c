@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 6f8b939a4c720c6f76dc6e75db35fe4c61d6d73bef192ac37041a50a3112f454
- * Operations: step 7629, init 111 (CasADi SX instructions).
+ * Operations: step 7629, input checks 177 a run (every check_period), init 111 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 04bc314e79a35352fe200bb9dae70a6bb4e51a63c00fa32a6573152205e044b3
- * Operations: step 7736, init 123 (CasADi SX instructions).
+ * Operations: step 7736, input checks 177 a run (every check_period), init 123 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: cb4396ea074917d37dc7140c12456fd8ea4fcff10715c75758bc72665ca0b7ef
- * Operations: step 7528, init 108 (CasADi SX instructions).
+ * Operations: step 7528, input checks 177 a run (every check_period), init 108 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

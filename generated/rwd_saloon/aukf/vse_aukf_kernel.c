@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 71b659408b7ebd4ae6e05a7598eff70b68f403283f9a8f537b124ef1a24b55eb
- * Operations: step 7839, init 126 (CasADi SX instructions).
+ * Operations: step 7839, input checks 179 a run (every check_period), init 126 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

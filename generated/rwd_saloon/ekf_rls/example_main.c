@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 7ce842d3d5dc926ef8903ce51575e293ac70a379794017b422586112102bd3e5
- * Operations: step 468, init 122 (CasADi SX instructions).
+ * Operations: step 468, input checks 218 a run (every check_period), init 122 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -5,7 +5,7 @@
 # Options: real=float, params=calibratable.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: e8dfe797e8120ab0d62727b30ddb237203c7ddab8969e454c3366b433afec9b0
-# Operations: step 515, init 68 (CasADi SX instructions).
+# Operations: step 515, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
 

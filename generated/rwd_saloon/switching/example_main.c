@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 4a2090a769effaec2f2d712d1335eee0d7b96b84d93338ee39c46caf0e89d081
- * Operations: step 1173, init 94 (CasADi SX instructions).
+ * Operations: step 1173, input checks 240 a run (every check_period), init 94 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 637b25a3426631bf2b1b0e7f34e4ccb3f55b056a20696505dd2f14a0aac5bf2c
- * Operations: step 7632, init 111 (CasADi SX instructions).
+ * Operations: step 7632, input checks 179 a run (every check_period), init 111 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
