@@ -53,7 +53,7 @@ FIELDS = (
                 "gyro offset, drift or freeze, a yaw-rate scale typed wrong); above 0 the estimator "
                 "also reads a_x and that axle's wheel speeds; 0 = no check", default=0.0),
     positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean (three check periods: it "
-             "reads r and the wheel speeds of the sample it runs on)", default=0.3),
+             "reads r and the wheel speeds of the sample it runs on)", default=0.25),
     positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
              "(no braking or drive torque to make the wheels slip)", default=1.0),
     nonnegative("wheel_check_scale", "-", "beyond the papers: the yaw-rate check's mean beyond this "
