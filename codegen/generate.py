@@ -24,6 +24,7 @@ from vsegen.model import status, ziggurat
 from vsegen.model.calibration_checks import calibration_checks, dynamics_checks
 from vsegen.model.estimator import RNG_WORDS
 from vsegen.model.estimators import DEFINITIONS, SCHEMAS, build
+from vsegen.model.guard import LIMIT_KEYS
 from vsegen.model.params import VehicleConfig
 from vsegen.model.schema import REALS
 
@@ -97,6 +98,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "sample_time": repr(config.sample_time),
         "sample_time_literal": literal(config.sample_time, real),
         "zero": literal(0.0, real),
+        "limits": {entry: literal(config.limits[LIMIT_KEYS[entry]], real) for entry in estimator.inputs.names},
         "one": literal(1.0, real),
         "real": real,
         "params": params,

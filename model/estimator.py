@@ -68,6 +68,10 @@ class CheckSegment:
     of the averaged inputs, the rest kept."""
     kept: ca.SX
     """Their values as they came in."""
+    sums: tuple[tuple[str, str, bool], ...] = ()
+    """(input, state entry, gated) of each input summed between two runs: a gated one may be
+    implausible on an active sample (only the checks read it), so only its plausible values are
+    added."""
 
     def composed(self, active: ca.SX) -> ca.SX:
         """Their values after a sample that was ``active`` (a held one keeps them)."""
@@ -82,11 +86,29 @@ class CheckSegment:
                 raise ValueError(f"the method writes {self.names[k - method]}, an entry of the input checks")
         return expressions[:method]
 
-    def function(self, name: str, state_sym: ca.SX, input_sym: ca.SX, parameters: Parameters) -> ca.Function:
-        """The ``checks`` kernel: (state, input[, params]) -> the segment after a run."""
+    def kernel(self, name: str, state_sym: ca.SX, input_sym: ca.SX, parameters: Parameters) -> CheckKernel:
+        """The ``checks`` kernel, (state, input[, params]) -> the segment after a run, and the sums
+        the generated C keeps between two runs."""
         extra = parameters.inputs()
-        return ca.Function(f"vse_{name}_kernel_checks", [state_sym, input_sym, *extra], [ca.densify(self.ran)],
-                           ["state", "input", *["params"] * len(extra)], ["checks_next"])
+        function = ca.Function(f"vse_{name}_kernel_checks", [state_sym, input_sym, *extra], [ca.densify(self.ran)],
+                               ["state", "input", *["params"] * len(extra)], ["checks_next"])
+        return CheckKernel(function, self.sums)
+
+
+@dataclass(frozen=True)
+class CheckKernel:
+    """What the generated C needs of the input checks (:class:`CheckSegment`): their kernel, run
+    every ``check_period``, and the sums it keeps on the active samples in between."""
+
+    function: ca.Function
+    """(state, input[, params]) -> the segment after a run."""
+    sums: tuple[tuple[str, str, bool], ...]
+    """(input, state entry, gated): :attr:`CheckSegment.sums`."""
+
+    @property
+    def gated(self) -> bool:
+        """Whether a sum takes only the plausible values of its input."""
+        return any(gated for *_, gated in self.sums)
 
 
 def hold_entry(states: Layout) -> str:
@@ -114,10 +136,9 @@ class _ComposedStep:
     """Operation counts of a structure with a composed ``step`` Function."""
 
     step: ca.Function | None
-    checks: ca.Function | None = None
+    checks: CheckKernel | None = None
     """The input checks' kernel (:class:`CheckSegment`), where the estimator has input checks."""
     header_template = "state_index.h.j2"
-    system_headers: tuple[str, ...] = ()
     in_place: tuple[str, ...] = ()
     """Names of the kernels that read their whole state (argument 0) before writing any of their
     next state (result 0), so the API passes the caller's state as both
@@ -127,13 +148,18 @@ class _ComposedStep:
         return self.step.n_instructions()
 
     @property
+    def system_headers(self) -> tuple[str, ...]:
+        """math.h where the template judges a summed input (fabs)."""
+        return ("math.h",) if self.checks is not None and self.checks.gated else ()
+
+    @property
     def checks_kernels(self) -> tuple[ca.Function, ...]:
         """The input checks' kernel, if any: generated first; it steps its part of the state in place."""
-        return () if self.checks is None else (self.checks,)
+        return () if self.checks is None else (self.checks.function,)
 
     def checks_names(self, states: Layout) -> dict[str, tuple[str, ...]]:
         """The entry names of the checks kernel's result (the state's last entries)."""
-        return {} if self.checks is None else {"checks_next": states.names[-self.checks.numel_out(0):]}
+        return {} if self.checks is None else {"checks_next": states.names[-self.checks.function.numel_out(0):]}
 
     def init_operations(self, init: ca.Function) -> int:
         return init.n_instructions()
@@ -174,7 +200,7 @@ class Guarded(_ComposedStep):
     active: ca.Function
     held: ca.Function
     step: ca.Function
-    checks: ca.Function | None = None
+    checks: CheckKernel | None = None
     templates = ("init.c.j2", "step_guarded.c.j2")
 
     @property
@@ -214,7 +240,7 @@ class Schemes(_ComposedStep):
     branches: tuple[tuple[str, ca.Function], ...]
     scratch: Layout
     step: ca.Function | None = None
-    checks: ca.Function | None = None
+    checks: CheckKernel | None = None
     templates = ("init.c.j2", "step_schemes.c.j2")
 
     @property
@@ -251,7 +277,7 @@ class Repeated(_ComposedStep):
     finish: ca.Function
     count: int
     step: ca.Function | None = None
-    checks: ca.Function | None = None
+    checks: CheckKernel | None = None
     templates = ("init.c.j2", "step_repeated.c.j2")
 
     @property
@@ -400,7 +426,7 @@ class Estimator:
         resampling)."""
         checks = getattr(self.structure, "checks", None)
         return {"step": self.structure.step_operations(),
-                "checks": 0 if checks is None else checks.n_instructions(),
+                "checks": 0 if checks is None else checks.function.n_instructions(),
                 "init": self.structure.init_operations(self.init)}
 
 
@@ -538,7 +564,7 @@ def make_guarded(name: str, inputs: Layout, states: Layout, outputs: Layout, inp
     held = ca.Function(f"vse_{name}_kernel_held", [*arguments, decisions.symbols, *extra],
                        _shared(decisions.when_held(next_state), decisions.when_held(output)),
                        [*names, "decisions", *extra_names], ["state_next", "output"])
-    kernel = None if checks is None else checks.function(name, state_sym, input_sym, parameters)
+    kernel = None if checks is None else checks.kernel(name, state_sym, input_sym, parameters)
     return init, Guarded(guard, active, held, step, kernel)
 
 
@@ -597,7 +623,7 @@ def make_schemes(name: str, states: Layout, scratch: Layout, state_sym: ca.SX, i
     if checks is None:
         return Schemes(select, tuple(functions), scratch), composed_state, composed_output
     untouched = state_sym[composed_state.numel():]        # the segment, as the method sees it
-    return (Schemes(select, tuple(functions), scratch, checks=checks.function(name, state_sym, input_sym, parameters)),
+    return (Schemes(select, tuple(functions), scratch, checks=checks.kernel(name, state_sym, input_sym, parameters)),
             ca.vertcat(composed_state, untouched), composed_output)
 
 
@@ -623,5 +649,5 @@ def make_repeated(name: str, state_sym: ca.SX, input_sym: ca.SX, items: list[ca.
                          ["state", "input", "results", *extra_names], ["state_next", "output"])
     results = ca.vertcat(*[each(shared, item, *extra) for item in items])
     composed_state, composed_output = ca.substitute([next_state, output], [results_sym], [results])
-    kernel = None if checks is None else checks.function(name, state_sym, input_sym, parameters)
+    kernel = None if checks is None else checks.kernel(name, state_sym, input_sym, parameters)
     return Repeated(prepare, each, finish, len(items), checks=kernel), composed_state, composed_output

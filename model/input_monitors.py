@@ -25,11 +25,11 @@ from vsegen.model.signals import Signal
 RECOVERY_STATE = Signal("frozen_recovery_left", "-", "samples INPUT_FROZEN stays raised after a frozen input "
                         "moved again (frozen_recovery; samples of the checks' period)")
 COUNTDOWN = Signal("checks_countdown", "-", "input checks: active samples to their next run (check_period)")
-AVERAGED = ("ay", "r")
+AVERAGED = ("ay", "r", "ax")
 """The noisy inertial inputs the checks read as their means over their period (summed on every
-active sample between two runs, where the method reads them and they are plausible): a sample a
-period stands for would carry its whole noise. (A check that compares r with a signal read at the
-sample, the wheel speeds, reads ``Watch.raw``.)"""
+active sample between two runs; a_x, which the checks may read alone, only where it is
+plausible): a sample a period stands for would carry its whole noise. (A check that compares r
+with a signal read at the sample, the wheel speeds, reads ``Watch.raw``.)"""
 CODE = Signal("checks_code", "-", "input checks: the status bits of their last run")
 CHECK_PERIOD = nonnegative(
     "check_period", "s", "beyond the papers: the input checks (frozen signals, cross-checks, wheel yaw "

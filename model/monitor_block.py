@@ -37,6 +37,7 @@ import casadi as ca
 from vsegen.model import consistency, input_monitors, status
 from vsegen.model.estimator import CheckSegment, Derived
 from vsegen.model.filters import held_flag
+from vsegen.model.guard import hold
 from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
 from vsegen.model.schema import Field
@@ -164,7 +165,8 @@ class MonitorBlock:
             return Step({}, ca.SX(0))
         period = input_monitors.period(self.numeric, sample_time)
         sums = {name: input_monitors.sum_state(name).name for name in input_monitors.averaged(self.inputs.names)}
-        means = {name: (s[entry] + u[name]) / period for name, entry in sums.items()}
+        added = {name: hold(u[name], plausible[name], 0) if name in self.monitored else u[name] for name in sums}
+        means = {name: (s[entry] + added[name]) / period for name, entry in sums.items()}
         judged = {name: plausible[name] if name in self.monitored else ca.SX(1) for name in plausible}
         updates, code = input_monitors.monitor(Watch(s, {**u, **means}, judged, ca.SX(1), settings, self.numeric,
                                                      period * sample_time, self.inputs.names, vehicle,
@@ -173,10 +175,11 @@ class MonitorBlock:
         names = tuple(entry.name for entry in self.segment)
         ran = {**{n: updates.get(n, s[n]) for n in names}, **dict.fromkeys(sums.values(), ca.SX(0)),
                countdown: ca.SX(period - 1), kept_code: code}
-        counted = {**{n: s[n] for n in names}, **{entry: s[entry] + u[name] for name, entry in sums.items()},
+        counted = {**{n: s[n] for n in names}, **{entry: s[entry] + added[name] for name, entry in sums.items()},
                    countdown: s[countdown] - 1}
         segment = CheckSegment(names, ca.vertcat(*(ran[n] for n in names)), s[countdown] > 0,
-                               ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)))
+                               ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)),
+                               tuple((name, entry, name in self.monitored) for name, entry in sums.items()))
         return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,

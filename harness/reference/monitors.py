@@ -48,8 +48,8 @@ def states(settings, inputs) -> tuple[str, ...]:
 
 def averaged(inputs) -> tuple[str, ...]:
     """The noisy inertial inputs the checks read as their means over their period (summed on every
-    active sample between two runs)."""
-    return tuple(name for name in ("ay", "r") if name in inputs)
+    active sample between two runs, where plausible: a_x may be read by the checks alone)."""
+    return tuple(name for name in ("ay", "r", "ax") if name in inputs)
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -80,13 +80,18 @@ def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], 
         return kept
     sums = {name: f"checks_sum_{name}" for name in averaged(inputs)}
     if x["checks_countdown"] > 0:
-        return kept | {entry: x[entry] + u[name] for name, entry in sums.items()} | {
+        return kept | {entry: x[entry] + _plausible(u, ok, name) for name, entry in sums.items()} | {
             "checks_countdown": x["checks_countdown"] - 1}
     n = period(settings, T)
-    means = {name: (x[entry] + u[name]) / n for name, entry in sums.items()}
+    means = {name: (x[entry] + _plausible(u, ok, name)) / n for name, entry in sums.items()}
     new, code = step(x, u | means, ok, settings, n * T, inputs, vehicle, raw=u)
     return kept | new | dict.fromkeys(sums.values(), 0.0) | {"checks_countdown": float(n - 1),
                                                               "checks_code": float(code)}
+
+
+def _plausible(u: Mapping[str, float], ok: Mapping[str, bool], name: str) -> float:
+    """Input ``name`` where it is plausible, else 0 (a sum of it stays finite)."""
+    return u[name] if ok[name] else 0.0
 
 
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,

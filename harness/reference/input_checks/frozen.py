@@ -26,10 +26,11 @@ def raises(settings, inputs) -> int:
 
 
 def states(settings, inputs) -> tuple[str, ...]:
-    """Per watched channel: its last plausible value and its repetitions."""
+    """Per watched channel: its last plausible value and its repetitions; then whether one is frozen."""
     if not enabled(settings, inputs):
         return ()
-    return tuple(name for c in CHANNELS if c in inputs for name in (f"frozen_{c}_value", f"frozen_{c}_repeats"))
+    return (*(name for c in CHANNELS if c in inputs for name in (f"frozen_{c}_value", f"frozen_{c}_repeats")),
+            "frozen_now")
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -37,14 +38,13 @@ def initial(settings, inputs, first: Mapping[str, float]) -> dict:
     if not enabled(settings, inputs):
         return {}
     return {k: v for c in CHANNELS if c in inputs
-            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))}
+            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))} | {"frozen_now": 0.0}
 
 
-def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
-    """Whether one of the channels ``names`` is frozen, from the monitor's new entries ``new``
+def any_frozen(x: Mapping[str, float]) -> bool:
+    """Whether a watched channel was frozen at the monitor's last run, from the state ``x``
     (model.input_checks.frozen.any_frozen); False when the monitor is off."""
-    limit = blocks.whole_samples(settings["frozen_time"], T)
-    return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
+    return x.get("frozen_now", 0.0) > 0
 
 
 def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs, vehicle,
@@ -60,4 +60,5 @@ def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs,
         new[f"frozen_{c}_value"] = u[c] if ok[c] else value
         new[f"frozen_{c}_repeats"] = count
         frozen = frozen or count >= limit
+    new["frozen_now"] = 1.0 if frozen else 0.0
     return new, blocks.INPUT_FROZEN if frozen else 0

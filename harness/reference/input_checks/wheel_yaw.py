@@ -44,15 +44,15 @@ def initial(settings, inputs, first) -> dict:
 
 def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]:
     """(new entries, YAW_RATE_MISMATCH or 0) from the sample's own r and wheel speeds ``raw``
-    (read at the same instant; not the period's mean r)."""
-    u = raw
+    (read at the same instant; not the period's mean r), judged on the period's mean a_x ``u``."""
+    mean_ax, u = u["ax"], raw
     left, right = _axle(settings)
     scale = settings["wheel_check_scale"] > 0
     new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
     if scale:
         new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
     readable = ok["ax"] and ok[left] and ok[right]
-    if readable and abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+    if readable and abs(mean_ax) <= settings["wheel_check_ax"]:     # no brake or drive slip
         steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
         wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
         new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
