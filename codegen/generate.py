@@ -52,6 +52,23 @@ def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
     )
 
 
+def check_sums(estimator, limits, real: str) -> list[tuple[str, str, str | None]]:
+    """(state entry, C value, C plausibility test or None) of each sum the input checks keep
+    between two runs (``model.estimator.CheckSegment.sums``): the value its input, or the first
+    minus the second; the test, |input| <= its [inputs] limit for each judged input."""
+    checks = getattr(estimator.structure, "checks", None)
+    if checks is None:
+        return []
+    ref = {name: f"u[{estimator.inputs.index(name)}]" for name in estimator.inputs.names}
+    fabs = "fabsf" if real == "float" else "fabs"
+    sums = []
+    for terms, entry, judged in checks.sums:
+        value = ref[terms[0]] if len(terms) == 1 else f"({ref[terms[0]]} - {ref[terms[1]]})"
+        tests = [f"({fabs}({ref[t]}) <= {literal(limits[LIMIT_KEYS[t]], real)})" for t in judged]
+        sums.append((entry, value, (tests[0] if len(tests) == 1 else f"({' && '.join(tests)})") if tests else None))
+    return sums
+
+
 def ziggurat_literals(real: str) -> dict[str, list[str]]:
     """The ziggurat's tables (``model.ziggurat``) as C literals of type ``real``: a float build's
     entries are the double tables rounded once to float (written as that float's exact value)."""
@@ -98,7 +115,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "sample_time": repr(config.sample_time),
         "sample_time_literal": literal(config.sample_time, real),
         "zero": literal(0.0, real),
-        "limits": {entry: literal(config.limits[LIMIT_KEYS[entry]], real) for entry in estimator.inputs.names},
+        "check_sums": check_sums(estimator, config.limits, real),
         "one": literal(1.0, real),
         "real": real,
         "params": params,

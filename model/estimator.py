@@ -68,10 +68,10 @@ class CheckSegment:
     of the averaged inputs, the rest kept."""
     kept: ca.SX
     """Their values as they came in."""
-    sums: tuple[tuple[str, str, bool], ...] = ()
-    """(input, state entry, gated) of each input summed between two runs: a gated one may be
-    implausible on an active sample (only the checks read it), so only its plausible values are
-    added."""
+    sums: tuple[tuple[tuple[str, ...], str, tuple[str, ...]], ...] = ()
+    """(terms, state entry, judged) of each sum kept between two runs: it adds its input (one
+    term) or the first minus the second; only where the ``judged`` terms are plausible (inputs only
+    the checks read, which may be implausible on an active sample)."""
 
     def composed(self, active: ca.SX) -> ca.SX:
         """Their values after a sample that was ``active`` (a held one keeps them)."""
@@ -102,13 +102,13 @@ class CheckKernel:
 
     function: ca.Function
     """(state, input[, params]) -> the segment after a run."""
-    sums: tuple[tuple[str, str, bool], ...]
-    """(input, state entry, gated): :attr:`CheckSegment.sums`."""
+    sums: tuple[tuple[tuple[str, ...], str, tuple[str, ...]], ...]
+    """(terms, state entry, judged): :attr:`CheckSegment.sums`."""
 
     @property
     def gated(self) -> bool:
-        """Whether a sum takes only the plausible values of its input."""
-        return any(gated for *_, gated in self.sums)
+        """Whether a sum takes only the plausible values of its inputs."""
+        return any(judged for *_, judged in self.sums)
 
 
 def hold_entry(states: Layout) -> str:

@@ -17,6 +17,7 @@ import casadi as ca
 
 from vsegen.model import signals, status
 from vsegen.model.filters import held_flag
+from vsegen.model.guard import hold
 from vsegen.model.input_checks import Watch, registered
 from vsegen.model.layout import Layout
 from vsegen.model.schema import nonnegative
@@ -25,11 +26,12 @@ from vsegen.model.signals import Signal
 RECOVERY_STATE = Signal("frozen_recovery_left", "-", "samples INPUT_FROZEN stays raised after a frozen input "
                         "moved again (frozen_recovery; samples of the checks' period)")
 COUNTDOWN = Signal("checks_countdown", "-", "input checks: active samples to their next run (check_period)")
-AVERAGED = ("ay", "r", "ax")
-"""The noisy inertial inputs the checks read as their means over their period (summed on every
-active sample between two runs; a_x, which the checks may read alone, only where it is
-plausible): a sample a period stands for would carry its whole noise. (A check that compares r
-with a signal read at the sample, the wheel speeds, reads ``Watch.raw``.)"""
+AVERAGED = {"ay": ("ay",), "r": ("r",), "ax": ("ax",),
+            "omega_f_diff": ("omega_fr", "omega_fl"), "omega_r_diff": ("omega_rr", "omega_rl")}
+"""What the checks read as its mean over their period, by name: an input, or the right minus the
+left wheel speed of an axle (summed on every active sample between two runs; an input only the
+checks read, only where it is plausible): a sample a period stands for would carry its whole
+noise."""
 CODE = Signal("checks_code", "-", "input checks: the status bits of their last run")
 CHECK_PERIOD = nonnegative(
     "check_period", "s", "beyond the papers: the input checks (frozen signals, cross-checks, wheel yaw "
@@ -85,15 +87,29 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
             *(sum_state(name) for name in averaged(inputs)), COUNTDOWN, CODE)
 
 
-def averaged(inputs: tuple[str, ...]) -> tuple[str, ...]:
-    """The inputs of :data:`AVERAGED` an estimator reading ``inputs`` has."""
-    return tuple(name for name in AVERAGED if name in inputs)
+def averaged(inputs: tuple[str, ...]) -> dict[str, tuple[str, ...]]:
+    """The means of :data:`AVERAGED` an estimator reading ``inputs`` has: {name: the inputs it
+    sums (one, or right and left wheel)}."""
+    return {name: terms for name, terms in AVERAGED.items() if all(term in inputs for term in terms)}
 
 
 def sum_state(name: str) -> Signal:
-    """The state entry summing input ``name`` over the active samples since the checks' last run."""
-    return Signal(f"checks_sum_{name}", signals.INPUT[name].signal.unit,
-                  f"input checks: sum of {name} since their last run")
+    """The state entry summing ``name`` of :data:`AVERAGED` over the active samples since the
+    checks' last run."""
+    unit = signals.INPUT[AVERAGED[name][0]].signal.unit
+    return Signal(f"checks_sum_{name}", unit, f"input checks: sum of {name} since their last run")
+
+
+def summand(name: str, u, plausible, monitored: tuple[str, ...]):
+    """The value ``name`` of :data:`AVERAGED` adds to its sum on an active sample: its input, or
+    right minus left wheel speed; 0 where an input only the checks read (``monitored``) is
+    implausible (the sum stays finite)."""
+    terms = AVERAGED[name]
+    value = u[terms[0]] if len(terms) == 1 else u[terms[0]] - u[terms[1]]
+    judged = [plausible[term] for term in terms if term in monitored]
+    if not judged:
+        return value
+    return hold(value, judged[0] if len(judged) == 1 else judged[0] * judged[1], 0)
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:

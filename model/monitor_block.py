@@ -37,7 +37,6 @@ import casadi as ca
 from vsegen.model import consistency, input_monitors, status
 from vsegen.model.estimator import CheckSegment, Derived
 from vsegen.model.filters import held_flag
-from vsegen.model.guard import hold
 from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
 from vsegen.model.schema import Field
@@ -158,14 +157,17 @@ class MonitorBlock:
         The checks run after the method, on an active sample whose countdown is 0 (every
         ``check_period``), stepped at that period, in a kernel of their own
         (``model.estimator.CheckSegment``): on such a sample every input the method reads is
-        plausible, so only the monitored-only inputs are judged there. a_y and r are read as their
-        means over the period (``model.input_monitors.AVERAGED``). The method reads their last run:
-        its updates keep their entries, its code is ``active`` times their kept code."""
+        plausible, so only the monitored-only inputs are judged there. a_y, r and a_x are read as
+        their means over the period, and so is each axle's right minus left wheel speed
+        (``model.input_monitors.AVERAGED``; an input only the checks read summed where
+        plausible). The method reads their last run: its updates keep their entries, its code
+        is ``active`` times their kept code."""
         if not self.segment:
             return Step({}, ca.SX(0))
         period = input_monitors.period(self.numeric, sample_time)
-        sums = {name: input_monitors.sum_state(name).name for name in input_monitors.averaged(self.inputs.names)}
-        added = {name: hold(u[name], plausible[name], 0) if name in self.monitored else u[name] for name in sums}
+        averaged = input_monitors.averaged(self.inputs.names)
+        sums = {name: input_monitors.sum_state(name).name for name in averaged}
+        added = {name: input_monitors.summand(name, u, plausible, self.monitored) for name in sums}
         means = {name: (s[entry] + added[name]) / period for name, entry in sums.items()}
         judged = {name: plausible[name] if name in self.monitored else ca.SX(1) for name in plausible}
         updates, code = input_monitors.monitor(Watch(s, {**u, **means}, judged, ca.SX(1), settings, self.numeric,
@@ -179,7 +181,8 @@ class MonitorBlock:
                    countdown: s[countdown] - 1}
         segment = CheckSegment(names, ca.vertcat(*(ran[n] for n in names)), s[countdown] > 0,
                                ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)),
-                               tuple((name, entry, name in self.monitored) for name, entry in sums.items()))
+                               tuple((terms, sums[name], tuple(t for t in terms if t in self.monitored))
+                                     for name, terms in averaged.items()))
         return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,

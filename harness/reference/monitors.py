@@ -46,10 +46,15 @@ def states(settings, inputs) -> tuple[str, ...]:
             *(f"checks_sum_{name}" for name in averaged(inputs)), "checks_countdown", "checks_code")
 
 
-def averaged(inputs) -> tuple[str, ...]:
-    """The noisy inertial inputs the checks read as their means over their period (summed on every
-    active sample between two runs, where plausible: a_x may be read by the checks alone)."""
-    return tuple(name for name in ("ay", "r", "ax") if name in inputs)
+AVERAGED = {"ay": ("ay",), "r": ("r",), "ax": ("ax",),
+            "omega_f_diff": ("omega_fr", "omega_fl"), "omega_r_diff": ("omega_rr", "omega_rl")}
+"""What the checks read as its mean over their period: an input, or an axle's right minus left
+wheel speed (model.input_monitors.AVERAGED)."""
+
+
+def averaged(inputs) -> dict[str, tuple[str, ...]]:
+    """The means an estimator reading ``inputs`` has: {name: the inputs summed (first minus second)}."""
+    return {name: terms for name, terms in AVERAGED.items() if all(term in inputs for term in terms)}
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -72,32 +77,36 @@ def period(settings, T: float) -> int:
 def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], active: bool, settings,
         T: float, inputs, vehicle: Mapping[str, float]) -> dict:
     """The checks' new entries after a sample (every sample): a held sample keeps them; on an
-    ``active`` one, while their countdown runs, the countdown one less and a_y and r added to their
-    sums; when it is 0, a run at their period on the period's mean a_y and r (the other inputs
+    ``active`` one, while their countdown runs, the countdown one less and a_y, r and a_x
+    (where plausible) added to their sums; when it is 0, a run at their period on the period's means (the other inputs
     this sample's) and the countdown and sums restarted."""
     kept = {name: x[name] for name in states(settings, inputs)}
     if not active:
         return kept
-    sums = {name: f"checks_sum_{name}" for name in averaged(inputs)}
+    terms = averaged(inputs)
+    sums = {name: f"checks_sum_{name}" for name in terms}
     if x["checks_countdown"] > 0:
-        return kept | {entry: x[entry] + _plausible(u, ok, name) for name, entry in sums.items()} | {
+        return kept | {entry: x[entry] + _summand(u, ok, terms[name]) for name, entry in sums.items()} | {
             "checks_countdown": x["checks_countdown"] - 1}
     n = period(settings, T)
-    means = {name: (x[entry] + _plausible(u, ok, name)) / n for name, entry in sums.items()}
+    means = {name: (x[entry] + _summand(u, ok, terms[name])) / n for name, entry in sums.items()}
     new, code = step(x, u | means, ok, settings, n * T, inputs, vehicle, raw=u)
     return kept | new | dict.fromkeys(sums.values(), 0.0) | {"checks_countdown": float(n - 1),
                                                               "checks_code": float(code)}
 
 
-def _plausible(u: Mapping[str, float], ok: Mapping[str, bool], name: str) -> float:
-    """Input ``name`` where it is plausible, else 0 (a sum of it stays finite)."""
-    return u[name] if ok[name] else 0.0
+def _summand(u: Mapping[str, float], ok: Mapping[str, bool], terms: tuple[str, ...]) -> float:
+    """The input ``terms[0]`` (minus ``terms[1]``) where they are plausible, else 0 (a sum of it
+    stays finite; on an active sample only an input the checks alone read can be implausible)."""
+    if not all(ok[term] for term in terms):
+        return 0.0
+    return u[terms[0]] - (u[terms[1]] if len(terms) > 1 else 0.0)
 
 
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
          inputs, vehicle: Mapping[str, float], raw: Mapping[str, float]) -> tuple[dict, int]:
     """(new entries, status bits) of one run of the checks that are on at period ``T``, on an
-    active sample: ``u`` the inputs (a_y and r their period's means), ``raw`` the sample's own."""
+    active sample: ``u`` the inputs (a_y, r and a_x their period's means), ``raw`` the sample's own."""
     new, code = {}, 0
     for check in _on(settings, inputs):
         checked, bits = check.step(x, u, ok, settings, T, inputs, vehicle, raw)

@@ -18,7 +18,10 @@ state; it watches again from the first active sample. Steering angle, speed and 
 they can be constant, quantisation and all, while the car drives straight or at constant speed.
 A logger that records a CAN signal at a multiple of its message rate repeats values by design:
 ``frozen_time`` must exceed a few message periods (the default 0.25 s covers 50 ms periods).
-``frozen_time`` = 0 switches the monitor off (no state, no status).
+``frozen_time`` = 0 switches the monitor off (no state, no status). The entry ``frozen_now``
+keeps whether a channel was frozen at the last run: the schemes that integrate a_y and r
+(switching, fusion) read it to hand the estimate to their KF (one entry read on every step, not a
+test per channel).
 """
 
 from __future__ import annotations

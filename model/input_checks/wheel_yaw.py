@@ -9,11 +9,11 @@ centres move at v_x -+ r t/2, the steered front wheels' along their heading, so
 R the rolling radius. The axle must be the non-driven one (``wheel_check_axle``): drive torque
 makes a driven wheel slip, and so does braking (the unloaded inner wheel of a braked bend slips
 most: 3 times the yaw rate in the downhill braking bend), so the check samples only while the
-car neither brakes nor accelerates hard: |a_x| <= ``wheel_check_ax``, judged on the mean a_x of
-the checks' period, since one sample carries the accelerometer's whole noise (the speed in the
-logs comes from the wheels, so their slip does not show against it). The gyro is compared with r_w through a
-low-pass, held between samples, on each run of the checks (every check_period T_c, on the
-sample's own r and wheel speeds: read at the same instant),
+car neither brakes nor accelerates hard, |a_x| <= ``wheel_check_ax`` (the speed in the logs comes
+from the wheels, so their slip does not show against it). Every quantity is the mean of the
+checks' period (r, the wheel-speed difference and a_x, summed on each active sample: one sample
+carries its sensor's whole noise). The gyro is compared with r_w through a low-pass, held between
+samples, on each run of the checks (every check_period T_c),
 
     m_k = m_k-1 + (1 - exp(-T_c / wheel_check_time)) (r - r_w - m_k-1),
 
@@ -38,7 +38,6 @@ import casadi as ca
 
 from vsegen.model import status
 from vsegen.model.filters import held_flag, low_pass
-from vsegen.model.guard import hold
 from vsegen.model.input_checks import Watch
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
@@ -53,8 +52,8 @@ FIELDS = (
                 "non-driven wheels' yaw rate beyond this raises status 32768 YAW_RATE_MISMATCH (a "
                 "gyro offset, drift or freeze, a yaw-rate scale typed wrong); above 0 the estimator "
                 "also reads a_x and that axle's wheel speeds; 0 = no check", default=0.0),
-    positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean (two check periods: it reads "
-             "r and the wheel speeds of the sample it runs on, a_x as the period's mean)", default=0.2),
+    positive("wheel_check_time", "s", "time constant of the yaw-rate check's mean (one check period: it "
+             "low-passes the period's means of r and the wheel speeds)", default=0.1),
     positive("wheel_check_ax", "m/s^2", "the yaw-rate check samples only while |a_x| is below this "
              "(no braking or drive torque to make the wheels slip)", default=1.0),
     nonnegative("wheel_check_scale", "-", "beyond the papers: the yaw-rate check's mean beyond this "
@@ -75,8 +74,18 @@ HOLD = Signal("wheel_yaw_hold_left", "-", "samples YAW_RATE_MISMATCH stays raise
 
 def wheels(numeric_settings) -> tuple[str, str]:
     """(left, right) wheel-speed inputs of the checked axle."""
-    axle = "r" if numeric_settings["wheel_check_axle"] == "rear" else "f"
+    axle = _axle(numeric_settings)
     return f"omega_{axle}l", f"omega_{axle}r"
+
+
+def difference(numeric_settings) -> str:
+    """The mean the check reads of the checked axle's right minus left wheel speed
+    (``model.input_monitors.AVERAGED``)."""
+    return f"omega_{_axle(numeric_settings)}_diff"
+
+
+def _axle(numeric_settings) -> str:
+    return "r" if numeric_settings["wheel_check_axle"] == "rear" else "f"
 
 
 def reads(numeric_settings) -> tuple[str, ...]:
@@ -111,21 +120,14 @@ def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> d
 
 def monitor(watch: Watch) -> tuple[dict, dict]:
     """(new state entries, {YAW_RATE_MISMATCH: 1 while the yaw rates disagree}); call only when
-    :func:`enabled`. A sample where an input the estimator's guard does not decide on (it does
-    not hold for an input only this check reads) is implausible is skipped; the others are
-    plausible on every active sample. The wheel speeds and r are the sample's own, read at one
-    instant; whether the car rolls freely is judged on the period's mean a_x (a sample of it
-    carries its whole noise)."""
-    s, u, active, settings, numeric_settings = watch.s, watch.raw, watch.active, watch.settings, watch.numeric
+    :func:`enabled`. It reads the period's means (``model.input_monitors.AVERAGED``): r, the
+    axle's right minus left wheel speed and a_x, whether the car rolls freely (one sample carries
+    its sensor's whole noise; an implausible wheel speed or a_x adds nothing to its sum)."""
+    s, u, active, settings, numeric_settings = watch.s, watch.u, watch.active, watch.settings, watch.numeric
     sample_time, vehicle = watch.sample_time, watch.vehicle
-    readable = {name: watch.plausible[name] for name in watch.monitored}
-    left, right = wheels(numeric_settings)
-    v = {name: hold(u[name], readable[name], 0) if name in readable else u[name] for name in (left, right)}
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
-    wheel_yaw_rate = vehicle["wheel_radius"] * (v[right] - v[left]) / (vehicle["track_width"] * steer)
-    rolling = ca.fabs(watch.u["ax"]) <= settings["wheel_check_ax"]     # the period's mean a_x
-    for flag in readable.values():
-        rolling = rolling * flag
+    wheel_yaw_rate = vehicle["wheel_radius"] * u[difference(numeric_settings)] / (vehicle["track_width"] * steer)
+    rolling = ca.fabs(u["ax"]) <= settings["wheel_check_ax"]
     residual = low_pass(s[STATE.name], u["r"] - wheel_yaw_rate, settings["wheel_check_time"], sample_time, rolling)
     updates = {STATE.name: residual}
     raised = ca.fabs(residual) > settings["wheel_check_limit"]

@@ -1,7 +1,7 @@
 """The yaw rate against the non-driven axle's wheel yaw rate r_w (model.input_checks.wheel_yaw):
 the mean of r - r_w beyond the limit, or beyond a share of the mean |r_w| where that is large
-enough, held a while after, raises YAW_RATE_MISMATCH; a sample with an implausible a_x or wheel
-speed, or braking or accelerating hard, is skipped."""
+enough, held a while after, raises YAW_RATE_MISMATCH; all of the checks' period's means (r, the
+axle's right minus left wheel speed, a_x); a period braking or accelerating hard is skipped."""
 
 from __future__ import annotations
 
@@ -43,18 +43,15 @@ def initial(settings, inputs, first) -> dict:
 
 
 def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]:
-    """(new entries, YAW_RATE_MISMATCH or 0) from the sample's own r and wheel speeds ``raw``
-    (read at the same instant; not the period's mean r), judged on the period's mean a_x ``u``."""
-    mean_ax, u = u["ax"], raw
-    left, right = _axle(settings)
+    """(new entries, YAW_RATE_MISMATCH or 0) from the period's means ``u``."""
     scale = settings["wheel_check_scale"] > 0
     new = {"wheel_yaw_residual": x["wheel_yaw_residual"]}
     if scale:
         new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
-    readable = ok["ax"] and ok[left] and ok[right]
-    if readable and abs(mean_ax) <= settings["wheel_check_ax"]:     # no brake or drive slip
+    if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
         steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
-        wheel_yaw_rate = vehicle["wheel_radius"] * (u[right] - u[left]) / (vehicle["track_width"] * steer)
+        difference = u["omega_r_diff" if settings["wheel_check_axle"] == "rear" else "omega_f_diff"]
+        wheel_yaw_rate = vehicle["wheel_radius"] * difference / (vehicle["track_width"] * steer)
         new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
                                                     settings["wheel_check_time"])
         if scale:
