@@ -8,7 +8,7 @@ import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
 from vsegen.harness.reference.input_checks import frozen
-from vsegen.harness.reference.kinematic_dynamic import DYN
+from vsegen.harness.reference.kinematic_dynamic import DYN, KINEMATIC_INPUTS
 from vsegen.harness.reference.monitor_block import Checks
 
 TABLE = "fusion"
@@ -57,7 +57,7 @@ def _fuse(config, block, x, updates, r_k, ay_f, status, u):
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
     w = min(max(abs(ay_f) / (2 * s["threshold"]), 0.0), 1.0)
-    if frozen.any_frozen(x):    # its inputs frozen: the KF alone
+    if frozen.any_frozen(x, s, block.check_time(T), KINEMATIC_INPUTS):    # its inputs frozen: the KF alone
         vy_kin, w = xk[0], 0.0
     beta_kin = kinematic_dynamic.beta(config, TABLE, vy_kin, u["vx"])
     beta_kf = kinematic_dynamic.beta(config, TABLE, xk[0], u["vx"])

@@ -10,7 +10,7 @@ import numpy as np
 
 from vsegen.harness.reference import blocks, kinematic_dynamic
 from vsegen.harness.reference.input_checks import frozen
-from vsegen.harness.reference.kinematic_dynamic import DYN, KIN
+from vsegen.harness.reference.kinematic_dynamic import DYN, KIN, KINEMATIC_INPUTS
 from vsegen.harness.reference.monitor_block import Checks
 
 TABLE = "switching"
@@ -56,7 +56,7 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
     offset = x.get("kin_offset", 0.0)
     hysteresis = s["hysteresis"] if x["mode"] == KIN else -s["hysteresis"]        # A7 option
     mode = KIN if abs(ay_f) > threshold - hysteresis else DYN
-    if frozen.any_frozen(x):  # inputs frozen
+    if frozen.any_frozen(x, s, _monitors(config).check_time(config.sample_time), KINEMATIC_INPUTS):  # inputs frozen
         mode = DYN
     if s["kinematic_max_dwell"] > 0:                        # beyond the paper: bounded kinematic dwell
         above = mode == KIN

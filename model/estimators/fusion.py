@@ -104,8 +104,8 @@ def build(params: Parameters) -> Estimator:
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"] - offset) \
         + T * seed.settings["integral_gain"] * (s["vy"] - s["vy_kin"])
     if frozen.enabled(numeric, KINEMATIC_INPUTS):   # its inputs frozen: the KF alone, and the integrator follows it
-        vy_kin = ca.if_else(pre.inertial_input_frozen, vy_kf, vy_kin)
-        weight = weight * ca.logic_not(pre.inertial_input_frozen)
+        vy_kin = ca.if_else(pre.kinematic_inputs_frozen, vy_kf, vy_kin)
+        weight = weight * ca.logic_not(pre.kinematic_inputs_frozen)
     vx = seed.speed(hold(u["vx"], ok["vx"], seed.vx_min))
     beta_kin = sideslip(vy_kin, vx)
     beta = weight * beta_kin + (1 - weight) * result["beta"]

@@ -131,9 +131,9 @@ class Preprocessed:
     status: ca.SX
     updates: dict[str, ca.SX]
     """New values of the pre-processing state entries (held while not active)."""
-    inertial_input_frozen: ca.SX = ca.SX(0)
-    """1 while an inertial input (a_y or r, the kinematic integrator's, or a_x) was frozen at the
-    checks' last run (``model.input_checks.frozen``): the model-based scheme must carry the estimate then."""
+    kinematic_inputs_frozen: ca.SX = ca.SX(0)
+    """1 while a_y or r, the kinematic integrator's inputs, is frozen (``model.input_checks.frozen``): the
+    model-based scheme must carry the estimate then."""
     checks: CheckSegment | None = None
     """The input checks' segment (``model.monitor_block``), for the structure builder."""
 
@@ -214,7 +214,7 @@ class KinematicDynamic:
             "ay_rejections": keep("ay_rejections", ay_check.rejections),
             **watched.updates,
         }
-        frozen_inputs = frozen.any_frozen(s)
+        frozen_inputs = frozen.any_frozen(s, settings, self.monitors.check_time(self.T), KINEMATIC_INPUTS)
         return Preprocessed(guard, r_check.value, filters.median(history), code, updates, frozen_inputs,
                             watched.checks)
 

@@ -140,11 +140,11 @@ def switching_threshold(seed: KinematicDynamic, mode_prev, peak=None):
 
 
 def wanted_scheme(seed: KinematicDynamic, pre, mode_prev, peak=None):
-    """KIN while |a_y,f| is above the threshold, else DYN; beyond the paper, DYN while an inertial
-    input (a_y or r, the integrator's, or a_x) is frozen (the KF only weighs them as measurements)."""
+    """KIN while |a_y,f| is above the threshold, else DYN; beyond the paper, DYN while a_y or r,
+    the integrator's inputs, is frozen (the KF only weighs them as measurements)."""
     mode = ca.if_else(ca.fabs(pre.ay_filtered) > switching_threshold(seed, mode_prev, peak), KIN, DYN)
     if frozen.enabled(seed.params.numeric.settings(NAME), KINEMATIC_INPUTS):
-        mode = ca.if_else(pre.inertial_input_frozen, DYN, mode)
+        mode = ca.if_else(pre.kinematic_inputs_frozen, DYN, mode)
     return mode
 
 

@@ -18,13 +18,12 @@ state; it watches again from the first active sample. Steering angle, speed and 
 they can be constant, quantisation and all, while the car drives straight or at constant speed.
 A logger that records a CAN signal at a multiple of its message rate repeats values by design:
 ``frozen_time`` must exceed a few message periods (the default 0.25 s covers 50 ms periods).
-``frozen_time`` = 0 switches the monitor off (no state, no status). The entry ``frozen_now``
-keeps whether a channel was frozen at the last run: the schemes that integrate a_y and r
-(switching, fusion) read it to hand the estimate to their KF (one entry read on every step, not a
-test per channel).
+``frozen_time`` = 0 switches the monitor off (no state, no status).
 """
 
 from __future__ import annotations
+
+import functools
 
 import casadi as ca
 
@@ -72,12 +71,8 @@ def raises(numeric_settings, inputs: tuple[str, ...]) -> tuple[int, ...]:
     return BITS if enabled(numeric_settings, inputs) else ()
 
 
-FROZEN = Signal("frozen_now", "-", "frozen-signal monitor: 1 while a watched channel was frozen at its last run")
-
-
 def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
-    """The monitor's state entries for an estimator reading ``inputs`` (none when it is off): per
-    channel its last value and repetitions, then whether one is frozen (:func:`any_frozen`)."""
+    """The monitor's state entries for an estimator reading ``inputs`` (none when it is off)."""
     if not enabled(numeric_settings, inputs):
         return ()
     entries = []
@@ -86,16 +81,15 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
         entries += [Signal(f"frozen_{c}_value", unit, f"frozen-signal monitor: last plausible {c}"),
                     Signal(f"frozen_{c}_repeats", "-", f"frozen-signal monitor: samples {c} has "
                            "repeated its value (at most frozen_time / T)")]
-    return (*entries, FROZEN)
+    return tuple(entries)
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
     """The entries at init: the first sample's (neutralised) values, no repetition."""
     if not enabled(numeric_settings, inputs):
         return {}
-    return {**{k: v for c in channels(inputs)
-               for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", ca.SX(0)))},
-            FROZEN.name: ca.SX(0)}
+    return {k: v for c in channels(inputs)
+            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", ca.SX(0)))}
 
 
 def samples_limit(settings, sample_time: float):
@@ -103,11 +97,15 @@ def samples_limit(settings, sample_time: float):
     return whole_samples(settings["frozen_time"], sample_time)
 
 
-def any_frozen(entries: dict) -> ca.SX:
-    """1 while a watched channel was frozen at the monitor's last run, from the state ``entries``
-    (one entry the method reads, instead of a test per channel on every step); 0 when the monitor
-    is off."""
-    return entries.get(FROZEN.name, ca.SX(0))
+def any_frozen(updates: dict, settings, sample_time: float, names: tuple[str, ...]) -> ca.SX:
+    """1 while one of the channels ``names`` is frozen, from the monitor's entries ``updates``
+    (the state's: its last run; ``sample_time`` the checks' period); 0 when the monitor is off or
+    watches none of them."""
+    counts = [updates[f"frozen_{c}_repeats"] for c in names if f"frozen_{c}_repeats" in updates]
+    if not counts:
+        return ca.SX(0)
+    limit = samples_limit(settings, sample_time)
+    return functools.reduce(ca.logic_or, [count >= limit for count in counts])
 
 
 def monitor(watch: Watch) -> tuple[dict, dict]:
@@ -125,5 +123,4 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
         updates[f"frozen_{c}_repeats"] = ca.if_else(active, count_next, count)
         stuck = count_next >= limit
         frozen = frozen + stuck - frozen * stuck
-    updates[FROZEN.name] = ca.if_else(active, frozen, s[FROZEN.name])
     return updates, {status.INPUT_FROZEN: active * frozen}

@@ -15,7 +15,7 @@ checks' period (r, the wheel-speed difference and a_x, summed on each active sam
 carries its sensor's whole noise). The gyro is compared with r_w through a low-pass, held between
 samples, on each run of the checks (every check_period T_c),
 
-    m_k = m_k-1 + (1 - exp(-T_c / wheel_check_time)) (r - r_w - m_k-1),
+    m_k = m_k-1 + (1 - exp(-T_c / wheel_check_time)) (mean r - mean r_w - m_k-1),
 
 and |m| > ``wheel_check_limit`` raises status YAW_RATE_MISMATCH: a gyro offset or drift, a frozen
 or late yaw rate, a wheel-speed fault, or a tyre far from the nominal radius. A yaw-rate *scale*

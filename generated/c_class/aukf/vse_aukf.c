@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: fe3aab33ee9514f6e8bbd6d67b8e021a0ddbe2e40ec9160bcd24af9dd8af4388
- * Operations: step 7870, input checks 188 a run (every check_period), init 130 (CasADi SX instructions).
+ * Operations: step 7862, input checks 187 a run (every check_period), init 129 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
@@ -129,7 +129,6 @@ void vse_aukf_step(vse_aukf_state *state, const vse_aukf_input *in, vse_aukf_out
     current[62] = state->x[62];
     current[63] = state->x[63];
     current[64] = state->x[64];
-    current[65] = state->x[65];
     /* prepare the 6 items, run one kernel on each, then finish the step */
     arg[0] = current;
     arg[1] = u;

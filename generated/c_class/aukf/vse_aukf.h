@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: fe3aab33ee9514f6e8bbd6d67b8e021a0ddbe2e40ec9160bcd24af9dd8af4388
- * Operations: step 7870, input checks 188 a run (every check_period), init 130 (CasADi SX instructions).
+ * Operations: step 7862, input checks 187 a run (every check_period), init 129 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
@@ -73,7 +73,7 @@ typedef struct {
 } vse_aukf_output;
 
 /** Number of state entries. */
-#define VSE_AUKF_N_STATE (66)
+#define VSE_AUKF_N_STATE (65)
 
 /** Index of each entry of vse_aukf_state.x. */
 enum {
@@ -127,22 +127,21 @@ enum {
     VSE_AUKF_STATE_FROZEN_AY_REPEATS = 47, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_AUKF_STATE_FROZEN_R_VALUE = 48, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_AUKF_STATE_FROZEN_R_REPEATS = 49, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_AUKF_STATE_FROZEN_NOW = 50, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_AUKF_STATE_STEADY_DELTA = 51, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_AUKF_STATE_STEADY_SAMPLES = 52, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_AUKF_STATE_STEADY_R = 53, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_AUKF_STATE_LATERAL_RESIDUAL = 54, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_AUKF_STATE_STEERING_OFFSET = 55, /* rad: learned steering-angle zero (road wheel) */
-    VSE_AUKF_STATE_CURVATURE = 56, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_AUKF_STATE_STEADY_CURVATURE = 57, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_AUKF_STATE_WHEEL_YAW_RESIDUAL = 58, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_AUKF_STATE_CHECKS_SUM_AY = 59, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_R = 60, /* rad/s: input checks: sum of r since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_AX = 61, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 62, /* rad/s: input checks: sum of omega_f_diff since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 63, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_AUKF_STATE_CHECKS_COUNTDOWN = 64, /* -: input checks: active samples to their next run (check_period) */
-    VSE_AUKF_STATE_CHECKS_CODE = 65 /* -: input checks: the status bits of their last run */
+    VSE_AUKF_STATE_STEADY_DELTA = 50, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_AUKF_STATE_STEADY_SAMPLES = 51, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_AUKF_STATE_STEADY_R = 52, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_AUKF_STATE_LATERAL_RESIDUAL = 53, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_AUKF_STATE_STEERING_OFFSET = 54, /* rad: learned steering-angle zero (road wheel) */
+    VSE_AUKF_STATE_CURVATURE = 55, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_AUKF_STATE_STEADY_CURVATURE = 56, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_AUKF_STATE_WHEEL_YAW_RESIDUAL = 57, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_AUKF_STATE_CHECKS_SUM_AY = 58, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_R = 59, /* rad/s: input checks: sum of r since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_AX = 60, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 61, /* rad/s: input checks: sum of omega_f_diff since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 62, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_AUKF_STATE_CHECKS_COUNTDOWN = 63, /* -: input checks: active samples to their next run (check_period) */
+    VSE_AUKF_STATE_CHECKS_CODE = 64 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: fe3aab33ee9514f6e8bbd6d67b8e021a0ddbe2e40ec9160bcd24af9dd8af4388
- * Operations: step 7870, input checks 188 a run (every check_period), init 130 (CasADi SX instructions).
+ * Operations: step 7862, input checks 187 a run (every check_period), init 129 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
@@ -89,7 +89,7 @@ static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 
-/* vse_aukf_kernel_init:(input[9])->(state[66]) */
+/* vse_aukf_kernel_init:(input[9])->(state[65]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -207,11 +207,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=((a13!=0.)?a10:0.);
   res[0][48]=a13;
   res[0][49]=a03;
-  res[0][50]=a03;
   a04=((a04!=0.)?a02:0.);
-  res[0][51]=a04;
-  res[0][52]=a03;
-  res[0][53]=a13;
+  res[0][50]=a04;
+  res[0][51]=a03;
+  res[0][52]=a13;
+  res[0][53]=a03;
   res[0][54]=a03;
   res[0][55]=a03;
   res[0][56]=a03;
@@ -223,33 +223,32 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][62]=a03;
   res[0][63]=a03;
   res[0][64]=a03;
-  res[0][65]=a03;
   return 0;
 }
 
 /*
- * vse_aukf_kernel_init: 130 operations (CasADi SX instructions)
+ * vse_aukf_kernel_init: 129 operations (CasADi SX instructions)
  * arg[0] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
- * res[0] state[66]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
+ * res[0] state[65]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
  *     P_ay_ay, qmean_u, qmean_v, qmean_gamma, qmean_moment, qmean_ax, qmean_ay, qvar_u, qvar_v,
  *     qvar_gamma, qvar_moment, qvar_ax, qvar_ay, fading, residual, residual_hold_left,
  *     linear_range_hold_left, hold_reason, frozen_ax_value, frozen_ax_repeats, frozen_ay_value,
- *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now, steady_delta,
- *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
- *     wheel_yaw_residual, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
+ *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_sum_omega_r_diff, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_aukf_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_aukf_kernel_checks:(state[66],input[9])->(checks_next[22]) */
+/* vse_aukf_kernel_checks:(state[65],input[9])->(checks_next[21]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20;
   a00=arg[1][2];
   const casadi_real state_44 = arg[0][44];
   const casadi_real state_45 = arg[0][45];
@@ -257,6 +256,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_47 = arg[0][47];
   const casadi_real state_48 = arg[0][48];
   const casadi_real state_49 = arg[0][49];
+  const casadi_real state_50 = arg[0][50];
   const casadi_real state_51 = arg[0][51];
   const casadi_real state_52 = arg[0][52];
   const casadi_real state_53 = arg[0][53];
@@ -267,8 +267,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_58 = arg[0][58];
   const casadi_real state_59 = arg[0][59];
   const casadi_real state_60 = arg[0][60];
-  const casadi_real state_61 = arg[0][61];
-  const casadi_real state_63 = arg[0][63];
+  const casadi_real state_62 = arg[0][62];
   res[0][0]=a00;
   a01=state_44;
   a01=(casadi_real)(a00==a01);
@@ -297,192 +296,191 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=casadi_fmin(a08,a04);
   a07=(a07*a08);
   res[0][5]=a07;
-  a01=(casadi_real)(a04<=a01);
-  a05=(casadi_real)(a04<=a05);
-  a08=(a01+a05);
-  a01=(a01*a05);
-  a08=(a08-a01);
-  a04=(casadi_real)(a04<=a07);
-  a07=(a08+a04);
-  a08=(a08*a04);
-  a07=(a07-a08);
-  res[0][6]=a07;
   a08=5.8200000000000007e-01;
-  a04=arg[1][0];
-  a01=state_51;
-  a05=(a04-a01);
-  a05=casadi_fabs(a05);
-  a09=arg[1][1];
-  a05=(a05*a09);
-  a05=(a05*a09);
-  a08=(casadi_real)(a08<a05);
-  a05=(a08*a04);
-  a10=(a03-a08);
-  a10=(a10*a01);
-  a05=(a05+a10);
-  res[0][7]=a05;
-  a08=(a03-a08);
-  a05=state_52;
-  a10=(a05+a03);
-  a01=3.;
-  a10=casadi_fmin(a10,a01);
-  a08=(a08*a10);
-  res[0][8]=a08;
-  a10=state_60;
-  a10=(a10+a06);
-  a06=10.;
-  a10=(a10/a06);
-  res[0][9]=a10;
-  a11=state_54;
-  a12=1.8126924692201818e-01;
-  a08=(casadi_real)(a01<=a08);
-  a13=state_53;
-  a13=(a10-a13);
-  a13=casadi_fabs(a13);
-  a13=(a13*a09);
-  a14=5.9999999999999998e-01;
-  a13=(casadi_real)(a13<=a14);
-  a13=(a08*a13);
-  a14=state_59;
-  a14=(a14+a02);
-  a14=(a14/a06);
-  a02=casadi_fabs(a14);
-  a15=1.5000000000000000e+00;
-  a02=(casadi_real)(a02<=a15);
-  a02=(a13*a02);
-  a12=(a12*a02);
-  a02=(a10*a09);
-  a02=(a14-a02);
-  a02=(a02-a11);
-  a12=(a12*a02);
-  a11=(a11+a12);
-  res[0][10]=a11;
-  a12=state_55;
-  a02=1.9801326693244747e-02;
-  a16=casadi_fabs(a14);
-  a17=5.0000000000000000e-01;
-  a16=(casadi_real)(a16<=a17);
-  a13=(a13*a16);
-  a16=15.;
-  a17=(casadi_real)(a16<=a09);
-  a13=(a13*a17);
-  a02=(a02*a13);
-  a13=2.9100000000000001e+00;
+  a09=arg[1][0];
+  a10=state_50;
+  a11=(a09-a10);
+  a11=casadi_fabs(a11);
+  a12=arg[1][1];
+  a11=(a11*a12);
+  a11=(a11*a12);
+  a08=(casadi_real)(a08<a11);
+  a11=(a08*a09);
+  a13=(a03-a08);
   a13=(a13*a10);
-  a16=casadi_fmax(a09,a16);
-  a13=(a13/a16);
-  a04=(a04-a13);
-  a04=(a04-a12);
-  a02=(a02*a04);
-  a12=(a12+a02);
-  res[0][11]=a12;
-  a02=state_56;
-  a04=8.6466471676338730e-01;
-  a13=(a10/a09);
-  a13=(a13-a02);
-  a04=(a04*a13);
-  a02=(a02+a04);
-  res[0][12]=a02;
-  a05=(casadi_real)(a05<a01);
-  a05=(a08*a05);
-  a01=(a05*a02);
-  a05=(a03-a05);
-  a04=state_57;
-  a05=(a05*a04);
-  a01=(a01+a05);
-  res[0][13]=a01;
-  a05=state_58;
-  a04=6.3212055882855767e-01;
-  a13=state_61;
-  a13=(a13+a00);
+  a11=(a11+a13);
+  res[0][6]=a11;
+  a08=(a03-a08);
+  a11=state_51;
+  a13=(a11+a03);
+  a10=3.;
+  a13=casadi_fmin(a13,a10);
+  a08=(a08*a13);
+  res[0][7]=a08;
+  a13=state_59;
+  a13=(a13+a06);
+  a06=10.;
   a13=(a13/a06);
-  a13=casadi_fabs(a13);
-  a13=(casadi_real)(a13<=a03);
-  a04=(a04*a13);
-  a13=3.2500000000000001e-01;
-  a03=state_63;
+  res[0][8]=a13;
+  a14=state_53;
+  a15=1.8126924692201818e-01;
+  a08=(casadi_real)(a10<=a08);
+  a16=state_52;
+  a16=(a13-a16);
+  a16=casadi_fabs(a16);
+  a16=(a16*a12);
+  a17=5.9999999999999998e-01;
+  a16=(casadi_real)(a16<=a17);
+  a16=(a08*a16);
+  a17=state_58;
+  a17=(a17+a02);
+  a17=(a17/a06);
+  a02=casadi_fabs(a17);
+  a18=1.5000000000000000e+00;
+  a02=(casadi_real)(a02<=a18);
+  a02=(a16*a02);
+  a15=(a15*a02);
+  a02=(a13*a12);
+  a02=(a17-a02);
+  a02=(a02-a14);
+  a15=(a15*a02);
+  a14=(a14+a15);
+  res[0][9]=a14;
+  a15=state_54;
+  a02=1.9801326693244747e-02;
+  a19=casadi_fabs(a17);
+  a20=5.0000000000000000e-01;
+  a19=(casadi_real)(a19<=a20);
+  a16=(a16*a19);
+  a19=15.;
+  a20=(casadi_real)(a19<=a12);
+  a16=(a16*a20);
+  a02=(a02*a16);
+  a16=2.9100000000000001e+00;
+  a16=(a16*a13);
+  a19=casadi_fmax(a12,a19);
+  a16=(a16/a19);
+  a09=(a09-a16);
+  a09=(a09-a15);
+  a02=(a02*a09);
+  a15=(a15+a02);
+  res[0][10]=a15;
+  a02=state_55;
+  a09=8.6466471676338730e-01;
+  a16=(a13/a12);
+  a16=(a16-a02);
+  a09=(a09*a16);
+  a02=(a02+a09);
+  res[0][11]=a02;
+  a11=(casadi_real)(a11<a10);
+  a11=(a08*a11);
+  a10=(a11*a02);
+  a11=(a03-a11);
+  a09=state_56;
+  a11=(a11*a09);
+  a10=(a10+a11);
+  res[0][12]=a10;
+  a11=state_57;
+  a09=6.3212055882855767e-01;
+  a16=state_60;
+  a16=(a16+a00);
+  a16=(a16/a06);
+  a16=casadi_fabs(a16);
+  a16=(casadi_real)(a16<=a03);
+  a09=(a09*a16);
+  a16=3.2500000000000001e-01;
+  a03=state_62;
   a00=arg[1][8];
-  a16=arg[1][7];
-  a00=(a00-a16);
+  a19=arg[1][7];
+  a00=(a00-a19);
   a03=(a03+a00);
   a03=(a03/a06);
-  a13=(a13*a03);
+  a16=(a16*a03);
   a03=1.5500000000000000e+00;
-  a13=(a13/a03);
-  a10=(a10-a13);
-  a10=(a10-a05);
-  a04=(a04*a10);
-  a05=(a05+a04);
-  res[0][14]=a05;
-  a04=0.;
-  res[0][15]=a04;
-  res[0][16]=a04;
-  res[0][17]=a04;
-  res[0][18]=a04;
-  res[0][19]=a04;
-  a04=9.;
-  res[0][20]=a04;
-  a04=2048.;
-  a14=casadi_fabs(a14);
-  a10=6.;
-  a14=(casadi_real)(a14<=a10);
-  a08=(a08*a14);
-  a02=(a02-a01);
-  a02=(a02*a09);
-  a02=(a02*a09);
+  a16=(a16/a03);
+  a13=(a13-a16);
+  a13=(a13-a11);
+  a09=(a09*a13);
+  a11=(a11+a09);
+  res[0][13]=a11;
+  a09=0.;
+  res[0][14]=a09;
+  res[0][15]=a09;
+  res[0][16]=a09;
+  res[0][17]=a09;
+  res[0][18]=a09;
+  a09=9.;
+  res[0][19]=a09;
+  a09=2048.;
+  a17=casadi_fabs(a17);
+  a13=6.;
+  a17=(casadi_real)(a17<=a13);
+  a08=(a08*a17);
+  a02=(a02-a10);
+  a02=(a02*a12);
+  a02=(a02*a12);
   a02=casadi_fabs(a02);
-  a15=(casadi_real)(a15<a02);
-  a08=(a08*a15);
-  a15=(a08+a07);
+  a18=(casadi_real)(a18<a02);
+  a08=(a08*a18);
+  a01=(casadi_real)(a04<=a01);
+  a05=(casadi_real)(a04<=a05);
+  a18=(a01+a05);
+  a01=(a01*a05);
+  a18=(a18-a01);
+  a04=(casadi_real)(a04<=a07);
+  a07=(a18+a04);
+  a18=(a18*a04);
+  a07=(a07-a18);
+  a18=(a08+a07);
   a08=(a08*a07);
-  a15=(a15-a08);
-  a04=(a04*a15);
-  a15=8192.;
+  a18=(a18-a08);
+  a09=(a09*a18);
+  a18=8192.;
   a08=4.0000000000000002e-01;
+  a14=casadi_fabs(a14);
+  a08=(casadi_real)(a08<a14);
+  a18=(a18*a08);
+  a09=(a09+a18);
+  a18=16384.;
+  a08=1.6999999999999999e-03;
+  a15=casadi_fabs(a15);
+  a08=(casadi_real)(a08<a15);
+  a18=(a18*a08);
+  a09=(a09+a18);
+  a18=32768.;
+  a08=5.0000000000000003e-02;
   a11=casadi_fabs(a11);
   a08=(casadi_real)(a08<a11);
-  a15=(a15*a08);
-  a04=(a04+a15);
-  a15=16384.;
-  a08=1.6999999999999999e-03;
-  a12=casadi_fabs(a12);
-  a08=(casadi_real)(a08<a12);
-  a15=(a15*a08);
-  a04=(a04+a15);
-  a15=32768.;
-  a08=5.0000000000000003e-02;
-  a05=casadi_fabs(a05);
-  a08=(casadi_real)(a08<a05);
-  a15=(a15*a08);
-  a04=(a04+a15);
-  res[0][21]=a04;
+  a18=(a18*a08);
+  a09=(a09+a18);
+  res[0][20]=a09;
   return 0;
 }
 
 /*
- * vse_aukf_kernel_checks: 188 operations (CasADi SX instructions)
- * arg[0] state[66]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
+ * vse_aukf_kernel_checks: 187 operations (CasADi SX instructions)
+ * arg[0] state[65]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
  *     P_ay_ay, qmean_u, qmean_v, qmean_gamma, qmean_moment, qmean_ax, qmean_ay, qvar_u, qvar_v,
  *     qvar_gamma, qvar_moment, qvar_ax, qvar_ay, fading, residual, residual_hold_left,
  *     linear_range_hold_left, hold_reason, frozen_ax_value, frozen_ax_repeats, frozen_ay_value,
- *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now, steady_delta,
- *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
- *     wheel_yaw_residual, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
- *     checks_sum_omega_r_diff, checks_countdown, checks_code
- * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
- * res[0] checks_next[22]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r,
  *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
  *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_sum_omega_r_diff, checks_countdown, checks_code
+ * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
+ * res[0] checks_next[21]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, wheel_yaw_residual, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff, checks_sum_omega_r_diff,
+ *     checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_aukf_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_aukf_kernel_prepare:(state[66],input[9])->(items[36],shared[13]) */
+/* vse_aukf_kernel_prepare:(state[65],input[9])->(items[36],shared[13]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -890,15 +888,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_aukf_kernel_prepare: 396 operations (CasADi SX instructions)
- * arg[0] state[66]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
+ * arg[0] state[65]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
  *     P_ay_ay, qmean_u, qmean_v, qmean_gamma, qmean_moment, qmean_ax, qmean_ay, qvar_u, qvar_v,
  *     qvar_gamma, qvar_moment, qvar_ax, qvar_ay, fading, residual, residual_hold_left,
  *     linear_range_hold_left, hold_reason, frozen_ax_value, frozen_ax_repeats, frozen_ay_value,
- *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now, steady_delta,
- *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
- *     wheel_yaw_residual, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
+ *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
  * res[0] items[36]: 36 entries
@@ -1913,7 +1911,7 @@ CASADI_SYMBOL_EXPORT int vse_aukf_kernel_each(const casadi_real** arg, casadi_re
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_aukf_kernel_finish:(state[66],input[9],results[72])->(state_next[44],output[8]) */
+/* vse_aukf_kernel_finish:(state[65],input[9],results[72])->(state_next[44],output[8]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
@@ -4765,7 +4763,7 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a029=32.;
   a018=((a018!=0.)?a029:0.);
   a001=(a001+a018);
-  a018=arg[0][65];
+  a018=arg[0][64];
   a018=(a016*a018);
   a001=(a001+a018);
   a206=(casadi_real)(a013<a206);
@@ -4793,15 +4791,15 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_aukf_kernel_finish: 2850 operations (CasADi SX instructions)
- * arg[0] state[66]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
+ * arg[0] state[65]: u, v, gamma, moment, ax, ay, P_u_u, P_u_v, P_u_gamma, P_u_moment, P_u_ax,
  *     P_u_ay, P_v_v, P_v_gamma, P_v_moment, P_v_ax, P_v_ay, P_gamma_gamma, P_gamma_moment,
  *     P_gamma_ax, P_gamma_ay, P_moment_moment, P_moment_ax, P_moment_ay, P_ax_ax, P_ax_ay,
  *     P_ay_ay, qmean_u, qmean_v, qmean_gamma, qmean_moment, qmean_ax, qmean_ay, qvar_u, qvar_v,
  *     qvar_gamma, qvar_moment, qvar_ax, qvar_ay, fading, residual, residual_hold_left,
  *     linear_range_hold_left, hold_reason, frozen_ax_value, frozen_ax_repeats, frozen_ay_value,
- *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now, steady_delta,
- *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
- *     wheel_yaw_residual, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
+ *     frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r,
+ *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
+ *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[9]: delta, vx, ax, ay, r, omega_fl, omega_fr, omega_rl, omega_rr
  * arg[2] results[72]: 72 entries

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 190b5186dd3dab318920bc0e727cf3cba4ad8c547c4b5ce9b889383b4757119a
- * Operations: step 477, input checks 224 a run (every check_period), init 125 (CasADi SX instructions).
+ * Operations: step 477, input checks 223 a run (every check_period), init 124 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -71,7 +71,7 @@ typedef struct {
 } vse_ekf_rls_output;
 
 /** Number of state entries. */
-#define VSE_EKF_RLS_N_STATE (48)
+#define VSE_EKF_RLS_N_STATE (47)
 
 /** Index of each entry of vse_ekf_rls_state.x. */
 enum {
@@ -106,23 +106,22 @@ enum {
     VSE_EKF_RLS_STATE_FROZEN_AY_REPEATS = 28, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_EKF_RLS_STATE_FROZEN_R_VALUE = 29, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_EKF_RLS_STATE_FROZEN_R_REPEATS = 30, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_EKF_RLS_STATE_FROZEN_NOW = 31, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_EKF_RLS_STATE_STEADY_DELTA = 32, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_EKF_RLS_STATE_STEADY_SAMPLES = 33, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_EKF_RLS_STATE_STEADY_R = 34, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_EKF_RLS_STATE_LATERAL_RESIDUAL = 35, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_EKF_RLS_STATE_STEERING_OFFSET = 36, /* rad: learned steering-angle zero (road wheel) */
-    VSE_EKF_RLS_STATE_CURVATURE = 37, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_EKF_RLS_STATE_STEADY_CURVATURE = 38, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_EKF_RLS_STATE_WHEEL_YAW_RESIDUAL = 39, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_EKF_RLS_STATE_WHEEL_YAW_RATE = 40, /* rad/s: yaw-rate check: mean |non-driven wheels' yaw rate| (wheel_check_scale) */
-    VSE_EKF_RLS_STATE_WHEEL_YAW_HOLD_LEFT = 41, /* -: samples YAW_RATE_MISMATCH stays raised (wheel_check_hold) */
-    VSE_EKF_RLS_STATE_CHECKS_SUM_AY = 42, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_EKF_RLS_STATE_CHECKS_SUM_R = 43, /* rad/s: input checks: sum of r since their last run */
-    VSE_EKF_RLS_STATE_CHECKS_SUM_AX = 44, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_EKF_RLS_STATE_CHECKS_SUM_OMEGA_R_DIFF = 45, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_EKF_RLS_STATE_CHECKS_COUNTDOWN = 46, /* -: input checks: active samples to their next run (check_period) */
-    VSE_EKF_RLS_STATE_CHECKS_CODE = 47 /* -: input checks: the status bits of their last run */
+    VSE_EKF_RLS_STATE_STEADY_DELTA = 31, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_EKF_RLS_STATE_STEADY_SAMPLES = 32, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_EKF_RLS_STATE_STEADY_R = 33, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_EKF_RLS_STATE_LATERAL_RESIDUAL = 34, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_EKF_RLS_STATE_STEERING_OFFSET = 35, /* rad: learned steering-angle zero (road wheel) */
+    VSE_EKF_RLS_STATE_CURVATURE = 36, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_EKF_RLS_STATE_STEADY_CURVATURE = 37, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_EKF_RLS_STATE_WHEEL_YAW_RESIDUAL = 38, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_EKF_RLS_STATE_WHEEL_YAW_RATE = 39, /* rad/s: yaw-rate check: mean |non-driven wheels' yaw rate| (wheel_check_scale) */
+    VSE_EKF_RLS_STATE_WHEEL_YAW_HOLD_LEFT = 40, /* -: samples YAW_RATE_MISMATCH stays raised (wheel_check_hold) */
+    VSE_EKF_RLS_STATE_CHECKS_SUM_AY = 41, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_EKF_RLS_STATE_CHECKS_SUM_R = 42, /* rad/s: input checks: sum of r since their last run */
+    VSE_EKF_RLS_STATE_CHECKS_SUM_AX = 43, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_EKF_RLS_STATE_CHECKS_SUM_OMEGA_R_DIFF = 44, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_EKF_RLS_STATE_CHECKS_COUNTDOWN = 45, /* -: input checks: active samples to their next run (check_period) */
+    VSE_EKF_RLS_STATE_CHECKS_CODE = 46 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

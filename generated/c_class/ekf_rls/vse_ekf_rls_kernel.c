@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 190b5186dd3dab318920bc0e727cf3cba4ad8c547c4b5ce9b889383b4757119a
- * Operations: step 477, input checks 224 a run (every check_period), init 125 (CasADi SX instructions).
+ * Operations: step 477, input checks 223 a run (every check_period), init 124 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -91,7 +91,7 @@ static casadi_real casadi_fmin(casadi_real x, casadi_real y) {
 
 /* Configuration this file was compiled with */
 
-/* vse_ekf_rls_kernel_init:(input[7])->(state[48]) */
+/* vse_ekf_rls_kernel_init:(input[7])->(state[47]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -204,10 +204,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][28]=a00;
   res[0][29]=a01;
   res[0][30]=a00;
-  res[0][31]=a00;
-  res[0][32]=a04;
-  res[0][33]=a00;
-  res[0][34]=a01;
+  res[0][31]=a04;
+  res[0][32]=a00;
+  res[0][33]=a01;
+  res[0][34]=a00;
   res[0][35]=a00;
   res[0][36]=a00;
   res[0][37]=a00;
@@ -220,31 +220,30 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][44]=a00;
   res[0][45]=a00;
   res[0][46]=a00;
-  res[0][47]=a00;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_init: 125 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_init: 124 operations (CasADi SX instructions)
  * arg[0] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
- * res[0] state[48]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ * res[0] state[47]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
- *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown,
- *     checks_code
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_checks:(state[48],input[7])->(checks_next[23]) */
+/* vse_ekf_rls_kernel_checks:(state[47],input[7])->(checks_next[22]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25;
   a00=arg[1][2];
   const casadi_real state_25 = arg[0][25];
   const casadi_real state_26 = arg[0][26];
@@ -252,6 +251,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_28 = arg[0][28];
   const casadi_real state_29 = arg[0][29];
   const casadi_real state_30 = arg[0][30];
+  const casadi_real state_31 = arg[0][31];
   const casadi_real state_32 = arg[0][32];
   const casadi_real state_33 = arg[0][33];
   const casadi_real state_34 = arg[0][34];
@@ -265,7 +265,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_42 = arg[0][42];
   const casadi_real state_43 = arg[0][43];
   const casadi_real state_44 = arg[0][44];
-  const casadi_real state_45 = arg[0][45];
   res[0][0]=a00;
   a01=state_25;
   a01=(casadi_real)(a00==a01);
@@ -294,226 +293,224 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=casadi_fmin(a08,a04);
   a07=(a07*a08);
   res[0][5]=a07;
-  a01=(casadi_real)(a04<=a01);
-  a05=(casadi_real)(a04<=a05);
-  a08=(a01+a05);
-  a01=(a01*a05);
-  a08=(a08-a01);
-  a04=(casadi_real)(a04<=a07);
-  a07=(a08+a04);
-  a08=(a08*a04);
-  a07=(a07-a08);
-  res[0][6]=a07;
   a08=5.8200000000000007e-01;
-  a04=arg[1][0];
-  a01=state_32;
-  a05=(a04-a01);
-  a05=casadi_fabs(a05);
-  a09=arg[1][1];
-  a05=(a05*a09);
-  a05=(a05*a09);
-  a08=(casadi_real)(a08<a05);
-  a05=(a08*a04);
-  a10=(a03-a08);
-  a10=(a10*a01);
-  a05=(a05+a10);
-  res[0][7]=a05;
+  a09=arg[1][0];
+  a10=state_31;
+  a11=(a09-a10);
+  a11=casadi_fabs(a11);
+  a12=arg[1][1];
+  a11=(a11*a12);
+  a11=(a11*a12);
+  a08=(casadi_real)(a08<a11);
+  a11=(a08*a09);
+  a13=(a03-a08);
+  a13=(a13*a10);
+  a11=(a11+a13);
+  res[0][6]=a11;
   a08=(a03-a08);
-  a05=state_33;
-  a10=(a05+a03);
-  a01=3.;
-  a10=casadi_fmin(a10,a01);
-  a08=(a08*a10);
-  res[0][8]=a08;
-  a10=state_43;
-  a10=(a10+a06);
+  a11=state_32;
+  a13=(a11+a03);
+  a10=3.;
+  a13=casadi_fmin(a13,a10);
+  a08=(a08*a13);
+  res[0][7]=a08;
+  a13=state_42;
+  a13=(a13+a06);
   a06=10.;
-  a10=(a10/a06);
-  res[0][9]=a10;
-  a11=state_35;
-  a12=1.8126924692201818e-01;
-  a08=(casadi_real)(a01<=a08);
-  a13=state_34;
-  a13=(a10-a13);
-  a13=casadi_fabs(a13);
-  a13=(a13*a09);
-  a14=5.9999999999999998e-01;
-  a13=(casadi_real)(a13<=a14);
-  a13=(a08*a13);
-  a14=state_42;
-  a14=(a14+a02);
-  a14=(a14/a06);
-  a02=casadi_fabs(a14);
-  a15=1.5000000000000000e+00;
-  a02=(casadi_real)(a02<=a15);
-  a02=(a13*a02);
-  a12=(a12*a02);
-  a02=(a10*a09);
-  a02=(a14-a02);
-  a02=(a02-a11);
-  a12=(a12*a02);
-  a11=(a11+a12);
-  res[0][10]=a11;
-  a12=state_36;
-  a02=1.9801326693244747e-02;
-  a16=casadi_fabs(a14);
-  a17=5.0000000000000000e-01;
-  a16=(casadi_real)(a16<=a17);
-  a13=(a13*a16);
-  a16=15.;
-  a17=(casadi_real)(a16<=a09);
-  a13=(a13*a17);
-  a02=(a02*a13);
-  a13=2.9100000000000001e+00;
-  a13=(a13*a10);
-  a16=casadi_fmax(a09,a16);
-  a13=(a13/a16);
-  a04=(a04-a13);
-  a04=(a04-a12);
-  a02=(a02*a04);
-  a12=(a12+a02);
-  res[0][11]=a12;
-  a02=state_37;
-  a04=8.6466471676338730e-01;
-  a13=(a10/a09);
-  a13=(a13-a02);
-  a04=(a04*a13);
-  a02=(a02+a04);
-  res[0][12]=a02;
-  a05=(casadi_real)(a05<a01);
-  a05=(a08*a05);
-  a01=(a05*a02);
-  a05=(a03-a05);
-  a04=state_38;
-  a05=(a05*a04);
-  a01=(a01+a05);
-  res[0][13]=a01;
-  a05=state_39;
-  a04=6.3212055882855767e-01;
-  a13=state_44;
-  a13=(a13+a00);
   a13=(a13/a06);
-  a13=casadi_fabs(a13);
-  a13=(casadi_real)(a13<=a03);
-  a00=(a04*a13);
-  a16=3.2500000000000001e-01;
-  a17=state_45;
-  a18=arg[1][6];
-  a19=casadi_fabs(a18);
-  a20=400.;
-  a19=(casadi_real)(a19<=a20);
-  a21=arg[1][5];
-  a22=casadi_fabs(a21);
-  a22=(casadi_real)(a22<=a20);
-  a19=(a19*a22);
-  a18=(a18-a21);
-  a19=((a19!=0.)?a18:0.);
-  a17=(a17+a19);
-  a17=(a17/a06);
-  a16=(a16*a17);
-  a17=1.5500000000000000e+00;
-  a16=(a16/a17);
-  a10=(a10-a16);
-  a10=(a10-a05);
-  a00=(a00*a10);
-  a05=(a05+a00);
-  res[0][14]=a05;
-  a00=state_40;
-  a04=(a04*a13);
+  res[0][8]=a13;
+  a14=state_34;
+  a15=1.8126924692201818e-01;
+  a08=(casadi_real)(a10<=a08);
+  a16=state_33;
+  a16=(a13-a16);
   a16=casadi_fabs(a16);
-  a16=(a16-a00);
-  a04=(a04*a16);
-  a00=(a00+a04);
-  res[0][15]=a00;
-  a04=5.;
-  a16=5.0000000000000003e-02;
-  a13=casadi_fabs(a05);
-  a16=(casadi_real)(a16<a13);
-  a13=1.0000000000000001e-01;
-  a13=(casadi_real)(a13<=a00);
-  a10=2.0000000000000001e-01;
-  a10=(a10*a00);
-  a05=casadi_fabs(a05);
-  a10=(casadi_real)(a10<a05);
-  a13=(a13*a10);
-  a10=(a16+a13);
+  a16=(a16*a12);
+  a17=5.9999999999999998e-01;
+  a16=(casadi_real)(a16<=a17);
+  a16=(a08*a16);
+  a17=state_41;
+  a17=(a17+a02);
+  a17=(a17/a06);
+  a02=casadi_fabs(a17);
+  a18=1.5000000000000000e+00;
+  a02=(casadi_real)(a02<=a18);
+  a02=(a16*a02);
+  a15=(a15*a02);
+  a02=(a13*a12);
+  a02=(a17-a02);
+  a02=(a02-a14);
+  a15=(a15*a02);
+  a14=(a14+a15);
+  res[0][9]=a14;
+  a15=state_35;
+  a02=1.9801326693244747e-02;
+  a19=casadi_fabs(a17);
+  a20=5.0000000000000000e-01;
+  a19=(casadi_real)(a19<=a20);
+  a16=(a16*a19);
+  a19=15.;
+  a20=(casadi_real)(a19<=a12);
+  a16=(a16*a20);
+  a02=(a02*a16);
+  a16=2.9100000000000001e+00;
   a16=(a16*a13);
-  a10=(a10-a16);
-  a04=(a04*a10);
-  a16=(a03-a10);
-  a13=state_41;
-  a05=(a13-a03);
+  a19=casadi_fmax(a12,a19);
+  a16=(a16/a19);
+  a09=(a09-a16);
+  a09=(a09-a15);
+  a02=(a02*a09);
+  a15=(a15+a02);
+  res[0][10]=a15;
+  a02=state_36;
+  a09=8.6466471676338730e-01;
+  a16=(a13/a12);
+  a16=(a16-a02);
+  a09=(a09*a16);
+  a02=(a02+a09);
+  res[0][11]=a02;
+  a11=(casadi_real)(a11<a10);
+  a11=(a08*a11);
+  a10=(a11*a02);
+  a11=(a03-a11);
+  a09=state_37;
+  a11=(a11*a09);
+  a10=(a10+a11);
+  res[0][12]=a10;
+  a11=state_38;
+  a09=6.3212055882855767e-01;
+  a16=state_43;
+  a16=(a16+a00);
+  a16=(a16/a06);
+  a16=casadi_fabs(a16);
+  a16=(casadi_real)(a16<=a03);
+  a00=(a09*a16);
+  a19=3.2500000000000001e-01;
+  a20=state_44;
+  a21=arg[1][6];
+  a22=casadi_fabs(a21);
+  a23=400.;
+  a22=(casadi_real)(a22<=a23);
+  a24=arg[1][5];
+  a25=casadi_fabs(a24);
+  a25=(casadi_real)(a25<=a23);
+  a22=(a22*a25);
+  a21=(a21-a24);
+  a22=((a22!=0.)?a21:0.);
+  a20=(a20+a22);
+  a20=(a20/a06);
+  a19=(a19*a20);
+  a20=1.5500000000000000e+00;
+  a19=(a19/a20);
+  a13=(a13-a19);
+  a13=(a13-a11);
+  a00=(a00*a13);
+  a11=(a11+a00);
+  res[0][13]=a11;
+  a00=state_39;
+  a09=(a09*a16);
+  a19=casadi_fabs(a19);
+  a19=(a19-a00);
+  a09=(a09*a19);
+  a00=(a00+a09);
+  res[0][14]=a00;
+  a09=5.;
+  a19=5.0000000000000003e-02;
+  a16=casadi_fabs(a11);
+  a19=(casadi_real)(a19<a16);
+  a16=1.0000000000000001e-01;
+  a16=(casadi_real)(a16<=a00);
+  a13=2.0000000000000001e-01;
+  a13=(a13*a00);
+  a11=casadi_fabs(a11);
+  a13=(casadi_real)(a13<a11);
+  a16=(a16*a13);
+  a13=(a19+a16);
+  a19=(a19*a16);
+  a13=(a13-a19);
+  a09=(a09*a13);
+  a19=(a03-a13);
+  a16=state_40;
+  a11=(a16-a03);
   a00=0.;
-  a05=casadi_fmax(a05,a00);
-  a16=(a16*a05);
-  a04=(a04+a16);
-  res[0][16]=a04;
+  a11=casadi_fmax(a11,a00);
+  a19=(a19*a11);
+  a09=(a09+a19);
+  res[0][15]=a09;
+  res[0][16]=a00;
   res[0][17]=a00;
   res[0][18]=a00;
   res[0][19]=a00;
-  res[0][20]=a00;
-  a04=9.;
-  res[0][21]=a04;
-  a04=2048.;
-  a14=casadi_fabs(a14);
-  a16=6.;
-  a14=(casadi_real)(a14<=a16);
-  a08=(a08*a14);
-  a02=(a02-a01);
-  a02=(a02*a09);
-  a02=(a02*a09);
+  a09=9.;
+  res[0][20]=a09;
+  a09=2048.;
+  a17=casadi_fabs(a17);
+  a19=6.;
+  a17=(casadi_real)(a17<=a19);
+  a08=(a08*a17);
+  a02=(a02-a10);
+  a02=(a02*a12);
+  a02=(a02*a12);
   a02=casadi_fabs(a02);
-  a15=(casadi_real)(a15<a02);
-  a08=(a08*a15);
-  a15=(a08+a07);
+  a18=(casadi_real)(a18<a02);
+  a08=(a08*a18);
+  a01=(casadi_real)(a04<=a01);
+  a05=(casadi_real)(a04<=a05);
+  a18=(a01+a05);
+  a01=(a01*a05);
+  a18=(a18-a01);
+  a04=(casadi_real)(a04<=a07);
+  a07=(a18+a04);
+  a18=(a18*a04);
+  a07=(a07-a18);
+  a18=(a08+a07);
   a08=(a08*a07);
-  a15=(a15-a08);
-  a04=(a04*a15);
-  a15=8192.;
+  a18=(a18-a08);
+  a09=(a09*a18);
+  a18=8192.;
   a08=4.0000000000000002e-01;
-  a11=casadi_fabs(a11);
-  a08=(casadi_real)(a08<a11);
-  a15=(a15*a08);
-  a04=(a04+a15);
-  a15=16384.;
+  a14=casadi_fabs(a14);
+  a08=(casadi_real)(a08<a14);
+  a18=(a18*a08);
+  a09=(a09+a18);
+  a18=16384.;
   a08=1.6999999999999999e-03;
-  a12=casadi_fabs(a12);
-  a08=(casadi_real)(a08<a12);
-  a15=(a15*a08);
-  a04=(a04+a15);
-  a15=32768.;
-  a03=(a03-a10);
-  a00=(casadi_real)(a00<a13);
+  a15=casadi_fabs(a15);
+  a08=(casadi_real)(a08<a15);
+  a18=(a18*a08);
+  a09=(a09+a18);
+  a18=32768.;
+  a03=(a03-a13);
+  a00=(casadi_real)(a00<a16);
   a03=(a03*a00);
-  a10=(a10+a03);
-  a15=(a15*a10);
-  a04=(a04+a15);
-  res[0][22]=a04;
+  a13=(a13+a03);
+  a18=(a18*a13);
+  a09=(a09+a18);
+  res[0][21]=a09;
   return 0;
 }
 
 /*
- * vse_ekf_rls_kernel_checks: 224 operations (CasADi SX instructions)
- * arg[0] state[48]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ * vse_ekf_rls_kernel_checks: 223 operations (CasADi SX instructions)
+ * arg[0] state[47]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
- *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown,
- *     checks_code
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
- * res[0] checks_next[23]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
- *     wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay, checks_sum_r, checks_sum_ax,
- *     checks_sum_omega_r_diff, checks_countdown, checks_code
+ * res[0] checks_next[22]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate,
+ *     wheel_yaw_hold_left, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff,
+ *     checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_guard:(state[48],input[7])->(decisions[7]) */
+/* vse_ekf_rls_kernel_guard:(state[47],input[7])->(decisions[7]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
@@ -565,14 +562,13 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_ekf_rls_kernel_guard: 43 operations (CasADi SX instructions)
- * arg[0] state[48]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ * arg[0] state[47]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
- *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown,
- *     checks_code
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
  * res[0] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
  *     low_speed, active
@@ -581,7 +577,7 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_guard(const casadi_real** arg, casad
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_active:(state[48],input[7])->(state_next[25],output[8]) */
+/* vse_ekf_rls_kernel_active:(state[47],input[7])->(state_next[25],output[8]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -699,7 +695,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_22 = arg[0][22];
   const casadi_real state_23 = arg[0][23];
   const casadi_real state_24 = arg[0][24];
-  const casadi_real state_47 = arg[0][47];
+  const casadi_real state_46 = arg[0][46];
   res[0][0]=a00;
   a23=(a07/a23);
   a24=(a23*a04);
@@ -783,7 +779,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a05=casadi_fmin(a05,a25);
   a07=(casadi_real)(a07<=a05);
   a05=0.;
-  a25=state_47;
+  a25=state_46;
   a26=(casadi_real)(a05<a25);
   a26=(casadi_real)(a26==0.);
   a07=(casadi_real)((a07!=0.)&&(a26!=0.));
@@ -1045,14 +1041,13 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_ekf_rls_kernel_active: 434 operations (CasADi SX instructions)
- * arg[0] state[48]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ * arg[0] state[47]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
- *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown,
- *     checks_code
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
  * res[0] state_next[25]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2,
  *     Prls_c0_1_c0_1, Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator,
@@ -1063,7 +1058,7 @@ CASADI_SYMBOL_EXPORT int vse_ekf_rls_kernel_active(const casadi_real** arg, casa
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_ekf_rls_kernel_held:(state[48],input[7],decisions[7])->(state_next[25],output[8]) */
+/* vse_ekf_rls_kernel_held:(state[47],input[7],decisions[7])->(state_next[25],output[8]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4;
@@ -1167,14 +1162,13 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_ekf_rls_kernel_held: 72 operations (CasADi SX instructions)
- * arg[0] state[48]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
+ * arg[0] state[47]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
- *     checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown,
- *     checks_code
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left, checks_sum_ay,
+ *     checks_sum_r, checks_sum_ax, checks_sum_omega_r_diff, checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_rl, omega_rr
  * arg[2] decisions[7]: plausible_delta, plausible_vx, plausible_ax, plausible_ay, plausible_r,
  *     low_speed, active

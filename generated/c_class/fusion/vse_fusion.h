@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 27c44475324666e9705c73d7fb939c8a1ccf745242225e94c8d2f20bdb53c961
- * Operations: step 582, input checks 143 a run (every check_period), init 105 (CasADi SX instructions).
+ * Operations: step 586, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -67,7 +67,7 @@ typedef struct {
 } vse_fusion_output;
 
 /** Number of state entries. */
-#define VSE_FUSION_N_STATE (41)
+#define VSE_FUSION_N_STATE (40)
 
 /** Index of each entry of vse_fusion_state.x. */
 enum {
@@ -100,18 +100,17 @@ enum {
     VSE_FUSION_STATE_FROZEN_AY_REPEATS = 26, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_FUSION_STATE_FROZEN_R_VALUE = 27, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_FUSION_STATE_FROZEN_R_REPEATS = 28, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_FUSION_STATE_FROZEN_NOW = 29, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_FUSION_STATE_STEADY_DELTA = 30, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_FUSION_STATE_STEADY_SAMPLES = 31, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_FUSION_STATE_STEADY_R = 32, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_FUSION_STATE_LATERAL_RESIDUAL = 33, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_FUSION_STATE_STEERING_OFFSET = 34, /* rad: learned steering-angle zero (road wheel) */
-    VSE_FUSION_STATE_CURVATURE = 35, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_FUSION_STATE_STEADY_CURVATURE = 36, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_FUSION_STATE_CHECKS_SUM_AY = 37, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_FUSION_STATE_CHECKS_SUM_R = 38, /* rad/s: input checks: sum of r since their last run */
-    VSE_FUSION_STATE_CHECKS_COUNTDOWN = 39, /* -: input checks: active samples to their next run (check_period) */
-    VSE_FUSION_STATE_CHECKS_CODE = 40 /* -: input checks: the status bits of their last run */
+    VSE_FUSION_STATE_STEADY_DELTA = 29, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_FUSION_STATE_STEADY_SAMPLES = 30, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_FUSION_STATE_STEADY_R = 31, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_FUSION_STATE_LATERAL_RESIDUAL = 32, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_FUSION_STATE_STEERING_OFFSET = 33, /* rad: learned steering-angle zero (road wheel) */
+    VSE_FUSION_STATE_CURVATURE = 34, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_FUSION_STATE_STEADY_CURVATURE = 35, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_FUSION_STATE_CHECKS_SUM_AY = 36, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_FUSION_STATE_CHECKS_SUM_R = 37, /* rad/s: input checks: sum of r since their last run */
+    VSE_FUSION_STATE_CHECKS_COUNTDOWN = 38, /* -: input checks: active samples to their next run (check_period) */
+    VSE_FUSION_STATE_CHECKS_CODE = 39 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 807ac18baf455cad55f84047df56cc6198948c7668ac6f88682526bd061ed13a
- * Operations: step 523, input checks 163 a run (every check_period), init 69 (CasADi SX instructions).
+ * Operations: step 523, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -64,7 +64,7 @@ typedef struct {
 } vse_kf2dof_output;
 
 /** Number of state entries. */
-#define VSE_KF2DOF_N_STATE (27)
+#define VSE_KF2DOF_N_STATE (26)
 
 /** Index of each entry of vse_kf2dof_state.x. */
 enum {
@@ -83,18 +83,17 @@ enum {
     VSE_KF2DOF_STATE_FROZEN_AY_REPEATS = 12, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_KF2DOF_STATE_FROZEN_R_VALUE = 13, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_KF2DOF_STATE_FROZEN_R_REPEATS = 14, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_KF2DOF_STATE_FROZEN_NOW = 15, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_KF2DOF_STATE_STEADY_DELTA = 16, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_KF2DOF_STATE_STEADY_SAMPLES = 17, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_KF2DOF_STATE_STEADY_R = 18, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_KF2DOF_STATE_LATERAL_RESIDUAL = 19, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_KF2DOF_STATE_STEERING_OFFSET = 20, /* rad: learned steering-angle zero (road wheel) */
-    VSE_KF2DOF_STATE_CURVATURE = 21, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_KF2DOF_STATE_STEADY_CURVATURE = 22, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_KF2DOF_STATE_CHECKS_SUM_AY = 23, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_KF2DOF_STATE_CHECKS_SUM_R = 24, /* rad/s: input checks: sum of r since their last run */
-    VSE_KF2DOF_STATE_CHECKS_COUNTDOWN = 25, /* -: input checks: active samples to their next run (check_period) */
-    VSE_KF2DOF_STATE_CHECKS_CODE = 26 /* -: input checks: the status bits of their last run */
+    VSE_KF2DOF_STATE_STEADY_DELTA = 15, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_KF2DOF_STATE_STEADY_SAMPLES = 16, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_KF2DOF_STATE_STEADY_R = 17, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_KF2DOF_STATE_LATERAL_RESIDUAL = 18, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_KF2DOF_STATE_STEERING_OFFSET = 19, /* rad: learned steering-angle zero (road wheel) */
+    VSE_KF2DOF_STATE_CURVATURE = 20, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_KF2DOF_STATE_STEADY_CURVATURE = 21, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_KF2DOF_STATE_CHECKS_SUM_AY = 22, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_KF2DOF_STATE_CHECKS_SUM_R = 23, /* rad/s: input checks: sum of r since their last run */
+    VSE_KF2DOF_STATE_CHECKS_COUNTDOWN = 24, /* -: input checks: active samples to their next run (check_period) */
+    VSE_KF2DOF_STATE_CHECKS_CODE = 25 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

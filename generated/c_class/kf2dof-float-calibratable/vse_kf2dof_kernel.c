@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 807ac18baf455cad55f84047df56cc6198948c7668ac6f88682526bd061ed13a
- * Operations: step 523, input checks 163 a run (every check_period), init 69 (CasADi SX instructions).
+ * Operations: step 523, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
@@ -89,7 +89,7 @@ static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
 
 /* Configuration this file was compiled with */
 
-/* vse_kf2dof_kernel_init:(input[4],params[43])->(state[27]) */
+/* vse_kf2dof_kernel_init:(input[4],params[43])->(state[26]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8, a9;
@@ -150,10 +150,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][12]=a0;
   res[0][13]=a1;
   res[0][14]=a0;
-  res[0][15]=a0;
-  res[0][16]=a3;
-  res[0][17]=a0;
-  res[0][18]=a1;
+  res[0][15]=a3;
+  res[0][16]=a0;
+  res[0][17]=a1;
+  res[0][18]=a0;
   res[0][19]=a0;
   res[0][20]=a0;
   res[0][21]=a0;
@@ -161,12 +161,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][23]=a0;
   res[0][24]=a0;
   res[0][25]=a0;
-  res[0][26]=a0;
   return 0;
 }
 
 /*
- * vse_kf2dof_kernel_init: 69 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_init: 68 operations (CasADi SX instructions)
  * arg[0] input[4]: delta, vx, ay, r
  * arg[1] params[43]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
@@ -177,26 +176,27 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_band, settle_band, lateral_check_limit, lateral_check_time, lateral_check_range,
  *     steering_offset_limit, steering_offset_time, steering_offset_range, steering_offset_speed,
  *     steer_check_limit, steer_check_time, steer_check_range
- * res[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * res[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_checks:(state[27],input[4],params[43])->(checks_next[16]) */
+/* vse_kf2dof_kernel_checks:(state[26],input[4],params[43])->(checks_next[15]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15;
+  casadi_real a12, a13, a14, a15, a16, a17;
   a00=arg[1][2];
   const casadi_real state_11 = arg[0][11];
   const casadi_real state_12 = arg[0][12];
   const casadi_real state_13 = arg[0][13];
   const casadi_real state_14 = arg[0][14];
+  const casadi_real state_15 = arg[0][15];
   const casadi_real state_16 = arg[0][16];
   const casadi_real state_17 = arg[0][17];
   const casadi_real state_18 = arg[0][18];
@@ -205,7 +205,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_21 = arg[0][21];
   const casadi_real state_22 = arg[0][22];
   const casadi_real state_23 = arg[0][23];
-  const casadi_real state_24 = arg[0][24];
   res[0][0]=a00;
   a01=state_11;
   a01=(casadi_real)(a00==a01);
@@ -230,154 +229,153 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=casadi_fmin(a08,a04);
   a07=(a07*a08);
   res[0][3]=a07;
+  a08=arg[2][31];
+  a09=arg[2][4];
+  a08=(a08*a09);
+  a10=arg[1][0];
+  a11=state_15;
+  a12=(a10-a11);
+  a12=casadi_fabs(a12);
+  a13=arg[1][1];
+  a12=(a12*a13);
+  a12=(a12*a13);
+  a08=(casadi_real)(a08<a12);
+  a12=(a08*a10);
+  a14=(a03-a08);
+  a14=(a14*a11);
+  a12=(a12+a14);
+  res[0][4]=a12;
+  a08=(a03-a08);
+  a12=state_16;
+  a14=(a12+a03);
+  a11=arg[2][30];
+  a11=(a11/a05);
+  a11=(a11+a06);
+  a11=floorf(a11);
+  a14=casadi_fmin(a14,a11);
+  a08=(a08*a14);
+  res[0][5]=a08;
+  a14=state_23;
+  a14=(a14+a02);
+  a02=10.f;
+  a14=(a14/a02);
+  res[0][6]=a14;
+  a06=state_18;
+  a08=(casadi_real)(a11<=a08);
+  a05=state_17;
+  a05=(a14-a05);
+  a05=casadi_fabs(a05);
+  a05=(a05*a13);
+  a15=arg[2][32];
+  a05=(casadi_real)(a05<=a15);
+  a05=(a08*a05);
+  a15=state_22;
+  a15=(a15+a00);
+  a15=(a15/a02);
+  a02=casadi_fabs(a15);
+  a00=arg[2][35];
+  a02=(casadi_real)(a02<=a00);
+  a02=(a05*a02);
+  a00=-1.0000000000000001e-01f;
+  a16=arg[2][34];
+  a16=(a00/a16);
+  a16=expf(a16);
+  a16=(a03-a16);
+  a02=(a02*a16);
+  a16=(a14*a13);
+  a16=(a15-a16);
+  a16=(a16-a06);
+  a02=(a02*a16);
+  a06=(a06+a02);
+  res[0][7]=a06;
+  a02=state_19;
+  a16=casadi_fabs(a15);
+  a17=arg[2][38];
+  a16=(casadi_real)(a16<=a17);
+  a05=(a05*a16);
+  a16=arg[2][39];
+  a17=(casadi_real)(a16<=a13);
+  a05=(a05*a17);
+  a17=arg[2][37];
+  a17=(a00/a17);
+  a17=expf(a17);
+  a17=(a03-a17);
+  a05=(a05*a17);
+  a09=(a09*a14);
+  a16=casadi_fmax(a13,a16);
+  a09=(a09/a16);
+  a10=(a10-a09);
+  a10=(a10-a02);
+  a05=(a05*a10);
+  a02=(a02+a05);
+  res[0][8]=a02;
+  a05=state_20;
+  a10=arg[2][41];
+  a00=(a00/a10);
+  a00=expf(a00);
+  a00=(a03-a00);
+  a14=(a14/a13);
+  a14=(a14-a05);
+  a00=(a00*a14);
+  a05=(a05+a00);
+  res[0][9]=a05;
+  a12=(casadi_real)(a12<a11);
+  a12=(a08*a12);
+  a11=(a12*a05);
+  a03=(a03-a12);
+  a12=state_21;
+  a03=(a03*a12);
+  a11=(a11+a03);
+  res[0][10]=a11;
+  a03=0.f;
+  res[0][11]=a03;
+  res[0][12]=a03;
+  a03=9.f;
+  res[0][13]=a03;
+  a03=2048.f;
+  a15=casadi_fabs(a15);
+  a12=arg[2][42];
+  a15=(casadi_real)(a15<=a12);
+  a08=(a08*a15);
+  a15=arg[2][40];
+  a05=(a05-a11);
+  a05=(a05*a13);
+  a05=(a05*a13);
+  a05=casadi_fabs(a05);
+  a15=(casadi_real)(a15<a05);
+  a08=(a08*a15);
   a01=(casadi_real)(a04<=a01);
   a04=(casadi_real)(a04<=a07);
   a07=(a01+a04);
   a01=(a01*a04);
   a07=(a07-a01);
-  res[0][4]=a07;
-  a01=arg[2][31];
-  a04=arg[2][4];
-  a01=(a01*a04);
-  a08=arg[1][0];
-  a09=state_16;
-  a10=(a08-a09);
-  a10=casadi_fabs(a10);
-  a11=arg[1][1];
-  a10=(a10*a11);
-  a10=(a10*a11);
-  a01=(casadi_real)(a01<a10);
-  a10=(a01*a08);
-  a12=(a03-a01);
-  a12=(a12*a09);
-  a10=(a10+a12);
-  res[0][5]=a10;
-  a01=(a03-a01);
-  a10=state_17;
-  a12=(a10+a03);
-  a09=arg[2][30];
-  a09=(a09/a05);
-  a09=(a09+a06);
-  a09=floorf(a09);
-  a12=casadi_fmin(a12,a09);
-  a01=(a01*a12);
-  res[0][6]=a01;
-  a12=state_24;
-  a12=(a12+a02);
-  a02=10.f;
-  a12=(a12/a02);
-  res[0][7]=a12;
-  a06=state_19;
-  a01=(casadi_real)(a09<=a01);
-  a05=state_18;
-  a05=(a12-a05);
-  a05=casadi_fabs(a05);
-  a05=(a05*a11);
-  a13=arg[2][32];
-  a05=(casadi_real)(a05<=a13);
-  a05=(a01*a05);
-  a13=state_23;
-  a13=(a13+a00);
-  a13=(a13/a02);
-  a02=casadi_fabs(a13);
-  a00=arg[2][35];
-  a02=(casadi_real)(a02<=a00);
-  a02=(a05*a02);
-  a00=-1.0000000000000001e-01f;
-  a14=arg[2][34];
-  a14=(a00/a14);
-  a14=expf(a14);
-  a14=(a03-a14);
-  a02=(a02*a14);
-  a14=(a12*a11);
-  a14=(a13-a14);
-  a14=(a14-a06);
-  a02=(a02*a14);
-  a06=(a06+a02);
-  res[0][8]=a06;
-  a02=state_20;
-  a14=casadi_fabs(a13);
-  a15=arg[2][38];
-  a14=(casadi_real)(a14<=a15);
-  a05=(a05*a14);
-  a14=arg[2][39];
-  a15=(casadi_real)(a14<=a11);
-  a05=(a05*a15);
-  a15=arg[2][37];
-  a15=(a00/a15);
-  a15=expf(a15);
-  a15=(a03-a15);
-  a05=(a05*a15);
-  a04=(a04*a12);
-  a14=casadi_fmax(a11,a14);
-  a04=(a04/a14);
-  a08=(a08-a04);
-  a08=(a08-a02);
-  a05=(a05*a08);
-  a02=(a02+a05);
-  res[0][9]=a02;
-  a05=state_21;
-  a08=arg[2][41];
-  a00=(a00/a08);
-  a00=expf(a00);
-  a00=(a03-a00);
-  a12=(a12/a11);
-  a12=(a12-a05);
-  a00=(a00*a12);
-  a05=(a05+a00);
-  res[0][10]=a05;
-  a10=(casadi_real)(a10<a09);
-  a10=(a01*a10);
-  a09=(a10*a05);
-  a03=(a03-a10);
-  a10=state_22;
-  a03=(a03*a10);
-  a09=(a09+a03);
-  res[0][11]=a09;
-  a03=0.f;
-  res[0][12]=a03;
-  res[0][13]=a03;
-  a03=9.f;
-  res[0][14]=a03;
-  a03=2048.f;
-  a13=casadi_fabs(a13);
-  a10=arg[2][42];
-  a13=(casadi_real)(a13<=a10);
-  a01=(a01*a13);
-  a13=arg[2][40];
-  a05=(a05-a09);
-  a05=(a05*a11);
-  a05=(a05*a11);
-  a05=casadi_fabs(a05);
-  a13=(casadi_real)(a13<a05);
-  a01=(a01*a13);
-  a13=(a01+a07);
-  a01=(a01*a07);
-  a13=(a13-a01);
-  a03=(a03*a13);
-  a13=8192.f;
-  a01=arg[2][33];
+  a01=(a08+a07);
+  a08=(a08*a07);
+  a01=(a01-a08);
+  a03=(a03*a01);
+  a01=8192.f;
+  a08=arg[2][33];
   a06=casadi_fabs(a06);
-  a01=(casadi_real)(a01<a06);
-  a13=(a13*a01);
-  a03=(a03+a13);
-  a13=16384.f;
-  a01=arg[2][36];
+  a08=(casadi_real)(a08<a06);
+  a01=(a01*a08);
+  a03=(a03+a01);
+  a01=16384.f;
+  a08=arg[2][36];
   a02=casadi_fabs(a02);
-  a01=(casadi_real)(a01<a02);
-  a13=(a13*a01);
-  a03=(a03+a13);
-  res[0][15]=a03;
+  a08=(casadi_real)(a08<a02);
+  a01=(a01*a08);
+  a03=(a03+a01);
+  res[0][14]=a03;
   return 0;
 }
 
 /*
- * vse_kf2dof_kernel_checks: 163 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * vse_kf2dof_kernel_checks: 162 operations (CasADi SX instructions)
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] params[43]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
@@ -388,15 +386,15 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
  *     steady_band, settle_band, lateral_check_limit, lateral_check_time, lateral_check_range,
  *     steering_offset_limit, steering_offset_time, steering_offset_range, steering_offset_speed,
  *     steer_check_limit, steer_check_time, steer_check_range
- * res[0] checks_next[16]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ * res[0] checks_next[15]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_guard:(state[27],input[4],params[43])->(decisions[6]) */
+/* vse_kf2dof_kernel_guard:(state[26],input[4],params[43])->(decisions[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7;
@@ -445,11 +443,11 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_guard: 40 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] params[43]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
@@ -466,7 +464,7 @@ CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_guard(const casadi_real** arg, casadi
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_active:(state[27],input[4],params[43])->(state_next[11],output[4]) */
+/* vse_kf2dof_kernel_active:(state[26],input[4],params[43])->(state_next[11],output[4]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -807,7 +805,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_7 = arg[0][7];
   const casadi_real state_8 = arg[0][8];
   const casadi_real state_9 = arg[0][9];
-  const casadi_real state_26 = arg[0][26];
+  const casadi_real state_25 = arg[0][25];
   res[0][0]=a30;
   a18=(a25*a18);
   a24=(a14*a24);
@@ -944,7 +942,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][0]=a15;
   res[1][1]=a30;
   res[1][2]=a05;
-  a05=state_26;
+  a05=state_25;
   a16=(casadi_real)(a18<a16);
   a26=(casadi_real)((a26!=0.f)||(a16!=0.f));
   a26=(casadi_real)((a00!=0.f)&&(a26!=0.f));
@@ -964,11 +962,11 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_active: 483 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] params[43]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,
  *     cornering_stiffness_front, cornering_stiffness_rear, delta_max, vx_max, ay_max, r_max,
@@ -987,7 +985,7 @@ CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_active(const casadi_real** arg, casad
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_held:(state[27],input[4],decisions[6],params[43])->(state_next[11],output[4]) */
+/* vse_kf2dof_kernel_held:(state[26],input[4],decisions[6],params[43])->(state_next[11],output[4]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6;
@@ -1049,11 +1047,11 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_held: 47 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  * arg[3] params[43]: mass, yaw_inertia, cg_to_front_axle, cg_to_rear_axle, wheelbase,

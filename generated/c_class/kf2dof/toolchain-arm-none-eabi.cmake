@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 807ac18baf455cad55f84047df56cc6198948c7668ac6f88682526bd061ed13a
-# Operations: step 451, input checks 143 a run (every check_period), init 66 (CasADi SX instructions).
+# Operations: step 451, input checks 142 a run (every check_period), init 65 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 

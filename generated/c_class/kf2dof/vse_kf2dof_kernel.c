@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 807ac18baf455cad55f84047df56cc6198948c7668ac6f88682526bd061ed13a
- * Operations: step 451, input checks 143 a run (every check_period), init 66 (CasADi SX instructions).
+ * Operations: step 451, input checks 142 a run (every check_period), init 65 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */
@@ -89,7 +89,7 @@ static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
 
 /* Configuration this file was compiled with */
 
-/* vse_kf2dof_kernel_init:(input[4])->(state[27]) */
+/* vse_kf2dof_kernel_init:(input[4])->(state[26]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10;
@@ -147,10 +147,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][12]=a00;
   res[0][13]=a01;
   res[0][14]=a00;
-  res[0][15]=a00;
-  res[0][16]=a04;
-  res[0][17]=a00;
-  res[0][18]=a01;
+  res[0][15]=a04;
+  res[0][16]=a00;
+  res[0][17]=a01;
+  res[0][18]=a00;
   res[0][19]=a00;
   res[0][20]=a00;
   res[0][21]=a00;
@@ -158,33 +158,33 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][23]=a00;
   res[0][24]=a00;
   res[0][25]=a00;
-  res[0][26]=a00;
   return 0;
 }
 
 /*
- * vse_kf2dof_kernel_init: 66 operations (CasADi SX instructions)
+ * vse_kf2dof_kernel_init: 65 operations (CasADi SX instructions)
  * arg[0] input[4]: delta, vx, ay, r
- * res[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * res[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_checks:(state[27],input[4])->(checks_next[16]) */
+/* vse_kf2dof_kernel_checks:(state[26],input[4])->(checks_next[15]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15;
+  casadi_real a12, a13, a14, a15, a16, a17;
   a00=arg[1][2];
   const casadi_real state_11 = arg[0][11];
   const casadi_real state_12 = arg[0][12];
   const casadi_real state_13 = arg[0][13];
   const casadi_real state_14 = arg[0][14];
+  const casadi_real state_15 = arg[0][15];
   const casadi_real state_16 = arg[0][16];
   const casadi_real state_17 = arg[0][17];
   const casadi_real state_18 = arg[0][18];
@@ -193,7 +193,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_21 = arg[0][21];
   const casadi_real state_22 = arg[0][22];
   const casadi_real state_23 = arg[0][23];
-  const casadi_real state_24 = arg[0][24];
   res[0][0]=a00;
   a01=state_11;
   a01=(casadi_real)(a00==a01);
@@ -213,149 +212,148 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=casadi_fmin(a06,a04);
   a05=(a05*a06);
   res[0][3]=a05;
+  a06=5.8200000000000007e-01;
+  a07=arg[1][0];
+  a08=state_15;
+  a09=(a07-a08);
+  a09=casadi_fabs(a09);
+  a10=arg[1][1];
+  a09=(a09*a10);
+  a09=(a09*a10);
+  a06=(casadi_real)(a06<a09);
+  a09=(a06*a07);
+  a11=(a03-a06);
+  a11=(a11*a08);
+  a09=(a09+a11);
+  res[0][4]=a09;
+  a06=(a03-a06);
+  a09=state_16;
+  a11=(a09+a03);
+  a08=3.;
+  a11=casadi_fmin(a11,a08);
+  a06=(a06*a11);
+  res[0][5]=a06;
+  a11=state_23;
+  a11=(a11+a02);
+  a02=10.;
+  a11=(a11/a02);
+  res[0][6]=a11;
+  a12=state_18;
+  a13=1.8126924692201818e-01;
+  a06=(casadi_real)(a08<=a06);
+  a14=state_17;
+  a14=(a11-a14);
+  a14=casadi_fabs(a14);
+  a14=(a14*a10);
+  a15=5.9999999999999998e-01;
+  a14=(casadi_real)(a14<=a15);
+  a14=(a06*a14);
+  a15=state_22;
+  a15=(a15+a00);
+  a15=(a15/a02);
+  a02=casadi_fabs(a15);
+  a00=1.5000000000000000e+00;
+  a02=(casadi_real)(a02<=a00);
+  a02=(a14*a02);
+  a13=(a13*a02);
+  a02=(a11*a10);
+  a02=(a15-a02);
+  a02=(a02-a12);
+  a13=(a13*a02);
+  a12=(a12+a13);
+  res[0][7]=a12;
+  a13=state_19;
+  a02=1.9801326693244747e-02;
+  a16=casadi_fabs(a15);
+  a17=5.0000000000000000e-01;
+  a16=(casadi_real)(a16<=a17);
+  a14=(a14*a16);
+  a16=15.;
+  a17=(casadi_real)(a16<=a10);
+  a14=(a14*a17);
+  a02=(a02*a14);
+  a14=2.9100000000000001e+00;
+  a14=(a14*a11);
+  a16=casadi_fmax(a10,a16);
+  a14=(a14/a16);
+  a07=(a07-a14);
+  a07=(a07-a13);
+  a02=(a02*a07);
+  a13=(a13+a02);
+  res[0][8]=a13;
+  a02=state_20;
+  a07=8.6466471676338730e-01;
+  a11=(a11/a10);
+  a11=(a11-a02);
+  a07=(a07*a11);
+  a02=(a02+a07);
+  res[0][9]=a02;
+  a09=(casadi_real)(a09<a08);
+  a09=(a06*a09);
+  a08=(a09*a02);
+  a03=(a03-a09);
+  a09=state_21;
+  a03=(a03*a09);
+  a08=(a08+a03);
+  res[0][10]=a08;
+  a03=0.;
+  res[0][11]=a03;
+  res[0][12]=a03;
+  a03=9.;
+  res[0][13]=a03;
+  a03=2048.;
+  a15=casadi_fabs(a15);
+  a09=6.;
+  a15=(casadi_real)(a15<=a09);
+  a06=(a06*a15);
+  a02=(a02-a08);
+  a02=(a02*a10);
+  a02=(a02*a10);
+  a02=casadi_fabs(a02);
+  a00=(casadi_real)(a00<a02);
+  a06=(a06*a00);
   a01=(casadi_real)(a04<=a01);
   a04=(casadi_real)(a04<=a05);
   a05=(a01+a04);
   a01=(a01*a04);
   a05=(a05-a01);
-  res[0][4]=a05;
-  a01=5.8200000000000007e-01;
-  a04=arg[1][0];
-  a06=state_16;
-  a07=(a04-a06);
-  a07=casadi_fabs(a07);
-  a08=arg[1][1];
-  a07=(a07*a08);
-  a07=(a07*a08);
-  a01=(casadi_real)(a01<a07);
-  a07=(a01*a04);
-  a09=(a03-a01);
-  a09=(a09*a06);
-  a07=(a07+a09);
-  res[0][5]=a07;
-  a01=(a03-a01);
-  a07=state_17;
-  a09=(a07+a03);
-  a06=3.;
-  a09=casadi_fmin(a09,a06);
-  a01=(a01*a09);
-  res[0][6]=a01;
-  a09=state_24;
-  a09=(a09+a02);
-  a02=10.;
-  a09=(a09/a02);
-  res[0][7]=a09;
-  a10=state_19;
-  a11=1.8126924692201818e-01;
-  a01=(casadi_real)(a06<=a01);
-  a12=state_18;
-  a12=(a09-a12);
+  a01=(a06+a05);
+  a06=(a06*a05);
+  a01=(a01-a06);
+  a03=(a03*a01);
+  a01=8192.;
+  a06=4.0000000000000002e-01;
   a12=casadi_fabs(a12);
-  a12=(a12*a08);
-  a13=5.9999999999999998e-01;
-  a12=(casadi_real)(a12<=a13);
-  a12=(a01*a12);
-  a13=state_23;
-  a13=(a13+a00);
-  a13=(a13/a02);
-  a02=casadi_fabs(a13);
-  a00=1.5000000000000000e+00;
-  a02=(casadi_real)(a02<=a00);
-  a02=(a12*a02);
-  a11=(a11*a02);
-  a02=(a09*a08);
-  a02=(a13-a02);
-  a02=(a02-a10);
-  a11=(a11*a02);
-  a10=(a10+a11);
-  res[0][8]=a10;
-  a11=state_20;
-  a02=1.9801326693244747e-02;
-  a14=casadi_fabs(a13);
-  a15=5.0000000000000000e-01;
-  a14=(casadi_real)(a14<=a15);
-  a12=(a12*a14);
-  a14=15.;
-  a15=(casadi_real)(a14<=a08);
-  a12=(a12*a15);
-  a02=(a02*a12);
-  a12=2.9100000000000001e+00;
-  a12=(a12*a09);
-  a14=casadi_fmax(a08,a14);
-  a12=(a12/a14);
-  a04=(a04-a12);
-  a04=(a04-a11);
-  a02=(a02*a04);
-  a11=(a11+a02);
-  res[0][9]=a11;
-  a02=state_21;
-  a04=8.6466471676338730e-01;
-  a09=(a09/a08);
-  a09=(a09-a02);
-  a04=(a04*a09);
-  a02=(a02+a04);
-  res[0][10]=a02;
-  a07=(casadi_real)(a07<a06);
-  a07=(a01*a07);
-  a06=(a07*a02);
-  a03=(a03-a07);
-  a07=state_22;
-  a03=(a03*a07);
-  a06=(a06+a03);
-  res[0][11]=a06;
-  a03=0.;
-  res[0][12]=a03;
-  res[0][13]=a03;
-  a03=9.;
-  res[0][14]=a03;
-  a03=2048.;
+  a06=(casadi_real)(a06<a12);
+  a01=(a01*a06);
+  a03=(a03+a01);
+  a01=16384.;
+  a06=1.6999999999999999e-03;
   a13=casadi_fabs(a13);
-  a07=6.;
-  a13=(casadi_real)(a13<=a07);
-  a01=(a01*a13);
-  a02=(a02-a06);
-  a02=(a02*a08);
-  a02=(a02*a08);
-  a02=casadi_fabs(a02);
-  a00=(casadi_real)(a00<a02);
-  a01=(a01*a00);
-  a00=(a01+a05);
-  a01=(a01*a05);
-  a00=(a00-a01);
-  a03=(a03*a00);
-  a00=8192.;
-  a01=4.0000000000000002e-01;
-  a10=casadi_fabs(a10);
-  a01=(casadi_real)(a01<a10);
-  a00=(a00*a01);
-  a03=(a03+a00);
-  a00=16384.;
-  a01=1.6999999999999999e-03;
-  a11=casadi_fabs(a11);
-  a01=(casadi_real)(a01<a11);
-  a00=(a00*a01);
-  a03=(a03+a00);
-  res[0][15]=a03;
+  a06=(casadi_real)(a06<a13);
+  a01=(a01*a06);
+  a03=(a03+a01);
+  res[0][14]=a03;
   return 0;
 }
 
 /*
- * vse_kf2dof_kernel_checks: 143 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * vse_kf2dof_kernel_checks: 142 operations (CasADi SX instructions)
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
- * res[0] checks_next[16]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ * res[0] checks_next[15]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_guard:(state[27],input[4])->(decisions[6]) */
+/* vse_kf2dof_kernel_guard:(state[26],input[4])->(decisions[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8;
@@ -402,11 +400,11 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_guard: 38 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  */
@@ -414,7 +412,7 @@ CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_guard(const casadi_real** arg, casadi
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_active:(state[27],input[4])->(state_next[11],output[4]) */
+/* vse_kf2dof_kernel_active:(state[26],input[4])->(state_next[11],output[4]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -709,7 +707,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_7 = arg[0][7];
   const casadi_real state_8 = arg[0][8];
   const casadi_real state_9 = arg[0][9];
-  const casadi_real state_26 = arg[0][26];
+  const casadi_real state_25 = arg[0][25];
   res[0][0]=a21;
   a15=(a27*a15);
   a29=(a22*a29);
@@ -822,7 +820,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[1][0]=a12;
   res[1][1]=a21;
   res[1][2]=a04;
-  a04=state_26;
+  a04=state_25;
   a13=(casadi_real)(a01<a13);
   a09=(casadi_real)((a09!=0.)||(a13!=0.));
   a09=(casadi_real)((a00!=0.)&&(a09!=0.));
@@ -842,11 +840,11 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_active: 413 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] state_next[11]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding
@@ -856,7 +854,7 @@ CASADI_SYMBOL_EXPORT int vse_kf2dof_kernel_active(const casadi_real** arg, casad
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_kf2dof_kernel_held:(state[27],input[4],decisions[6])->(state_next[11],output[4]) */
+/* vse_kf2dof_kernel_held:(state[26],input[4],decisions[6])->(state_next[11],output[4]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6;
@@ -917,11 +915,11 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_kf2dof_kernel_held: 46 operations (CasADi SX instructions)
- * arg[0] state[27]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
+ * arg[0] state[26]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,
  *     residual_hold_left, linear_range_hold_left, holding, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r,
- *     checks_countdown, checks_code
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown,
+ *     checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  * res[0] state_next[11]: vy, r, P_vy_vy, P_vy_r, P_r_r, delta_prev, vx_prev, residual,

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 1858642307f2085bc8af81bb2226cd0392be3b42ec42b2b337ffd54ad3ef8e24
- * Operations: step 1197, input checks 245 a run (every check_period), init 97 (CasADi SX instructions).
+ * Operations: step 1192, input checks 244 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -68,7 +68,7 @@ typedef struct {
 } vse_switching_output;
 
 /** Number of state entries. */
-#define VSE_SWITCHING_N_STATE (48)
+#define VSE_SWITCHING_N_STATE (47)
 
 /** Index of each entry of vse_switching_state.x. */
 enum {
@@ -102,24 +102,23 @@ enum {
     VSE_SWITCHING_STATE_FROZEN_AY_REPEATS = 27, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_SWITCHING_STATE_FROZEN_R_VALUE = 28, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_SWITCHING_STATE_FROZEN_R_REPEATS = 29, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_SWITCHING_STATE_FROZEN_NOW = 30, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_SWITCHING_STATE_STEADY_DELTA = 31, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_SWITCHING_STATE_STEADY_SAMPLES = 32, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_SWITCHING_STATE_STEADY_R = 33, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_SWITCHING_STATE_LATERAL_RESIDUAL = 34, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_SWITCHING_STATE_STEERING_OFFSET = 35, /* rad: learned steering-angle zero (road wheel) */
-    VSE_SWITCHING_STATE_CURVATURE = 36, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_SWITCHING_STATE_STEADY_CURVATURE = 37, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_SWITCHING_STATE_WHEEL_YAW_RESIDUAL = 38, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_SWITCHING_STATE_WHEEL_YAW_RATE = 39, /* rad/s: yaw-rate check: mean |non-driven wheels' yaw rate| (wheel_check_scale) */
-    VSE_SWITCHING_STATE_WHEEL_YAW_HOLD_LEFT = 40, /* -: samples YAW_RATE_MISMATCH stays raised (wheel_check_hold) */
-    VSE_SWITCHING_STATE_FROZEN_RECOVERY_LEFT = 41, /* -: samples INPUT_FROZEN stays raised after a frozen input moved again (frozen_recovery; samples of the checks' period) */
-    VSE_SWITCHING_STATE_CHECKS_SUM_AY = 42, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_SWITCHING_STATE_CHECKS_SUM_R = 43, /* rad/s: input checks: sum of r since their last run */
-    VSE_SWITCHING_STATE_CHECKS_SUM_AX = 44, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_R_DIFF = 45, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_SWITCHING_STATE_CHECKS_COUNTDOWN = 46, /* -: input checks: active samples to their next run (check_period) */
-    VSE_SWITCHING_STATE_CHECKS_CODE = 47 /* -: input checks: the status bits of their last run */
+    VSE_SWITCHING_STATE_STEADY_DELTA = 30, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_SWITCHING_STATE_STEADY_SAMPLES = 31, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_SWITCHING_STATE_STEADY_R = 32, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_SWITCHING_STATE_LATERAL_RESIDUAL = 33, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_SWITCHING_STATE_STEERING_OFFSET = 34, /* rad: learned steering-angle zero (road wheel) */
+    VSE_SWITCHING_STATE_CURVATURE = 35, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_SWITCHING_STATE_STEADY_CURVATURE = 36, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_SWITCHING_STATE_WHEEL_YAW_RESIDUAL = 37, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_SWITCHING_STATE_WHEEL_YAW_RATE = 38, /* rad/s: yaw-rate check: mean |non-driven wheels' yaw rate| (wheel_check_scale) */
+    VSE_SWITCHING_STATE_WHEEL_YAW_HOLD_LEFT = 39, /* -: samples YAW_RATE_MISMATCH stays raised (wheel_check_hold) */
+    VSE_SWITCHING_STATE_FROZEN_RECOVERY_LEFT = 40, /* -: samples INPUT_FROZEN stays raised after a frozen input moved again (frozen_recovery; samples of the checks' period) */
+    VSE_SWITCHING_STATE_CHECKS_SUM_AY = 41, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_SWITCHING_STATE_CHECKS_SUM_R = 42, /* rad/s: input checks: sum of r since their last run */
+    VSE_SWITCHING_STATE_CHECKS_SUM_AX = 43, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_R_DIFF = 44, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_SWITCHING_STATE_CHECKS_COUNTDOWN = 45, /* -: input checks: active samples to their next run (check_period) */
+    VSE_SWITCHING_STATE_CHECKS_CODE = 46 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 1101bbde7b9b1182613e9262c2a944f548a480057acc7bedc5a4b49fa46bb51e
-# Operations: step 7663, input checks 188 a run (every check_period), init 115 (CasADi SX instructions).
+# Operations: step 7655, input checks 187 a run (every check_period), init 114 (CasADi SX instructions).
 # longitudinal_force: wheel_speeds
 # sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 1101bbde7b9b1182613e9262c2a944f548a480057acc7bedc5a4b49fa46bb51e
- * Operations: step 7663, input checks 188 a run (every check_period), init 115 (CasADi SX instructions).
+ * Operations: step 7655, input checks 187 a run (every check_period), init 114 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
@@ -116,7 +116,6 @@ void vse_ukf_step(vse_ukf_state *state, const vse_ukf_input *in, vse_ukf_output 
     current[49] = state->x[49];
     current[50] = state->x[50];
     current[51] = state->x[51];
-    current[52] = state->x[52];
     /* prepare the 6 items, run one kernel on each, then finish the step */
     arg[0] = current;
     arg[1] = u;

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3fffa704e727e973388db4f82379931ba36b99eef681e19f45f8aee3696a419c
- * Operations: step 7770, input checks 187 a run (every check_period), init 127 (CasADi SX instructions).
+ * Operations: step 7762, input checks 186 a run (every check_period), init 126 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */

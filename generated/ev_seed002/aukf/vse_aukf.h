@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 3fffa704e727e973388db4f82379931ba36b99eef681e19f45f8aee3696a419c
- * Operations: step 7770, input checks 187 a run (every check_period), init 127 (CasADi SX instructions).
+ * Operations: step 7762, input checks 186 a run (every check_period), init 126 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */
@@ -73,7 +73,7 @@ typedef struct {
 } vse_aukf_output;
 
 /** Number of state entries. */
-#define VSE_AUKF_N_STATE (63)
+#define VSE_AUKF_N_STATE (62)
 
 /** Index of each entry of vse_aukf_state.x. */
 enum {
@@ -124,22 +124,21 @@ enum {
     VSE_AUKF_STATE_FROZEN_AY_REPEATS = 44, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_AUKF_STATE_FROZEN_R_VALUE = 45, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_AUKF_STATE_FROZEN_R_REPEATS = 46, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_AUKF_STATE_FROZEN_NOW = 47, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_AUKF_STATE_STEADY_DELTA = 48, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_AUKF_STATE_STEADY_SAMPLES = 49, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_AUKF_STATE_STEADY_R = 50, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_AUKF_STATE_LATERAL_RESIDUAL = 51, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_AUKF_STATE_STEERING_OFFSET = 52, /* rad: learned steering-angle zero (road wheel) */
-    VSE_AUKF_STATE_CURVATURE = 53, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_AUKF_STATE_STEADY_CURVATURE = 54, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_AUKF_STATE_WHEEL_YAW_RESIDUAL = 55, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_AUKF_STATE_CHECKS_SUM_AY = 56, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_R = 57, /* rad/s: input checks: sum of r since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_AX = 58, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 59, /* rad/s: input checks: sum of omega_f_diff since their last run */
-    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 60, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_AUKF_STATE_CHECKS_COUNTDOWN = 61, /* -: input checks: active samples to their next run (check_period) */
-    VSE_AUKF_STATE_CHECKS_CODE = 62 /* -: input checks: the status bits of their last run */
+    VSE_AUKF_STATE_STEADY_DELTA = 47, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_AUKF_STATE_STEADY_SAMPLES = 48, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_AUKF_STATE_STEADY_R = 49, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_AUKF_STATE_LATERAL_RESIDUAL = 50, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_AUKF_STATE_STEERING_OFFSET = 51, /* rad: learned steering-angle zero (road wheel) */
+    VSE_AUKF_STATE_CURVATURE = 52, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_AUKF_STATE_STEADY_CURVATURE = 53, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_AUKF_STATE_WHEEL_YAW_RESIDUAL = 54, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_AUKF_STATE_CHECKS_SUM_AY = 55, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_R = 56, /* rad/s: input checks: sum of r since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_AX = 57, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 58, /* rad/s: input checks: sum of omega_f_diff since their last run */
+    VSE_AUKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 59, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_AUKF_STATE_CHECKS_COUNTDOWN = 60, /* -: input checks: active samples to their next run (check_period) */
+    VSE_AUKF_STATE_CHECKS_CODE = 61 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 50c5cc60884ff428440f9c328b3980aaff0ee35b0614696fbafcc6039ad46621
- * Operations: step 7562, input checks 187 a run (every check_period), init 112 (CasADi SX instructions).
+ * Operations: step 7554, input checks 186 a run (every check_period), init 111 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */
@@ -113,7 +113,6 @@ void vse_ukf_step(vse_ukf_state *state, const vse_ukf_input *in, vse_ukf_output 
     current[46] = state->x[46];
     current[47] = state->x[47];
     current[48] = state->x[48];
-    current[49] = state->x[49];
     /* prepare the 6 items, run one kernel on each, then finish the step */
     arg[0] = current;
     arg[1] = u;

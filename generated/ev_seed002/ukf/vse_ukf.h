@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 50c5cc60884ff428440f9c328b3980aaff0ee35b0614696fbafcc6039ad46621
- * Operations: step 7562, input checks 187 a run (every check_period), init 112 (CasADi SX instructions).
+ * Operations: step 7554, input checks 186 a run (every check_period), init 111 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
  */
@@ -73,7 +73,7 @@ typedef struct {
 } vse_ukf_output;
 
 /** Number of state entries. */
-#define VSE_UKF_N_STATE (50)
+#define VSE_UKF_N_STATE (49)
 
 /** Index of each entry of vse_ukf_state.x. */
 enum {
@@ -111,22 +111,21 @@ enum {
     VSE_UKF_STATE_FROZEN_AY_REPEATS = 31, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_UKF_STATE_FROZEN_R_VALUE = 32, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_UKF_STATE_FROZEN_R_REPEATS = 33, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_UKF_STATE_FROZEN_NOW = 34, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_UKF_STATE_STEADY_DELTA = 35, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_UKF_STATE_STEADY_SAMPLES = 36, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_UKF_STATE_STEADY_R = 37, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_UKF_STATE_LATERAL_RESIDUAL = 38, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_UKF_STATE_STEERING_OFFSET = 39, /* rad: learned steering-angle zero (road wheel) */
-    VSE_UKF_STATE_CURVATURE = 40, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_UKF_STATE_STEADY_CURVATURE = 41, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_UKF_STATE_WHEEL_YAW_RESIDUAL = 42, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_UKF_STATE_CHECKS_SUM_AY = 43, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_R = 44, /* rad/s: input checks: sum of r since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_AX = 45, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 46, /* rad/s: input checks: sum of omega_f_diff since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 47, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_UKF_STATE_CHECKS_COUNTDOWN = 48, /* -: input checks: active samples to their next run (check_period) */
-    VSE_UKF_STATE_CHECKS_CODE = 49 /* -: input checks: the status bits of their last run */
+    VSE_UKF_STATE_STEADY_DELTA = 34, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_UKF_STATE_STEADY_SAMPLES = 35, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_UKF_STATE_STEADY_R = 36, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_UKF_STATE_LATERAL_RESIDUAL = 37, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_UKF_STATE_STEERING_OFFSET = 38, /* rad: learned steering-angle zero (road wheel) */
+    VSE_UKF_STATE_CURVATURE = 39, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_UKF_STATE_STEADY_CURVATURE = 40, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_UKF_STATE_WHEEL_YAW_RESIDUAL = 41, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_UKF_STATE_CHECKS_SUM_AY = 42, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_R = 43, /* rad/s: input checks: sum of r since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_AX = 44, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 45, /* rad/s: input checks: sum of omega_f_diff since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 46, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_UKF_STATE_CHECKS_COUNTDOWN = 47, /* -: input checks: active samples to their next run (check_period) */
+    VSE_UKF_STATE_CHECKS_CODE = 48 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 5ef54ee9df8541a34478977c548fa352fc6ec8504a66b9d4ad9780491dfafe40
- * Operations: step 7873, input checks 190 a run (every check_period), init 130 (CasADi SX instructions).
+ * Operations: step 7865, input checks 189 a run (every check_period), init 129 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: e611174a6419de965cf8d9d2331562baddf9ab76c879d4a9cf7ecc9eec0d9016
- * Operations: step 575, input checks 143 a run (every check_period), init 105 (CasADi SX instructions).
+ * Operations: step 579, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -91,7 +91,7 @@ static casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 
-/* vse_fusion_kernel_init:(input[4])->(state[41]) */
+/* vse_fusion_kernel_init:(input[4])->(state[40]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -189,10 +189,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][26]=a02;
   res[0][27]=a03;
   res[0][28]=a02;
-  res[0][29]=a02;
-  res[0][30]=a06;
-  res[0][31]=a02;
-  res[0][32]=a03;
+  res[0][29]=a06;
+  res[0][30]=a02;
+  res[0][31]=a03;
+  res[0][32]=a02;
   res[0][33]=a02;
   res[0][34]=a02;
   res[0][35]=a02;
@@ -200,34 +200,34 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][37]=a02;
   res[0][38]=a02;
   res[0][39]=a02;
-  res[0][40]=a02;
   return 0;
 }
 
 /*
- * vse_fusion_kernel_init: 105 operations (CasADi SX instructions)
+ * vse_fusion_kernel_init: 104 operations (CasADi SX instructions)
  * arg[0] input[4]: delta, vx, ay, r
- * res[0] state[41]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * res[0] state[40]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, holding, kin_offset,
- *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now,
- *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
- *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta,
+ *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
+ *     checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_init(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_fusion_kernel_checks:(state[41],input[4])->(checks_next[16]) */
+/* vse_fusion_kernel_checks:(state[40],input[4])->(checks_next[15]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15;
+  casadi_real a12, a13, a14, a15, a16, a17;
   a00=arg[1][2];
   const casadi_real state_25 = arg[0][25];
   const casadi_real state_26 = arg[0][26];
   const casadi_real state_27 = arg[0][27];
   const casadi_real state_28 = arg[0][28];
+  const casadi_real state_29 = arg[0][29];
   const casadi_real state_30 = arg[0][30];
   const casadi_real state_31 = arg[0][31];
   const casadi_real state_32 = arg[0][32];
@@ -236,7 +236,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_35 = arg[0][35];
   const casadi_real state_36 = arg[0][36];
   const casadi_real state_37 = arg[0][37];
-  const casadi_real state_38 = arg[0][38];
   res[0][0]=a00;
   a01=state_25;
   a01=(casadi_real)(a00==a01);
@@ -256,150 +255,149 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=casadi_fmin(a06,a04);
   a05=(a05*a06);
   res[0][3]=a05;
+  a06=5.9000000000000008e-01;
+  a07=arg[1][0];
+  a08=state_29;
+  a09=(a07-a08);
+  a09=casadi_fabs(a09);
+  a10=arg[1][1];
+  a09=(a09*a10);
+  a09=(a09*a10);
+  a06=(casadi_real)(a06<a09);
+  a09=(a06*a07);
+  a11=(a03-a06);
+  a11=(a11*a08);
+  a09=(a09+a11);
+  res[0][4]=a09;
+  a06=(a03-a06);
+  a09=state_30;
+  a11=(a09+a03);
+  a08=3.;
+  a11=casadi_fmin(a11,a08);
+  a06=(a06*a11);
+  res[0][5]=a06;
+  a11=state_37;
+  a11=(a11+a02);
+  a02=10.;
+  a11=(a11/a02);
+  res[0][6]=a11;
+  a12=state_32;
+  a13=1.8126924692201818e-01;
+  a06=(casadi_real)(a08<=a06);
+  a14=state_31;
+  a14=(a11-a14);
+  a14=casadi_fabs(a14);
+  a14=(a14*a10);
+  a15=5.9999999999999998e-01;
+  a14=(casadi_real)(a14<=a15);
+  a14=(a06*a14);
+  a15=state_36;
+  a15=(a15+a00);
+  a15=(a15/a02);
+  a02=casadi_fabs(a15);
+  a00=1.5000000000000000e+00;
+  a02=(casadi_real)(a02<=a00);
+  a02=(a14*a02);
+  a13=(a13*a02);
+  a02=(a11*a10);
+  a02=(a15-a02);
+  a02=(a02-a12);
+  a13=(a13*a02);
+  a12=(a12+a13);
+  res[0][7]=a12;
+  a13=state_33;
+  a02=1.9801326693244747e-02;
+  a16=casadi_fabs(a15);
+  a17=5.0000000000000000e-01;
+  a16=(casadi_real)(a16<=a17);
+  a14=(a14*a16);
+  a16=15.;
+  a17=(casadi_real)(a16<=a10);
+  a14=(a14*a17);
+  a02=(a02*a14);
+  a14=2.9500000000000002e+00;
+  a14=(a14*a11);
+  a16=casadi_fmax(a10,a16);
+  a14=(a14/a16);
+  a07=(a07-a14);
+  a07=(a07-a13);
+  a02=(a02*a07);
+  a13=(a13+a02);
+  res[0][8]=a13;
+  a02=state_34;
+  a07=8.6466471676338730e-01;
+  a11=(a11/a10);
+  a11=(a11-a02);
+  a07=(a07*a11);
+  a02=(a02+a07);
+  res[0][9]=a02;
+  a09=(casadi_real)(a09<a08);
+  a09=(a06*a09);
+  a08=(a09*a02);
+  a03=(a03-a09);
+  a09=state_35;
+  a03=(a03*a09);
+  a08=(a08+a03);
+  res[0][10]=a08;
+  a03=0.;
+  res[0][11]=a03;
+  res[0][12]=a03;
+  a03=9.;
+  res[0][13]=a03;
+  a03=2048.;
+  a15=casadi_fabs(a15);
+  a09=6.;
+  a15=(casadi_real)(a15<=a09);
+  a06=(a06*a15);
+  a02=(a02-a08);
+  a02=(a02*a10);
+  a02=(a02*a10);
+  a02=casadi_fabs(a02);
+  a00=(casadi_real)(a00<a02);
+  a06=(a06*a00);
   a01=(casadi_real)(a04<=a01);
   a04=(casadi_real)(a04<=a05);
   a05=(a01+a04);
   a01=(a01*a04);
   a05=(a05-a01);
-  res[0][4]=a05;
-  a01=5.9000000000000008e-01;
-  a04=arg[1][0];
-  a06=state_30;
-  a07=(a04-a06);
-  a07=casadi_fabs(a07);
-  a08=arg[1][1];
-  a07=(a07*a08);
-  a07=(a07*a08);
-  a01=(casadi_real)(a01<a07);
-  a07=(a01*a04);
-  a09=(a03-a01);
-  a09=(a09*a06);
-  a07=(a07+a09);
-  res[0][5]=a07;
-  a01=(a03-a01);
-  a07=state_31;
-  a09=(a07+a03);
-  a06=3.;
-  a09=casadi_fmin(a09,a06);
-  a01=(a01*a09);
-  res[0][6]=a01;
-  a09=state_38;
-  a09=(a09+a02);
-  a02=10.;
-  a09=(a09/a02);
-  res[0][7]=a09;
-  a10=state_33;
-  a11=1.8126924692201818e-01;
-  a01=(casadi_real)(a06<=a01);
-  a12=state_32;
-  a12=(a09-a12);
+  a01=(a06+a05);
+  a06=(a06*a05);
+  a01=(a01-a06);
+  a03=(a03*a01);
+  a01=8192.;
+  a06=4.0000000000000002e-01;
   a12=casadi_fabs(a12);
-  a12=(a12*a08);
-  a13=5.9999999999999998e-01;
-  a12=(casadi_real)(a12<=a13);
-  a12=(a01*a12);
-  a13=state_37;
-  a13=(a13+a00);
-  a13=(a13/a02);
-  a02=casadi_fabs(a13);
-  a00=1.5000000000000000e+00;
-  a02=(casadi_real)(a02<=a00);
-  a02=(a12*a02);
-  a11=(a11*a02);
-  a02=(a09*a08);
-  a02=(a13-a02);
-  a02=(a02-a10);
-  a11=(a11*a02);
-  a10=(a10+a11);
-  res[0][8]=a10;
-  a11=state_34;
-  a02=1.9801326693244747e-02;
-  a14=casadi_fabs(a13);
-  a15=5.0000000000000000e-01;
-  a14=(casadi_real)(a14<=a15);
-  a12=(a12*a14);
-  a14=15.;
-  a15=(casadi_real)(a14<=a08);
-  a12=(a12*a15);
-  a02=(a02*a12);
-  a12=2.9500000000000002e+00;
-  a12=(a12*a09);
-  a14=casadi_fmax(a08,a14);
-  a12=(a12/a14);
-  a04=(a04-a12);
-  a04=(a04-a11);
-  a02=(a02*a04);
-  a11=(a11+a02);
-  res[0][9]=a11;
-  a02=state_35;
-  a04=8.6466471676338730e-01;
-  a09=(a09/a08);
-  a09=(a09-a02);
-  a04=(a04*a09);
-  a02=(a02+a04);
-  res[0][10]=a02;
-  a07=(casadi_real)(a07<a06);
-  a07=(a01*a07);
-  a06=(a07*a02);
-  a03=(a03-a07);
-  a07=state_36;
-  a03=(a03*a07);
-  a06=(a06+a03);
-  res[0][11]=a06;
-  a03=0.;
-  res[0][12]=a03;
-  res[0][13]=a03;
-  a03=9.;
-  res[0][14]=a03;
-  a03=2048.;
+  a06=(casadi_real)(a06<a12);
+  a01=(a01*a06);
+  a03=(a03+a01);
+  a01=16384.;
+  a06=1.6999999999999999e-03;
   a13=casadi_fabs(a13);
-  a07=6.;
-  a13=(casadi_real)(a13<=a07);
-  a01=(a01*a13);
-  a02=(a02-a06);
-  a02=(a02*a08);
-  a02=(a02*a08);
-  a02=casadi_fabs(a02);
-  a00=(casadi_real)(a00<a02);
-  a01=(a01*a00);
-  a00=(a01+a05);
-  a01=(a01*a05);
-  a00=(a00-a01);
-  a03=(a03*a00);
-  a00=8192.;
-  a01=4.0000000000000002e-01;
-  a10=casadi_fabs(a10);
-  a01=(casadi_real)(a01<a10);
-  a00=(a00*a01);
-  a03=(a03+a00);
-  a00=16384.;
-  a01=1.6999999999999999e-03;
-  a11=casadi_fabs(a11);
-  a01=(casadi_real)(a01<a11);
-  a00=(a00*a01);
-  a03=(a03+a00);
-  res[0][15]=a03;
+  a06=(casadi_real)(a06<a13);
+  a01=(a01*a06);
+  a03=(a03+a01);
+  res[0][14]=a03;
   return 0;
 }
 
 /*
- * vse_fusion_kernel_checks: 143 operations (CasADi SX instructions)
- * arg[0] state[41]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * vse_fusion_kernel_checks: 142 operations (CasADi SX instructions)
+ * arg[0] state[40]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, holding, kin_offset,
- *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now,
+ *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta,
+ *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
+ *     checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ * arg[1] input[4]: delta, vx, ay, r
+ * res[0] checks_next[15]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
  *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
  *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
- * arg[1] input[4]: delta, vx, ay, r
- * res[0] checks_next[16]: frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_fusion_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_fusion_kernel_guard:(state[41],input[4])->(decisions[6]) */
+/* vse_fusion_kernel_guard:(state[40],input[4])->(decisions[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6, a7, a8;
@@ -446,12 +444,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_fusion_kernel_guard: 38 operations (CasADi SX instructions)
- * arg[0] state[41]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * arg[0] state[40]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, holding, kin_offset,
- *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now,
- *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
- *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta,
+ *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
+ *     checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  */
@@ -459,14 +457,14 @@ CASADI_SYMBOL_EXPORT int vse_fusion_kernel_guard(const casadi_real** arg, casadi
   return casadi_f2(arg, res, iw, w, mem);
 }
 
-/* vse_fusion_kernel_active:(state[41],input[4])->(state_next[25],output[5]) */
+/* vse_fusion_kernel_active:(state[40],input[4])->(state_next[25],output[5]) */
 static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
   casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
-  casadi_real a48;
+  casadi_real a48, a49;
   a00=8.6816196568537740e-01;
   a01=arg[1][2];
   a00=(a00*a01);
@@ -494,8 +492,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_21 = arg[0][21];
   const casadi_real state_22 = arg[0][22];
   const casadi_real state_24 = arg[0][24];
-  const casadi_real state_29 = arg[0][29];
-  const casadi_real state_40 = arg[0][40];
+  const casadi_real state_26 = arg[0][26];
+  const casadi_real state_28 = arg[0][28];
+  const casadi_real state_39 = arg[0][39];
   res[0][0]=a00;
   a02=state_0;
   res[0][1]=a02;
@@ -580,453 +579,457 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][11]=a19;
   a19=state_12;
   res[0][12]=a19;
-  a19=state_29;
-  a22=5.0000000000000000e-01;
-  a12=8.3333333333333329e-02;
-  a17=3.3333333333333333e-02;
-  a24=1.7857142857142856e-02;
-  a25=1.1111111111111112e-02;
-  a26=7.5757575757575760e-03;
-  a27=5.4945054945054949e-03;
-  a28=2.5000000000000001e-03;
-  a29=-1.3634831460674158e+02;
-  a30=state_20;
-  a31=casadi_fmax(a30,a09);
-  a31=casadi_fmin(a31,a11);
-  a11=(a29/a31);
-  a11=(a28*a11);
-  a32=-1.7347770491803280e+02;
-  a32=(a32/a31);
-  a32=(a28*a32);
-  a33=(a11*a32);
-  a34=1.3668539325842696e+01;
-  a35=(a34/a31);
-  a35=(a35-a31);
-  a35=(a28*a35);
-  a36=7.9770491803278691e+00;
-  a36=(a36/a31);
-  a36=(a28*a36);
-  a31=(a35*a36);
-  a33=(a33-a31);
-  a27=(a27*a33);
+  a19=2.;
+  a22=state_26;
+  a22=(casadi_real)(a19<=a22);
+  a12=state_28;
+  a12=(casadi_real)(a19<=a12);
+  a22=(casadi_real)((a22!=0.)||(a12!=0.));
+  a12=5.0000000000000000e-01;
+  a17=8.3333333333333329e-02;
+  a24=3.3333333333333333e-02;
+  a25=1.7857142857142856e-02;
+  a26=1.1111111111111112e-02;
+  a27=7.5757575757575760e-03;
+  a28=5.4945054945054949e-03;
+  a29=2.5000000000000001e-03;
+  a30=-1.3634831460674158e+02;
+  a31=state_20;
+  a32=casadi_fmax(a31,a09);
+  a32=casadi_fmin(a32,a11);
+  a11=(a30/a32);
+  a11=(a29*a11);
+  a33=-1.7347770491803280e+02;
+  a33=(a33/a32);
+  a33=(a29*a33);
+  a34=(a11*a33);
+  a35=1.3668539325842696e+01;
+  a36=(a35/a32);
+  a36=(a36-a32);
+  a36=(a29*a36);
+  a37=7.9770491803278691e+00;
+  a37=(a37/a32);
+  a37=(a29*a37);
+  a32=(a36*a37);
+  a34=(a34-a32);
+  a28=(a28*a34);
+  a28=(a14-a28);
+  a32=7.6923076923076927e-02;
+  a38=7.1428571428571425e-02;
+  a39=(a11+a33);
+  a38=(a38*a39);
+  a38=(a14+a38);
+  a32=(a32*a38);
+  a32=(a32*a39);
+  a28=(a28+a32);
+  a27=(a27*a28);
+  a27=(a27*a34);
   a27=(a14-a27);
-  a31=7.6923076923076927e-02;
-  a37=7.1428571428571425e-02;
-  a38=(a11+a32);
-  a37=(a37*a38);
-  a37=(a14+a37);
-  a31=(a31*a37);
-  a31=(a31*a38);
-  a27=(a27+a31);
+  a32=9.0909090909090912e-02;
+  a40=6.4102564102564100e-03;
+  a40=(a40*a38);
+  a40=(a40*a34);
+  a40=(a14-a40);
+  a28=(a17*a28);
+  a28=(a28*a39);
+  a40=(a40+a28);
+  a32=(a32*a40);
+  a32=(a32*a39);
+  a27=(a27+a32);
   a26=(a26*a27);
-  a26=(a26*a33);
+  a26=(a26*a34);
   a26=(a14-a26);
-  a31=9.0909090909090912e-02;
-  a39=6.4102564102564100e-03;
-  a39=(a39*a37);
-  a39=(a39*a33);
-  a39=(a14-a39);
-  a27=(a12*a27);
-  a27=(a27*a38);
-  a39=(a39+a27);
-  a31=(a31*a39);
-  a31=(a31*a38);
-  a26=(a26+a31);
+  a32=9.0909090909090922e-03;
+  a32=(a32*a40);
+  a32=(a32*a34);
+  a32=(a14-a32);
+  a40=1.0000000000000001e-01;
+  a40=(a40*a27);
+  a40=(a40*a39);
+  a32=(a32+a40);
+  a01=(a01*a32);
+  a01=(a01*a39);
+  a26=(a26+a01);
   a25=(a25*a26);
-  a25=(a25*a33);
+  a25=(a25*a34);
   a25=(a14-a25);
-  a31=9.0909090909090922e-03;
-  a31=(a31*a39);
-  a31=(a31*a33);
-  a31=(a14-a31);
-  a39=1.0000000000000001e-01;
-  a39=(a39*a26);
-  a39=(a39*a38);
-  a31=(a31+a39);
-  a01=(a01*a31);
-  a01=(a01*a38);
+  a01=1.4285714285714285e-01;
+  a40=1.3888888888888888e-02;
+  a40=(a40*a32);
+  a40=(a40*a34);
+  a40=(a14-a40);
+  a32=1.2500000000000000e-01;
+  a32=(a32*a26);
+  a32=(a32*a39);
+  a40=(a40+a32);
+  a01=(a01*a40);
+  a01=(a01*a39);
   a25=(a25+a01);
   a24=(a24*a25);
-  a24=(a24*a33);
-  a24=(a14-a24);
-  a01=1.4285714285714285e-01;
-  a39=1.3888888888888888e-02;
-  a39=(a39*a31);
-  a39=(a39*a33);
-  a39=(a14-a39);
-  a31=1.2500000000000000e-01;
-  a31=(a31*a25);
-  a31=(a31*a38);
-  a39=(a39+a31);
-  a01=(a01*a39);
-  a01=(a01*a38);
-  a24=(a24+a01);
-  a17=(a17*a24);
-  a17=(a17*a33);
-  a17=(a14-a17);
-  a01=2.3809523809523808e-02;
-  a01=(a01*a39);
-  a01=(a01*a33);
-  a01=(a14-a01);
-  a39=1.6666666666666666e-01;
-  a24=(a39*a24);
-  a24=(a24*a38);
-  a01=(a01+a24);
-  a13=(a13*a01);
-  a13=(a13*a38);
-  a17=(a17+a13);
-  a12=(a12*a17);
-  a12=(a12*a33);
-  a12=(a14-a12);
-  a13=3.3333333333333331e-01;
-  a24=5.0000000000000003e-02;
-  a24=(a24*a01);
-  a24=(a24*a33);
-  a24=(a14-a24);
-  a01=2.5000000000000000e-01;
-  a01=(a01*a17);
-  a01=(a01*a38);
-  a24=(a24+a01);
-  a13=(a13*a24);
-  a13=(a13*a38);
-  a12=(a12+a13);
-  a12=(a22*a12);
-  a13=(a12*a33);
-  a13=(a14-a13);
-  a39=(a39*a24);
-  a39=(a39*a33);
-  a39=(a14-a39);
-  a38=(a12*a38);
-  a38=(a39+a38);
-  a33=(a38*a11);
-  a33=(a13+a33);
-  a24=casadi_sq(a33);
-  a01=(a38*a35);
-  a17=(a38*a36);
-  a31=(a01*a17);
-  a24=(a24+a31);
-  a31=casadi_sq(a24);
-  a25=(a33*a01);
-  a38=(a38*a32);
-  a13=(a13+a38);
-  a38=(a01*a13);
-  a25=(a25+a38);
-  a38=(a17*a33);
-  a26=(a13*a17);
-  a38=(a38+a26);
-  a26=(a25*a38);
-  a31=(a31+a26);
-  a26=state_14;
-  a27=(a31*a26);
-  a37=(a24*a25);
-  a40=(a17*a01);
-  a41=casadi_sq(a13);
-  a40=(a40+a41);
-  a41=(a25*a40);
-  a37=(a37+a41);
-  a41=state_15;
-  a42=(a37*a41);
-  a27=(a27+a42);
-  a42=7.1629213483146074e+01;
-  a11=(a12*a11);
-  a11=(a39+a11);
-  a11=(a42*a11);
-  a43=5.4344262295081968e+01;
-  a35=(a12*a35);
-  a35=(a43*a35);
-  a11=(a11+a35);
-  a11=(a28*a11);
-  a33=(a33*a11);
-  a36=(a12*a36);
-  a36=(a42*a36);
-  a12=(a12*a32);
-  a39=(a39+a12);
-  a43=(a43*a39);
-  a36=(a36+a43);
-  a36=(a28*a36);
-  a01=(a01*a36);
-  a33=(a33+a01);
-  a33=(a33+a11);
-  a01=(a24*a33);
-  a17=(a17*a11);
-  a13=(a13*a36);
-  a17=(a17+a13);
-  a17=(a17+a36);
-  a36=(a25*a17);
-  a01=(a01+a36);
-  a01=(a01+a33);
-  a36=state_19;
-  a01=(a01*a36);
-  a27=(a27+a01);
-  a01=state_16;
-  a13=(a31*a01);
-  a11=state_17;
-  a43=(a37*a11);
-  a13=(a13+a43);
-  a43=(a13*a31);
-  a39=(a31*a11);
-  a12=state_18;
-  a32=(a37*a12);
-  a39=(a39+a32);
-  a32=(a39*a37);
-  a43=(a43+a32);
-  a43=(a43+a28);
-  a29=(a29/a10);
-  a28=(a43*a29);
-  a24=(a38*a24);
-  a32=(a40*a38);
-  a24=(a24+a32);
-  a13=(a13*a24);
-  a25=(a38*a25);
-  a32=casadi_sq(a40);
-  a25=(a25+a32);
-  a39=(a39*a25);
-  a13=(a13+a39);
-  a34=(a34/a10);
-  a39=(a13*a34);
-  a28=(a28+a39);
-  a01=(a24*a01);
-  a39=(a25*a11);
-  a01=(a01+a39);
-  a39=(a01*a24);
-  a11=(a24*a11);
-  a12=(a25*a12);
-  a11=(a11+a12);
-  a12=(a11*a25);
-  a39=(a39+a12);
-  a12=1.0000000000000000e-04;
-  a39=(a39+a12);
-  a12=3.0669999999999997e-04;
-  a32=(a39+a12);
-  a35=(a29*a43);
-  a01=(a01*a31);
-  a11=(a11*a37);
-  a01=(a01+a11);
-  a11=(a34*a01);
-  a35=(a35+a11);
-  a35=(a35*a29);
-  a11=(a29*a13);
-  a37=(a34*a39);
-  a11=(a11+a37);
-  a37=(a11*a34);
-  a35=(a35+a37);
-  a37=8.9660000000000004e-02;
-  a35=(a35+a37);
-  a31=(a35*a32);
-  a44=(a01*a29);
-  a45=(a39*a34);
-  a44=(a44+a45);
-  a45=(a11*a44);
-  a31=(a31-a45);
-  a32=(a32/a31);
-  a45=(a28*a32);
-  a46=(a44/a31);
-  a47=(a13*a46);
-  a45=(a45-a47);
-  a47=4.0000000000000002e-01;
-  a48=state_24;
-  a47=(a47*a48);
-  a00=(a00-a47);
-  a47=(a29*a27);
-  a24=(a24*a26);
-  a25=(a25*a41);
-  a24=(a24+a25);
-  a38=(a38*a33);
-  a40=(a40*a17);
-  a38=(a38+a40);
-  a38=(a38+a17);
-  a38=(a38*a36);
-  a24=(a24+a38);
-  a38=(a34*a24);
-  a47=(a47+a38);
-  a00=(a00-a47);
-  a42=(a42*a07);
-  a00=(a00-a42);
-  a42=(a45*a00);
-  a35=(a35/a31);
-  a47=(a13*a35);
-  a11=(a11/a31);
-  a28=(a28*a11);
-  a47=(a47-a28);
-  a28=(a06-a24);
-  a31=(a47*a28);
-  a42=(a42+a31);
-  a27=(a27+a42);
-  a42=((a19!=0.)?a27:0.);
-  a19=(casadi_real)(a19==0.);
-  a31=state_13;
-  a38=1.0000000000000000e-02;
-  a18=(a18*a30);
-  a23=(a23-a18);
-  a23=(a23-a48);
-  a38=(a38*a23);
-  a38=(a31+a38);
-  a23=5.0000000000000001e-03;
-  a26=(a26-a31);
-  a23=(a23*a26);
-  a38=(a38+a23);
-  a38=((a19!=0.)?a38:0.);
-  a42=(a42+a38);
-  res[0][13]=a42;
-  res[0][14]=a27;
-  a32=(a44*a32);
-  a46=(a39*a46);
-  a32=(a32-a46);
-  a46=(a32*a00);
-  a35=(a39*a35);
-  a44=(a44*a11);
-  a35=(a35-a44);
-  a44=(a35*a28);
-  a46=(a46+a44);
-  a24=(a24+a46);
-  res[0][15]=a24;
-  a24=(a45*a29);
-  a24=(a14-a24);
-  a46=(a24*a43);
-  a44=(a45*a34);
-  a44=(a44+a47);
-  a11=(a44*a01);
-  a46=(a46-a11);
-  a11=(a46*a24);
-  a24=(a24*a13);
-  a38=(a44*a39);
-  a24=(a24-a38);
-  a44=(a24*a44);
-  a11=(a11-a44);
-  a44=(a37*a45);
-  a45=(a44*a45);
-  a38=(a12*a47);
-  a47=(a38*a47);
-  a45=(a45+a47);
-  a11=(a11+a45);
-  res[0][16]=a11;
-  a34=(a32*a34);
-  a34=(a34+a35);
-  a34=(a14-a34);
   a24=(a24*a34);
-  a29=(a32*a29);
-  a46=(a46*a29);
-  a24=(a24-a46);
-  a44=(a44*a32);
-  a38=(a38*a35);
-  a44=(a44+a38);
-  a24=(a24+a44);
-  res[0][17]=a24;
-  a39=(a34*a39);
-  a13=(a29*a13);
-  a39=(a39-a13);
+  a24=(a14-a24);
+  a01=2.3809523809523808e-02;
+  a01=(a01*a40);
+  a01=(a01*a34);
+  a01=(a14-a01);
+  a40=1.6666666666666666e-01;
+  a25=(a40*a25);
+  a25=(a25*a39);
+  a01=(a01+a25);
+  a13=(a13*a01);
+  a13=(a13*a39);
+  a24=(a24+a13);
+  a17=(a17*a24);
+  a17=(a17*a34);
+  a17=(a14-a17);
+  a13=3.3333333333333331e-01;
+  a25=5.0000000000000003e-02;
+  a25=(a25*a01);
+  a25=(a25*a34);
+  a25=(a14-a25);
+  a01=2.5000000000000000e-01;
+  a01=(a01*a24);
+  a01=(a01*a39);
+  a25=(a25+a01);
+  a13=(a13*a25);
+  a13=(a13*a39);
+  a17=(a17+a13);
+  a17=(a12*a17);
+  a13=(a17*a34);
+  a13=(a14-a13);
+  a40=(a40*a25);
+  a40=(a40*a34);
+  a40=(a14-a40);
+  a39=(a17*a39);
+  a39=(a40+a39);
+  a34=(a39*a11);
+  a34=(a13+a34);
+  a25=casadi_sq(a34);
+  a01=(a39*a36);
+  a24=(a39*a37);
+  a32=(a01*a24);
+  a25=(a25+a32);
+  a32=casadi_sq(a25);
+  a26=(a34*a01);
+  a39=(a39*a33);
+  a13=(a13+a39);
+  a39=(a01*a13);
+  a26=(a26+a39);
+  a39=(a24*a34);
+  a27=(a13*a24);
+  a39=(a39+a27);
+  a27=(a26*a39);
+  a32=(a32+a27);
+  a27=state_14;
+  a28=(a32*a27);
+  a38=(a25*a26);
+  a41=(a24*a01);
+  a42=casadi_sq(a13);
+  a41=(a41+a42);
+  a42=(a26*a41);
+  a38=(a38+a42);
+  a42=state_15;
+  a43=(a38*a42);
+  a28=(a28+a43);
+  a43=7.1629213483146074e+01;
+  a11=(a17*a11);
+  a11=(a40+a11);
+  a11=(a43*a11);
+  a44=5.4344262295081968e+01;
+  a36=(a17*a36);
+  a36=(a44*a36);
+  a11=(a11+a36);
+  a11=(a29*a11);
+  a34=(a34*a11);
+  a37=(a17*a37);
+  a37=(a43*a37);
+  a17=(a17*a33);
+  a40=(a40+a17);
+  a44=(a44*a40);
+  a37=(a37+a44);
+  a37=(a29*a37);
+  a01=(a01*a37);
+  a34=(a34+a01);
+  a34=(a34+a11);
+  a01=(a25*a34);
+  a24=(a24*a11);
+  a13=(a13*a37);
+  a24=(a24+a13);
+  a24=(a24+a37);
+  a37=(a26*a24);
+  a01=(a01+a37);
+  a01=(a01+a34);
+  a37=state_19;
+  a01=(a01*a37);
+  a28=(a28+a01);
+  a01=state_16;
+  a13=(a32*a01);
+  a11=state_17;
+  a44=(a38*a11);
+  a13=(a13+a44);
+  a44=(a13*a32);
+  a40=(a32*a11);
+  a17=state_18;
+  a33=(a38*a17);
+  a40=(a40+a33);
+  a33=(a40*a38);
+  a44=(a44+a33);
+  a44=(a44+a29);
+  a30=(a30/a10);
+  a29=(a44*a30);
+  a25=(a39*a25);
+  a33=(a41*a39);
+  a25=(a25+a33);
+  a13=(a13*a25);
+  a26=(a39*a26);
+  a33=casadi_sq(a41);
+  a26=(a26+a33);
+  a40=(a40*a26);
+  a13=(a13+a40);
+  a35=(a35/a10);
+  a40=(a13*a35);
+  a29=(a29+a40);
+  a01=(a25*a01);
+  a40=(a26*a11);
+  a01=(a01+a40);
+  a40=(a01*a25);
+  a11=(a25*a11);
+  a17=(a26*a17);
+  a11=(a11+a17);
+  a17=(a11*a26);
+  a40=(a40+a17);
+  a17=1.0000000000000000e-04;
+  a40=(a40+a17);
+  a17=3.0669999999999997e-04;
+  a33=(a40+a17);
+  a36=(a30*a44);
+  a01=(a01*a32);
+  a11=(a11*a38);
+  a01=(a01+a11);
+  a11=(a35*a01);
+  a36=(a36+a11);
+  a36=(a36*a30);
+  a11=(a30*a13);
+  a38=(a35*a40);
+  a11=(a11+a38);
+  a38=(a11*a35);
+  a36=(a36+a38);
+  a38=8.9660000000000004e-02;
+  a36=(a36+a38);
+  a32=(a36*a33);
+  a45=(a01*a30);
+  a46=(a40*a35);
+  a45=(a45+a46);
+  a46=(a11*a45);
+  a32=(a32-a46);
+  a33=(a33/a32);
+  a46=(a29*a33);
+  a47=(a45/a32);
+  a48=(a13*a47);
+  a46=(a46-a48);
+  a48=4.0000000000000002e-01;
+  a49=state_24;
+  a48=(a48*a49);
+  a00=(a00-a48);
+  a48=(a30*a28);
+  a25=(a25*a27);
+  a26=(a26*a42);
+  a25=(a25+a26);
   a39=(a39*a34);
-  a34=(a34*a01);
-  a43=(a29*a43);
-  a34=(a34-a43);
-  a34=(a34*a29);
-  a39=(a39-a34);
-  a37=(a37*a32);
-  a37=(a37*a32);
-  a12=(a12*a35);
-  a12=(a12*a35);
-  a37=(a37+a12);
-  a39=(a39+a37);
-  res[0][18]=a39;
+  a41=(a41*a24);
+  a39=(a39+a41);
+  a39=(a39+a24);
+  a39=(a39*a37);
+  a25=(a25+a39);
+  a39=(a35*a25);
+  a48=(a48+a39);
+  a00=(a00-a48);
+  a43=(a43*a07);
+  a00=(a00-a43);
+  a43=(a46*a00);
+  a36=(a36/a32);
+  a48=(a13*a36);
+  a11=(a11/a32);
+  a29=(a29*a11);
+  a48=(a48-a29);
+  a29=(a06-a25);
+  a32=(a48*a29);
+  a43=(a43+a32);
+  a28=(a28+a43);
+  a43=((a22!=0.)?a28:0.);
+  a22=(casadi_real)(a22==0.);
+  a32=state_13;
+  a39=1.0000000000000000e-02;
+  a18=(a18*a31);
+  a23=(a23-a18);
+  a23=(a23-a49);
+  a39=(a39*a23);
+  a39=(a32+a39);
+  a23=5.0000000000000001e-03;
+  a27=(a27-a32);
+  a23=(a23*a27);
+  a39=(a39+a23);
+  a39=((a22!=0.)?a39:0.);
+  a43=(a43+a39);
+  res[0][13]=a43;
+  res[0][14]=a28;
+  a33=(a45*a33);
+  a47=(a40*a47);
+  a33=(a33-a47);
+  a47=(a33*a00);
+  a36=(a40*a36);
+  a45=(a45*a11);
+  a36=(a36-a45);
+  a45=(a36*a29);
+  a47=(a47+a45);
+  a25=(a25+a47);
+  res[0][15]=a25;
+  a25=(a46*a30);
+  a25=(a14-a25);
+  a47=(a25*a44);
+  a45=(a46*a35);
+  a45=(a45+a48);
+  a11=(a45*a01);
+  a47=(a47-a11);
+  a11=(a47*a25);
+  a25=(a25*a13);
+  a39=(a45*a40);
+  a25=(a25-a39);
+  a45=(a25*a45);
+  a11=(a11-a45);
+  a45=(a38*a46);
+  a46=(a45*a46);
+  a39=(a17*a48);
+  a48=(a39*a48);
+  a46=(a46+a48);
+  a11=(a11+a46);
+  res[0][16]=a11;
+  a35=(a33*a35);
+  a35=(a35+a36);
+  a35=(a14-a35);
+  a25=(a25*a35);
+  a30=(a33*a30);
+  a47=(a47*a30);
+  a25=(a25-a47);
+  a45=(a45*a33);
+  a39=(a39*a36);
+  a45=(a45+a39);
+  a25=(a25+a45);
+  res[0][17]=a25;
+  a40=(a35*a40);
+  a13=(a30*a13);
+  a40=(a40-a13);
+  a40=(a40*a35);
+  a35=(a35*a01);
+  a44=(a30*a44);
+  a35=(a35-a44);
+  a35=(a35*a30);
+  a40=(a40-a35);
+  a38=(a38*a33);
+  a38=(a38*a33);
+  a17=(a17*a36);
+  a17=(a17*a36);
+  a38=(a38+a17);
+  a40=(a40+a38);
+  res[0][18]=a40;
   res[0][19]=a07;
   res[0][20]=a08;
   a07=9.5122942450071402e-01;
-  a39=state_21;
-  a07=(a07*a39);
-  a39=4.8770575499285984e-02;
+  a40=state_21;
+  a07=(a07*a40);
+  a40=4.8770575499285984e-02;
   a00=casadi_sq(a00);
-  a37=8.9640360000000002e-02;
-  a00=(a00/a37);
-  a37=100.;
-  a00=casadi_fmin(a00,a37);
-  a28=casadi_sq(a28);
-  a12=3.0660010000000006e-04;
-  a28=(a28/a12);
-  a28=casadi_fmin(a28,a37);
-  a00=(a00+a28);
-  a28=2.;
-  a00=(a00/a28);
-  a39=(a39*a00);
-  a07=(a07+a39);
+  a38=8.9640360000000002e-02;
+  a00=(a00/a38);
+  a38=100.;
+  a00=casadi_fmin(a00,a38);
+  a29=casadi_sq(a29);
+  a17=3.0660010000000006e-04;
+  a29=(a29/a17);
+  a29=casadi_fmin(a29,a38);
+  a00=(a00+a29);
+  a00=(a00/a19);
+  a40=(a40*a00);
+  a07=(a07+a40);
   res[0][21]=a07;
   a07=(casadi_real)(a20<a07);
-  a37=((a07!=0.)?a37:0.);
-  a39=(casadi_real)(a07==0.);
+  a38=((a07!=0.)?a38:0.);
+  a40=(casadi_real)(a07==0.);
   a00=state_22;
-  a28=(a00-a14);
-  a12=0.;
-  a28=casadi_fmax(a28,a12);
-  a39=((a39!=0.)?a28:0.);
-  a37=(a37+a39);
-  res[0][22]=a37;
-  res[0][23]=a12;
-  a37=1.9801326693244747e-02;
-  a39=casadi_fmin(a03,a04);
+  a19=(a00-a14);
+  a29=0.;
+  a19=casadi_fmax(a19,a29);
+  a40=((a40!=0.)?a19:0.);
+  a38=(a38+a40);
+  res[0][22]=a38;
+  res[0][23]=a29;
+  a38=1.9801326693244747e-02;
+  a40=casadi_fmin(a03,a04);
   a03=casadi_fmax(a03,a04);
   a04=casadi_fmin(a03,a02);
-  a28=casadi_fmin(a39,a04);
-  a39=casadi_fmax(a39,a04);
+  a19=casadi_fmin(a40,a04);
+  a40=casadi_fmax(a40,a04);
   a03=casadi_fmax(a03,a02);
   a02=casadi_fmin(a03,a05);
-  a04=casadi_fmin(a39,a02);
-  a28=casadi_fmax(a28,a04);
-  a39=casadi_fmax(a39,a02);
+  a04=casadi_fmin(a40,a02);
+  a19=casadi_fmax(a19,a04);
+  a40=casadi_fmax(a40,a02);
   a03=casadi_fmax(a03,a05);
   a05=state_7;
   a03=casadi_fmin(a03,a05);
-  a39=casadi_fmin(a39,a03);
-  a28=casadi_fmax(a28,a39);
-  a39=(a28-a48);
-  a39=casadi_fabs(a39);
-  a39=(casadi_real)(a39<a22);
+  a40=casadi_fmin(a40,a03);
+  a19=casadi_fmax(a19,a40);
+  a40=(a19-a49);
+  a40=casadi_fabs(a40);
+  a40=(casadi_real)(a40<a12);
   a08=(a06*a08);
   a03=casadi_fabs(a08);
-  a03=(casadi_real)(a03<a22);
-  a39=(casadi_real)((a39!=0.)&&(a03!=0.));
-  a39=(casadi_real)((a14!=0.)&&(a39!=0.));
-  a37=(a37*a39);
+  a03=(casadi_real)(a03<a12);
+  a40=(casadi_real)((a40!=0.)&&(a03!=0.));
+  a40=(casadi_real)((a14!=0.)&&(a40!=0.));
+  a38=(a38*a40);
   a16=(a16-a08);
-  a16=(a16-a48);
-  a37=(a37*a16);
-  a48=(a48+a37);
-  res[0][24]=a48;
-  a28=casadi_fabs(a28);
-  a28=(a28/a09);
-  a28=casadi_fmax(a28,a12);
-  a28=casadi_fmin(a28,a14);
-  a28=(a28*a19);
-  a19=(a42/a10);
-  a19=atan(a19);
-  a09=(a28*a19);
-  a48=(a14-a28);
-  a10=(a27/a10);
+  a16=(a16-a49);
+  a38=(a38*a16);
+  a49=(a49+a38);
+  res[0][24]=a49;
+  a19=casadi_fabs(a19);
+  a19=(a19/a09);
+  a19=casadi_fmax(a19,a29);
+  a19=casadi_fmin(a19,a14);
+  a19=(a19*a22);
+  a22=(a43/a10);
+  a22=atan(a22);
+  a09=(a19*a22);
+  a49=(a14-a19);
+  a10=(a28/a10);
   a10=atan(a10);
-  a37=(a48*a10);
-  a09=(a09+a37);
+  a38=(a49*a10);
+  a09=(a09+a38);
   res[1][0]=a09;
-  a42=(a28*a42);
-  a48=(a48*a27);
-  a42=(a42+a48);
-  res[1][1]=a42;
+  a43=(a19*a43);
+  a49=(a49*a28);
+  a43=(a43+a49);
+  res[1][1]=a43;
   res[1][2]=a06;
-  res[1][3]=a28;
+  res[1][3]=a19;
   a15=(casadi_real)((a15!=0.)||(a21!=0.));
   a15=(casadi_real)((a14!=0.)&&(a15!=0.));
   a15=((a15!=0.)?a20:0.);
-  a20=state_40;
+  a20=state_39;
   a15=(a15+a20);
-  a12=(casadi_real)(a12<a00);
-  a07=(casadi_real)((a07!=0.)||(a12!=0.));
+  a29=(casadi_real)(a29<a00);
+  a07=(casadi_real)((a07!=0.)||(a29!=0.));
   a14=(casadi_real)((a14!=0.)&&(a07!=0.));
   a07=128.;
   a14=((a14!=0.)?a07:0.);
   a15=(a15+a14);
   a14=4096.;
   a07=2.5999999999999999e-02;
-  a19=(a19-a10);
-  a19=casadi_fabs(a19);
-  a28=(a28*a19);
-  a07=(casadi_real)(a07<a28);
+  a22=(a22-a10);
+  a22=casadi_fabs(a22);
+  a19=(a19*a22);
+  a07=(casadi_real)(a07<a19);
   a14=(a14*a07);
   a15=(a15+a14);
   res[1][4]=a15;
@@ -1034,13 +1037,13 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_fusion_kernel_active: 537 operations (CasADi SX instructions)
- * arg[0] state[41]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * vse_fusion_kernel_active: 541 operations (CasADi SX instructions)
+ * arg[0] state[40]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, holding, kin_offset,
- *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now,
- *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
- *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta,
+ *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
+ *     checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * res[0] state_next[25]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
@@ -1051,7 +1054,7 @@ CASADI_SYMBOL_EXPORT int vse_fusion_kernel_active(const casadi_real** arg, casad
   return casadi_f3(arg, res, iw, w, mem);
 }
 
-/* vse_fusion_kernel_held:(state[41],input[4],decisions[6])->(state_next[25],output[5]) */
+/* vse_fusion_kernel_held:(state[40],input[4],decisions[6])->(state_next[25],output[5]) */
 static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a0, a1, a2, a3, a4, a5, a6;
@@ -1150,12 +1153,12 @@ static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 
 /*
  * vse_fusion_kernel_held: 73 operations (CasADi SX instructions)
- * arg[0] state[41]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * arg[0] state[40]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, residual, residual_hold_left, holding, kin_offset,
- *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, frozen_now,
- *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
- *     steady_curvature, checks_sum_ay, checks_sum_r, checks_countdown, checks_code
+ *     frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats, steady_delta,
+ *     steady_samples, steady_r, lateral_residual, steering_offset, curvature, steady_curvature,
+ *     checks_sum_ay, checks_sum_r, checks_countdown, checks_code
  * arg[1] input[4]: delta, vx, ay, r
  * arg[2] decisions[6]: plausible_delta, plausible_vx, plausible_ay, plausible_r, low_speed, active
  * res[0] state_next[25]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,

@@ -6,7 +6,7 @@
  * Options: real=float, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: f3996086be869d284f1e005593ddef046aa37b03fe9e9c16229a5f923e007e3d
- * Operations: step 444, input checks 143 a run (every check_period), init 66 (CasADi SX instructions).
+ * Operations: step 444, input checks 142 a run (every check_period), init 65 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  */

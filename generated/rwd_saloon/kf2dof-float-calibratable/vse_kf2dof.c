@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: f3996086be869d284f1e005593ddef046aa37b03fe9e9c16229a5f923e007e3d
- * Operations: step 515, input checks 163 a run (every check_period), init 69 (CasADi SX instructions).
+ * Operations: step 515, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9030875ca65d27346f3c7bfd4a1a570bed06e259b36e89b588b9769072d4d27a
- * Operations: step 1192, input checks 247 a run (every check_period), init 97 (CasADi SX instructions).
+ * Operations: step 1187, input checks 246 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -92,7 +92,7 @@ static casadi_real casadi_fmax(casadi_real x, casadi_real y) {
 
 /* Configuration this file was compiled with */
 
-/* vse_switching_kernel_init:(input[7])->(state[48]) */
+/* vse_switching_kernel_init:(input[7])->(state[47]) */
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -176,10 +176,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][27]=a03;
   res[0][28]=a04;
   res[0][29]=a03;
-  res[0][30]=a03;
-  res[0][31]=a07;
-  res[0][32]=a03;
-  res[0][33]=a04;
+  res[0][30]=a07;
+  res[0][31]=a03;
+  res[0][32]=a04;
+  res[0][33]=a03;
   res[0][34]=a03;
   res[0][35]=a03;
   res[0][36]=a03;
@@ -193,19 +193,18 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][44]=a03;
   res[0][45]=a03;
   res[0][46]=a03;
-  res[0][47]=a03;
   return 0;
 }
 
 /*
- * vse_switching_kernel_init: 97 operations (CasADi SX instructions)
+ * vse_switching_kernel_init: 96 operations (CasADi SX instructions)
  * arg[0] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr
- * res[0] state[48]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * res[0] state[47]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding, kin_samples, kin_offset, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
  *     frozen_recovery_left, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_countdown, checks_code
  */
@@ -213,11 +212,12 @@ CASADI_SYMBOL_EXPORT int vse_switching_kernel_init(const casadi_real** arg, casa
   return casadi_f0(arg, res, iw, w, mem);
 }
 
-/* vse_switching_kernel_checks:(state[48],input[7])->(checks_next[24]) */
+/* vse_switching_kernel_checks:(state[47],input[7])->(checks_next[23]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26;
   a00=arg[1][2];
   a01=casadi_fabs(a00);
   a02=30.;
@@ -232,6 +232,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_27 = arg[0][27];
   const casadi_real state_28 = arg[0][28];
   const casadi_real state_29 = arg[0][29];
+  const casadi_real state_30 = arg[0][30];
   const casadi_real state_31 = arg[0][31];
   const casadi_real state_32 = arg[0][32];
   const casadi_real state_33 = arg[0][33];
@@ -246,7 +247,6 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   const casadi_real state_42 = arg[0][42];
   const casadi_real state_43 = arg[0][43];
   const casadi_real state_44 = arg[0][44];
-  const casadi_real state_45 = arg[0][45];
   res[0][0]=a02;
   a04=(casadi_real)(a00==a04);
   a04=(a01*a04);
@@ -275,241 +275,240 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a09=casadi_fmin(a09,a05);
   a08=(a08*a09);
   res[0][5]=a08;
-  a04=(casadi_real)(a05<=a04);
-  a06=(casadi_real)(a05<=a06);
-  a09=(a04+a06);
-  a04=(a04*a06);
-  a09=(a09-a04);
-  a05=(casadi_real)(a05<=a08);
-  a08=(a09+a05);
-  a09=(a09*a05);
-  a08=(a08-a09);
-  res[0][6]=a08;
   a09=5.9000000000000008e-01;
-  a05=arg[1][0];
-  a04=state_31;
-  a06=(a05-a04);
-  a06=casadi_fabs(a06);
-  a10=arg[1][1];
-  a06=(a06*a10);
-  a06=(a06*a10);
-  a09=(casadi_real)(a09<a06);
-  a06=(a09*a05);
-  a11=(a03-a09);
-  a11=(a11*a04);
-  a06=(a06+a11);
-  res[0][7]=a06;
-  a09=(a03-a09);
-  a06=state_32;
-  a11=(a06+a03);
-  a04=3.;
-  a11=casadi_fmin(a11,a04);
-  a09=(a09*a11);
-  res[0][8]=a09;
-  a11=state_43;
-  a11=(a11+a07);
-  a07=10.;
-  a11=(a11/a07);
-  res[0][9]=a11;
-  a12=state_34;
-  a13=1.8126924692201818e-01;
-  a09=(casadi_real)(a04<=a09);
-  a14=state_33;
-  a14=(a11-a14);
-  a14=casadi_fabs(a14);
-  a14=(a14*a10);
-  a15=5.9999999999999998e-01;
-  a14=(casadi_real)(a14<=a15);
-  a14=(a09*a14);
-  a15=state_42;
-  a15=(a15+a02);
-  a15=(a15/a07);
-  a02=casadi_fabs(a15);
-  a16=1.5000000000000000e+00;
-  a02=(casadi_real)(a02<=a16);
-  a02=(a14*a02);
-  a13=(a13*a02);
-  a02=(a11*a10);
-  a02=(a15-a02);
-  a02=(a02-a12);
-  a13=(a13*a02);
-  a12=(a12+a13);
-  res[0][10]=a12;
-  a13=state_35;
-  a02=1.9801326693244747e-02;
-  a17=casadi_fabs(a15);
-  a18=5.0000000000000000e-01;
-  a17=(casadi_real)(a17<=a18);
-  a14=(a14*a17);
-  a17=15.;
-  a18=(casadi_real)(a17<=a10);
-  a14=(a14*a18);
-  a02=(a02*a14);
-  a14=2.9500000000000002e+00;
+  a10=arg[1][0];
+  a11=state_30;
+  a12=(a10-a11);
+  a12=casadi_fabs(a12);
+  a13=arg[1][1];
+  a12=(a12*a13);
+  a12=(a12*a13);
+  a09=(casadi_real)(a09<a12);
+  a12=(a09*a10);
+  a14=(a03-a09);
   a14=(a14*a11);
-  a17=casadi_fmax(a10,a17);
-  a14=(a14/a17);
-  a14=(a05-a14);
-  a14=(a14-a13);
-  a02=(a02*a14);
-  a13=(a13+a02);
-  res[0][11]=a13;
-  a02=state_36;
-  a14=8.6466471676338730e-01;
-  a17=(a11/a10);
-  a17=(a17-a02);
-  a14=(a14*a17);
-  a02=(a02+a14);
-  res[0][12]=a02;
-  a06=(casadi_real)(a06<a04);
-  a06=(a09*a06);
-  a04=(a06*a02);
-  a06=(a03-a06);
-  a14=state_37;
-  a06=(a06*a14);
-  a04=(a04+a06);
-  res[0][13]=a04;
-  a06=state_38;
-  a14=6.3212055882855767e-01;
-  a17=state_44;
-  a01=((a01!=0.)?a00:0.);
-  a17=(a17+a01);
-  a17=(a17/a07);
+  a12=(a12+a14);
+  res[0][6]=a12;
+  a09=(a03-a09);
+  a12=state_31;
+  a14=(a12+a03);
+  a11=3.;
+  a14=casadi_fmin(a14,a11);
+  a09=(a09*a14);
+  res[0][7]=a09;
+  a14=state_42;
+  a14=(a14+a07);
+  a07=10.;
+  a14=(a14/a07);
+  res[0][8]=a14;
+  a15=state_33;
+  a16=1.8126924692201818e-01;
+  a09=(casadi_real)(a11<=a09);
+  a17=state_32;
+  a17=(a14-a17);
   a17=casadi_fabs(a17);
-  a17=(casadi_real)(a17<=a03);
-  a01=(a14*a17);
-  a00=3.3500000000000002e-01;
-  a18=state_45;
-  a19=arg[1][6];
-  a20=casadi_fabs(a19);
-  a21=400.;
-  a20=(casadi_real)(a20<=a21);
-  a22=arg[1][5];
-  a23=casadi_fabs(a22);
-  a23=(casadi_real)(a23<=a21);
-  a20=(a20*a23);
-  a19=(a19-a22);
-  a20=((a20!=0.)?a19:0.);
-  a18=(a18+a20);
+  a17=(a17*a13);
+  a18=5.9999999999999998e-01;
+  a17=(casadi_real)(a17<=a18);
+  a17=(a09*a17);
+  a18=state_41;
+  a18=(a18+a02);
   a18=(a18/a07);
-  a00=(a00*a18);
-  a18=1.6000000000000001e+00;
-  a05=cos(a05);
-  a18=(a18*a05);
-  a00=(a00/a18);
-  a11=(a11-a00);
-  a11=(a11-a06);
-  a01=(a01*a11);
-  a06=(a06+a01);
-  res[0][14]=a06;
-  a01=state_39;
-  a14=(a14*a17);
+  a02=casadi_fabs(a18);
+  a19=1.5000000000000000e+00;
+  a02=(casadi_real)(a02<=a19);
+  a02=(a17*a02);
+  a16=(a16*a02);
+  a02=(a14*a13);
+  a02=(a18-a02);
+  a02=(a02-a15);
+  a16=(a16*a02);
+  a15=(a15+a16);
+  res[0][9]=a15;
+  a16=state_34;
+  a02=1.9801326693244747e-02;
+  a20=casadi_fabs(a18);
+  a21=5.0000000000000000e-01;
+  a20=(casadi_real)(a20<=a21);
+  a17=(a17*a20);
+  a20=15.;
+  a21=(casadi_real)(a20<=a13);
+  a17=(a17*a21);
+  a02=(a02*a17);
+  a17=2.9500000000000002e+00;
+  a17=(a17*a14);
+  a20=casadi_fmax(a13,a20);
+  a17=(a17/a20);
+  a17=(a10-a17);
+  a17=(a17-a16);
+  a02=(a02*a17);
+  a16=(a16+a02);
+  res[0][10]=a16;
+  a02=state_35;
+  a17=8.6466471676338730e-01;
+  a20=(a14/a13);
+  a20=(a20-a02);
+  a17=(a17*a20);
+  a02=(a02+a17);
+  res[0][11]=a02;
+  a12=(casadi_real)(a12<a11);
+  a12=(a09*a12);
+  a11=(a12*a02);
+  a12=(a03-a12);
+  a17=state_36;
+  a12=(a12*a17);
+  a11=(a11+a12);
+  res[0][12]=a11;
+  a12=state_37;
+  a17=6.3212055882855767e-01;
+  a20=state_43;
+  a01=((a01!=0.)?a00:0.);
+  a20=(a20+a01);
+  a20=(a20/a07);
+  a20=casadi_fabs(a20);
+  a20=(casadi_real)(a20<=a03);
+  a01=(a17*a20);
+  a00=3.3500000000000002e-01;
+  a21=state_44;
+  a22=arg[1][6];
+  a23=casadi_fabs(a22);
+  a24=400.;
+  a23=(casadi_real)(a23<=a24);
+  a25=arg[1][5];
+  a26=casadi_fabs(a25);
+  a26=(casadi_real)(a26<=a24);
+  a23=(a23*a26);
+  a22=(a22-a25);
+  a23=((a23!=0.)?a22:0.);
+  a21=(a21+a23);
+  a21=(a21/a07);
+  a00=(a00*a21);
+  a21=1.6000000000000001e+00;
+  a10=cos(a10);
+  a21=(a21*a10);
+  a00=(a00/a21);
+  a14=(a14-a00);
+  a14=(a14-a12);
+  a01=(a01*a14);
+  a12=(a12+a01);
+  res[0][13]=a12;
+  a01=state_38;
+  a17=(a17*a20);
   a00=casadi_fabs(a00);
   a00=(a00-a01);
-  a14=(a14*a00);
-  a01=(a01+a14);
-  res[0][15]=a01;
-  a14=5.;
+  a17=(a17*a00);
+  a01=(a01+a17);
+  res[0][14]=a01;
+  a17=5.;
   a00=5.0000000000000003e-02;
-  a17=casadi_fabs(a06);
-  a00=(casadi_real)(a00<a17);
-  a17=1.0000000000000001e-01;
-  a17=(casadi_real)(a17<=a01);
-  a11=2.0000000000000001e-01;
-  a11=(a11*a01);
-  a06=casadi_fabs(a06);
-  a11=(casadi_real)(a11<a06);
-  a17=(a17*a11);
-  a11=(a00+a17);
-  a00=(a00*a17);
-  a11=(a11-a00);
-  a14=(a14*a11);
-  a00=(a03-a11);
-  a17=state_40;
-  a06=(a17-a03);
+  a20=casadi_fabs(a12);
+  a00=(casadi_real)(a00<a20);
+  a20=1.0000000000000001e-01;
+  a20=(casadi_real)(a20<=a01);
+  a14=2.0000000000000001e-01;
+  a14=(a14*a01);
+  a12=casadi_fabs(a12);
+  a14=(casadi_real)(a14<a12);
+  a20=(a20*a14);
+  a14=(a00+a20);
+  a00=(a00*a20);
+  a14=(a14-a00);
+  a17=(a17*a14);
+  a00=(a03-a14);
+  a20=state_39;
+  a12=(a20-a03);
   a01=0.;
-  a06=casadi_fmax(a06,a01);
-  a00=(a00*a06);
-  a14=(a14+a00);
-  res[0][16]=a14;
-  a15=casadi_fabs(a15);
-  a14=6.;
-  a15=(casadi_real)(a15<=a14);
-  a09=(a09*a15);
-  a02=(a02-a04);
-  a02=(a02*a10);
-  a02=(a02*a10);
+  a12=casadi_fmax(a12,a01);
+  a00=(a00*a12);
+  a17=(a17+a00);
+  res[0][15]=a17;
+  a18=casadi_fabs(a18);
+  a17=6.;
+  a18=(casadi_real)(a18<=a17);
+  a09=(a09*a18);
+  a02=(a02-a11);
+  a02=(a02*a13);
+  a02=(a02*a13);
   a02=casadi_fabs(a02);
-  a16=(casadi_real)(a16<a02);
-  a09=(a09*a16);
-  a16=(a09+a08);
+  a19=(casadi_real)(a19<a02);
+  a09=(a09*a19);
+  a04=(casadi_real)(a05<=a04);
+  a06=(casadi_real)(a05<=a06);
+  a19=(a04+a06);
+  a04=(a04*a06);
+  a19=(a19-a04);
+  a05=(casadi_real)(a05<=a08);
+  a08=(a19+a05);
+  a19=(a19*a05);
+  a08=(a08-a19);
+  a19=(a09+a08);
   a09=(a09*a08);
-  a16=(a16-a09);
-  a07=(a07*a16);
-  a09=(a03-a16);
-  a08=state_41;
-  a02=(a08-a03);
-  a02=casadi_fmax(a02,a01);
-  a09=(a09*a02);
+  a19=(a19-a09);
+  a07=(a07*a19);
+  a09=(a03-a19);
+  a08=state_40;
+  a05=(a08-a03);
+  a05=casadi_fmax(a05,a01);
+  a09=(a09*a05);
   a07=(a07+a09);
-  res[0][17]=a07;
+  res[0][16]=a07;
+  res[0][17]=a01;
   res[0][18]=a01;
   res[0][19]=a01;
   res[0][20]=a01;
-  res[0][21]=a01;
   a07=9.;
-  res[0][22]=a07;
+  res[0][21]=a07;
   a07=2048.;
-  a09=(a03-a16);
+  a09=(a03-a19);
   a08=(casadi_real)(a01<a08);
   a09=(a09*a08);
-  a16=(a16+a09);
-  a07=(a07*a16);
-  a16=8192.;
+  a19=(a19+a09);
+  a07=(a07*a19);
+  a19=8192.;
   a09=4.0000000000000002e-01;
-  a12=casadi_fabs(a12);
-  a09=(casadi_real)(a09<a12);
-  a16=(a16*a09);
-  a07=(a07+a16);
-  a16=16384.;
+  a15=casadi_fabs(a15);
+  a09=(casadi_real)(a09<a15);
+  a19=(a19*a09);
+  a07=(a07+a19);
+  a19=16384.;
   a09=1.6999999999999999e-03;
-  a13=casadi_fabs(a13);
-  a09=(casadi_real)(a09<a13);
-  a16=(a16*a09);
-  a07=(a07+a16);
-  a16=32768.;
-  a03=(a03-a11);
-  a01=(casadi_real)(a01<a17);
+  a16=casadi_fabs(a16);
+  a09=(casadi_real)(a09<a16);
+  a19=(a19*a09);
+  a07=(a07+a19);
+  a19=32768.;
+  a03=(a03-a14);
+  a01=(casadi_real)(a01<a20);
   a03=(a03*a01);
-  a11=(a11+a03);
-  a16=(a16*a11);
-  a07=(a07+a16);
-  res[0][23]=a07;
+  a14=(a14+a03);
+  a19=(a19*a14);
+  a07=(a07+a19);
+  res[0][22]=a07;
   return 0;
 }
 
 /*
- * vse_switching_kernel_checks: 247 operations (CasADi SX instructions)
- * arg[0] state[48]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * vse_switching_kernel_checks: 246 operations (CasADi SX instructions)
+ * arg[0] state[47]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding, kin_samples, kin_offset, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
  *     frozen_recovery_left, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr
- * res[0] checks_next[24]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
- *     frozen_r_value, frozen_r_repeats, frozen_now, steady_delta, steady_samples, steady_r,
- *     lateral_residual, steering_offset, curvature, steady_curvature, wheel_yaw_residual,
- *     wheel_yaw_rate, wheel_yaw_hold_left, frozen_recovery_left, checks_sum_ay, checks_sum_r,
- *     checks_sum_ax, checks_sum_omega_f_diff, checks_countdown, checks_code
+ * res[0] checks_next[23]: frozen_ax_value, frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats,
+ *     frozen_r_value, frozen_r_repeats, steady_delta, steady_samples, steady_r, lateral_residual,
+ *     steering_offset, curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate,
+ *     wheel_yaw_hold_left, frozen_recovery_left, checks_sum_ay, checks_sum_r, checks_sum_ax,
+ *     checks_sum_omega_f_diff, checks_countdown, checks_code
  */
 CASADI_SYMBOL_EXPORT int vse_switching_kernel_checks(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return casadi_f1(arg, res, iw, w, mem);
 }
 
-/* vse_switching_kernel_select:(state[48],input[7])->(state_mid[24],scratch[6]) */
+/* vse_switching_kernel_select:(state[47],input[7])->(state_mid[24],scratch[6]) */
 static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -689,38 +688,43 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a08=((a08!=0.)?a24:0.);
   a22=(a22+a08);
   res[0][11]=a22;
-  a22=arg[0][30];
-  a22=(casadi_real)(a22==0.);
-  a08=1.5000000000000000e+00;
-  a24=casadi_fmin(a13,a16);
+  a22=2.;
+  a08=arg[0][27];
+  a08=(casadi_real)(a22<=a08);
+  a24=arg[0][29];
+  a24=(casadi_real)(a22<=a24);
+  a08=(casadi_real)((a08!=0.)||(a24!=0.));
+  a08=(casadi_real)(a08==0.);
+  a24=1.5000000000000000e+00;
+  a25=casadi_fmin(a13,a16);
   a13=casadi_fmax(a13,a16);
   a16=casadi_fmin(a13,a05);
-  a25=casadi_fmin(a24,a16);
-  a24=casadi_fmax(a24,a16);
+  a20=casadi_fmin(a25,a16);
+  a25=casadi_fmax(a25,a16);
   a13=casadi_fmax(a13,a05);
   a05=casadi_fmin(a13,a17);
-  a16=casadi_fmin(a24,a05);
-  a25=casadi_fmax(a25,a16);
-  a24=casadi_fmax(a24,a05);
+  a16=casadi_fmin(a25,a05);
+  a20=casadi_fmax(a20,a16);
+  a25=casadi_fmax(a25,a05);
   a13=casadi_fmax(a13,a17);
   a13=casadi_fmin(a13,a18);
-  a24=casadi_fmin(a24,a13);
-  a25=casadi_fmax(a25,a24);
-  a24=casadi_fabs(a25);
-  a24=(casadi_real)(a08<a24);
-  a24=((a24!=0.)?a01:0.);
-  a22=((a22!=0.)?a24:0.);
-  a24=(casadi_real)(a22==a01);
+  a25=casadi_fmin(a25,a13);
+  a20=casadi_fmax(a20,a25);
+  a25=casadi_fabs(a20);
+  a25=(casadi_real)(a24<a25);
+  a25=((a25!=0.)?a01:0.);
+  a08=((a08!=0.)?a25:0.);
+  a25=(casadi_real)(a08==a01);
   a13=1.0000000000000000e-02;
   a18=arg[0][22];
   a17=5.0000000000000000e-01;
   a05=(a18+a17);
   a13=(a13*a05);
-  a08=(casadi_real)(a08<a13);
-  a24=(casadi_real)((a24!=0.)&&(a08!=0.));
-  a08=(casadi_real)(a24==0.);
-  a08=((a08!=0.)?a22:0.);
-  a13=((a10!=0.)?a08:0.);
+  a24=(casadi_real)(a24<a13);
+  a25=(casadi_real)((a25!=0.)&&(a24!=0.));
+  a24=(casadi_real)(a25==0.);
+  a24=((a24!=0.)?a08:0.);
+  a13=((a10!=0.)?a24:0.);
   res[0][12]=a13;
   a13=arg[0][13];
   res[0][13]=a13;
@@ -739,22 +743,22 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=arg[0][20];
   res[0][20]=a13;
   res[0][21]=a12;
-  a22=(casadi_real)(a22==a01);
-  a12=(casadi_real)(a08==a01);
+  a08=(casadi_real)(a08==a01);
+  a12=(casadi_real)(a24==a01);
   a12=(a18+a12);
-  a22=(a22*a12);
-  a22=((a10!=0.)?a22:0.);
+  a08=(a08*a12);
+  a08=((a10!=0.)?a08:0.);
   a12=(casadi_real)(a10==0.);
   a12=((a12!=0.)?a18:0.);
-  a22=(a22+a12);
-  res[0][22]=a22;
-  a22=arg[0][23];
+  a08=(a08+a12);
+  res[0][22]=a08;
+  a08=arg[0][23];
   a12=1.9801326693244747e-02;
-  a11=(casadi_real)(a08==a11);
+  a11=(casadi_real)(a24==a11);
   a11=(casadi_real)((a10!=0.)&&(a11!=0.));
-  a25=(a25-a22);
-  a25=casadi_fabs(a25);
-  a25=(casadi_real)(a25<a17);
+  a20=(a20-a08);
+  a20=casadi_fabs(a20);
+  a20=(casadi_real)(a20<a17);
   a02=((a03!=0.)?a02:0.);
   a03=(casadi_real)(a03==0.);
   a03=((a03!=0.)?a09:0.);
@@ -762,21 +766,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a03=(a07*a02);
   a03=casadi_fabs(a03);
   a03=(casadi_real)(a03<a17);
-  a25=(casadi_real)((a25!=0.)&&(a03!=0.));
-  a11=(casadi_real)((a11!=0.)&&(a25!=0.));
+  a20=(casadi_real)((a20!=0.)&&(a03!=0.));
+  a11=(casadi_real)((a11!=0.)&&(a20!=0.));
   a12=(a12*a11);
   a21=(a21*a02);
   a19=(a19-a21);
-  a19=(a19-a22);
+  a19=(a19-a08);
   a12=(a12*a19);
-  a22=(a22+a12);
-  res[0][23]=a22;
-  a08=((a10!=0.)?a08:0.);
-  a22=(casadi_real)(a10==0.);
-  a12=2.;
-  a22=((a22!=0.)?a12:0.);
-  a08=(a08+a22);
-  res[1][0]=a08;
+  a08=(a08+a12);
+  res[0][23]=a08;
+  a24=((a10!=0.)?a24:0.);
+  a08=(casadi_real)(a10==0.);
+  a08=((a08!=0.)?a22:0.);
+  a24=(a24+a08);
+  res[1][0]=a24;
   res[1][1]=a07;
   res[1][2]=a15;
   res[1][3]=a26;
@@ -789,25 +792,25 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a06=(casadi_real)((a10!=0.)&&(a06!=0.));
   a06=((a06!=0.)?a04:0.);
   a01=(a01+a06);
-  a06=arg[0][47];
+  a06=arg[0][46];
   a06=(a10*a06);
   a01=(a01+a06);
-  a10=(casadi_real)((a10!=0.)&&(a24!=0.));
-  a24=64.;
-  a10=((a10!=0.)?a24:0.);
+  a10=(casadi_real)((a10!=0.)&&(a25!=0.));
+  a25=64.;
+  a10=((a10!=0.)?a25:0.);
   a01=(a01+a10);
   res[1][5]=a01;
   return 0;
 }
 
 /*
- * vse_switching_kernel_select: 282 operations (CasADi SX instructions)
- * arg[0] state[48]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
+ * vse_switching_kernel_select: 286 operations (CasADi SX instructions)
+ * arg[0] state[47]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding, kin_samples, kin_offset, frozen_ax_value,
  *     frozen_ax_repeats, frozen_ay_value, frozen_ay_repeats, frozen_r_value, frozen_r_repeats,
- *     frozen_now, steady_delta, steady_samples, steady_r, lateral_residual, steering_offset,
- *     curvature, steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
+ *     steady_delta, steady_samples, steady_r, lateral_residual, steering_offset, curvature,
+ *     steady_curvature, wheel_yaw_residual, wheel_yaw_rate, wheel_yaw_hold_left,
  *     frozen_recovery_left, checks_sum_ay, checks_sum_r, checks_sum_ax, checks_sum_omega_f_diff,
  *     checks_countdown, checks_code
  * arg[1] input[7]: delta, vx, ax, ay, r, omega_fl, omega_fr

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 17ef8b020c31db7eff77ddf450f51fd5c484a65675e3e40f79e58ba1138ade24
-# Operations: step 7666, input checks 190 a run (every check_period), init 115 (CasADi SX instructions).
+# Operations: step 7658, input checks 189 a run (every check_period), init 114 (CasADi SX instructions).
 # longitudinal_force: wheel_speeds
 # sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
 

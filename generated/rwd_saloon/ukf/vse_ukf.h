@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 17ef8b020c31db7eff77ddf450f51fd5c484a65675e3e40f79e58ba1138ade24
- * Operations: step 7666, input checks 190 a run (every check_period), init 115 (CasADi SX instructions).
+ * Operations: step 7658, input checks 189 a run (every check_period), init 114 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
@@ -73,7 +73,7 @@ typedef struct {
 } vse_ukf_output;
 
 /** Number of state entries. */
-#define VSE_UKF_N_STATE (53)
+#define VSE_UKF_N_STATE (52)
 
 /** Index of each entry of vse_ukf_state.x. */
 enum {
@@ -114,22 +114,21 @@ enum {
     VSE_UKF_STATE_FROZEN_AY_REPEATS = 34, /* -: frozen-signal monitor: samples ay has repeated its value (at most frozen_time / T) */
     VSE_UKF_STATE_FROZEN_R_VALUE = 35, /* rad/s: frozen-signal monitor: last plausible r */
     VSE_UKF_STATE_FROZEN_R_REPEATS = 36, /* -: frozen-signal monitor: samples r has repeated its value (at most frozen_time / T) */
-    VSE_UKF_STATE_FROZEN_NOW = 37, /* -: frozen-signal monitor: 1 while a watched channel was frozen at its last run */
-    VSE_UKF_STATE_STEADY_DELTA = 38, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
-    VSE_UKF_STATE_STEADY_SAMPLES = 39, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
-    VSE_UKF_STATE_STEADY_R = 40, /* rad/s: cross-checks: yaw rate at their last run */
-    VSE_UKF_STATE_LATERAL_RESIDUAL = 41, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
-    VSE_UKF_STATE_STEERING_OFFSET = 42, /* rad: learned steering-angle zero (road wheel) */
-    VSE_UKF_STATE_CURVATURE = 43, /* 1/m: steer check: low-passed path curvature r / v_x */
-    VSE_UKF_STATE_STEADY_CURVATURE = 44, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
-    VSE_UKF_STATE_WHEEL_YAW_RESIDUAL = 45, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
-    VSE_UKF_STATE_CHECKS_SUM_AY = 46, /* m/s^2: input checks: sum of ay since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_R = 47, /* rad/s: input checks: sum of r since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_AX = 48, /* m/s^2: input checks: sum of ax since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 49, /* rad/s: input checks: sum of omega_f_diff since their last run */
-    VSE_UKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 50, /* rad/s: input checks: sum of omega_r_diff since their last run */
-    VSE_UKF_STATE_CHECKS_COUNTDOWN = 51, /* -: input checks: active samples to their next run (check_period) */
-    VSE_UKF_STATE_CHECKS_CODE = 52 /* -: input checks: the status bits of their last run */
+    VSE_UKF_STATE_STEADY_DELTA = 37, /* rad: cross-checks: steer angle at the start of the quasi-steady stretch */
+    VSE_UKF_STATE_STEADY_SAMPLES = 38, /* -: cross-checks: runs the stretch has lasted (at most steady_time / check_period) */
+    VSE_UKF_STATE_STEADY_R = 39, /* rad/s: cross-checks: yaw rate at their last run */
+    VSE_UKF_STATE_LATERAL_RESIDUAL = 40, /* m/s^2: lateral check: mean of a_y - r v_x in quasi-steady driving */
+    VSE_UKF_STATE_STEERING_OFFSET = 41, /* rad: learned steering-angle zero (road wheel) */
+    VSE_UKF_STATE_CURVATURE = 42, /* 1/m: steer check: low-passed path curvature r / v_x */
+    VSE_UKF_STATE_STEADY_CURVATURE = 43, /* 1/m: steer check: low-passed path curvature when the stretch turned quasi-steady */
+    VSE_UKF_STATE_WHEEL_YAW_RESIDUAL = 44, /* rad/s: yaw-rate check: mean of r minus the non-driven wheels' yaw rate */
+    VSE_UKF_STATE_CHECKS_SUM_AY = 45, /* m/s^2: input checks: sum of ay since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_R = 46, /* rad/s: input checks: sum of r since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_AX = 47, /* m/s^2: input checks: sum of ax since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_OMEGA_F_DIFF = 48, /* rad/s: input checks: sum of omega_f_diff since their last run */
+    VSE_UKF_STATE_CHECKS_SUM_OMEGA_R_DIFF = 49, /* rad/s: input checks: sum of omega_r_diff since their last run */
+    VSE_UKF_STATE_CHECKS_COUNTDOWN = 50, /* -: input checks: active samples to their next run (check_period) */
+    VSE_UKF_STATE_CHECKS_CODE = 51 /* -: input checks: the status bits of their last run */
 };
 
 /** Estimator state; owned by the caller, no other memory is used. */

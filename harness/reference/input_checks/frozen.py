@@ -26,11 +26,10 @@ def raises(settings, inputs) -> int:
 
 
 def states(settings, inputs) -> tuple[str, ...]:
-    """Per watched channel: its last plausible value and its repetitions; then whether one is frozen."""
+    """Per watched channel: its last plausible value and its repetitions."""
     if not enabled(settings, inputs):
         return ()
-    return (*(name for c in CHANNELS if c in inputs for name in (f"frozen_{c}_value", f"frozen_{c}_repeats")),
-            "frozen_now")
+    return tuple(name for c in CHANNELS if c in inputs for name in (f"frozen_{c}_value", f"frozen_{c}_repeats"))
 
 
 def initial(settings, inputs, first: Mapping[str, float]) -> dict:
@@ -38,13 +37,14 @@ def initial(settings, inputs, first: Mapping[str, float]) -> dict:
     if not enabled(settings, inputs):
         return {}
     return {k: v for c in CHANNELS if c in inputs
-            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))} | {"frozen_now": 0.0}
+            for k, v in ((f"frozen_{c}_value", first[c]), (f"frozen_{c}_repeats", 0.0))}
 
 
-def any_frozen(x: Mapping[str, float]) -> bool:
-    """Whether a watched channel was frozen at the monitor's last run, from the state ``x``
+def any_frozen(new: Mapping[str, float], settings, T, names) -> bool:
+    """Whether one of the channels ``names`` is frozen, from the monitor's new entries ``new``
     (model.input_checks.frozen.any_frozen); False when the monitor is off."""
-    return x.get("frozen_now", 0.0) > 0
+    limit = blocks.whole_samples(settings["frozen_time"], T)
+    return settings["frozen_time"] > 0 and any(new.get(f"frozen_{c}_repeats", 0.0) >= limit for c in names)
 
 
 def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs, vehicle,
@@ -60,5 +60,4 @@ def step(x, u: Mapping[str, float], ok: Mapping[str, bool], settings, T, inputs,
         new[f"frozen_{c}_value"] = u[c] if ok[c] else value
         new[f"frozen_{c}_repeats"] = count
         frozen = frozen or count >= limit
-    new["frozen_now"] = 1.0 if frozen else 0.0
     return new, blocks.INPUT_FROZEN if frozen else 0
