@@ -171,8 +171,7 @@ class MonitorBlock:
         means = {name: (s[entry] + added[name]) / period for name, entry in sums.items()}
         judged = {name: plausible[name] if name in self.monitored else ca.SX(1) for name in plausible}
         updates, code = input_monitors.monitor(Watch(s, {**u, **means}, judged, ca.SX(1), settings, self.numeric,
-                                                     period * sample_time, self.inputs.names, vehicle,
-                                                     self.monitored, u))
+                                                     period * sample_time, self.inputs.names, vehicle, u))
         countdown, kept_code = input_monitors.COUNTDOWN.name, input_monitors.CODE.name
         names = tuple(entry.name for entry in self.segment)
         ran = {**{n: updates.get(n, s[n]) for n in names}, **dict.fromkeys(sums.values(), ca.SX(0)),

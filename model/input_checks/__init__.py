@@ -35,7 +35,8 @@ class Watch:
     s: Mapping
     """The state entries as they came in."""
     u: Mapping
-    """The raw inputs (plausible on an active sample, except those only the monitors read)."""
+    """The inputs, with the means of the checks' period in place of a_y, r and a_x, and each
+    axle's mean right minus left wheel speed (``model.input_monitors.AVERAGED``, by name)."""
     plausible: Mapping
     """Each input's plausibility flag (0/1)."""
     active: ca.SX
@@ -50,12 +51,9 @@ class Watch:
     """The estimator's input names."""
     vehicle: Mapping
     """The [vehicle] table: numbers or calibration symbols."""
-    monitored: tuple[str, ...]
-    """The inputs only the monitors read (``model.guard.input_guard``'s ``monitored``): they may
-    be implausible on an active sample."""
     raw: Mapping
-    """The sample's own inputs: ``u`` holds the noisy inertial ones (``model.input_monitors.AVERAGED``)
-    as their means over the checks' period instead (a bit-for-bit test wants the sample)."""
+    """The sample's own inputs (a bit-for-bit test wants the sample); those only the checks read
+    may be implausible."""
 
 
 class InputCheck(Protocol):
