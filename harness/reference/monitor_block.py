@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 from vsegen.harness.reference import blocks, monitors
 
@@ -35,12 +36,12 @@ class MonitorBlock:
     method_inputs: tuple[str, ...]
     settings: Mapping
 
-    @property
+    @cached_property
     def inputs(self) -> tuple[str, ...]:
         """The method's inputs and what the monitors read beside them, in the log's column order."""
         return monitors.inputs(self.method_inputs, self.settings)
 
-    @property
+    @cached_property
     def monitored(self) -> tuple[str, ...]:
         """The inputs only the monitors read (an implausible one does not hold the estimator)."""
         return monitors.monitored_only(self.method_inputs, self.settings)
@@ -62,7 +63,7 @@ class MonitorBlock:
         return (*(blocks.MONITOR_STATES if self.consistent else ()),
                 *(("linear_range_hold_left",) if self.range_held else ()))
 
-    @property
+    @cached_property
     def segment(self) -> tuple[str, ...]:
         """The input monitors' entries: the last of an estimator's state."""
         return monitors.states(self.settings, self.inputs)
