@@ -54,18 +54,20 @@ def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
 
 def check_sums(estimator, limits, real: str) -> list[tuple[str, str, str | None]]:
     """(state entry, C value, C plausibility test or None) of each sum the input checks keep
-    between two runs (``model.estimator.CheckSegment.sums``): the value its input, or the first
-    minus the second; the test, |input| <= its [inputs] limit for each judged input."""
+    between two runs (``model.estimator.Sum``): the value its input, or the first minus the
+    second; the test, |input| <= its [inputs] limit for each judged input."""
     checks = getattr(estimator.structure, "checks", None)
     if checks is None:
         return []
     ref = {name: f"u[{estimator.inputs.index(name)}]" for name in estimator.inputs.names}
     fabs = "fabsf" if real == "float" else "fabs"
     sums = []
-    for terms, entry, judged in checks.sums:
+    for total in checks.sums:
+        terms = total.terms
         value = ref[terms[0]] if len(terms) == 1 else f"({ref[terms[0]]} - {ref[terms[1]]})"
-        tests = [f"({fabs}({ref[t]}) <= {literal(limits[LIMIT_KEYS[t]], real)})" for t in judged]
-        sums.append((entry, value, (tests[0] if len(tests) == 1 else f"({' && '.join(tests)})") if tests else None))
+        tests = [f"({fabs}({ref[t]}) <= {literal(limits[LIMIT_KEYS[t]], real)})" for t in total.judged]
+        gate = (tests[0] if len(tests) == 1 else f"({' && '.join(tests)})") if tests else None
+        sums.append((total.entry, value, gate))
     return sums
 
 
@@ -115,7 +117,6 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
         "sample_time": repr(config.sample_time),
         "sample_time_literal": literal(config.sample_time, real),
         "zero": literal(0.0, real),
-        "check_sums": check_sums(estimator, config.limits, real),
         "one": literal(1.0, real),
         "real": real,
         "params": params,
@@ -133,6 +134,7 @@ def render(config: VehicleConfig, name: str, real: str | None = None,
             *dynamics_checks(SCHEMAS[name], estimator.parameters.names, estimator.parameters.values))],
         "invalid_calibration": literal(float(status.INVALID_CALIBRATION), real),
         "status_index": estimator.outputs.index("status"),
+        "check_sums": check_sums(estimator, config.limits, real),
         "kernel": kernel,
         "rng_words": RNG_WORDS,
         "ziggurat": ziggurat_literals(real),

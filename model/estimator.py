@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import casadi as ca
 
@@ -46,6 +46,17 @@ from vsegen.model.schema import EstimatorSchema
 
 if TYPE_CHECKING:
     from vsegen.model.monitor_block import MonitorBlock
+
+
+class Sum(NamedTuple):
+    """A sum the input checks keep between two runs (their period's mean, ``model.input_monitors.AVERAGED``)."""
+
+    terms: tuple[str, ...]
+    """The input it adds, or the first minus the second (an axle's right and left wheel speed)."""
+    entry: str
+    """Its state entry."""
+    judged: tuple[str, ...]
+    """The terms only the checks read: it adds nothing on a sample where one is implausible."""
 
 
 @dataclass(frozen=True)
@@ -68,10 +79,8 @@ class CheckSegment:
     of the averaged inputs, the rest kept."""
     kept: ca.SX
     """Their values as they came in."""
-    sums: tuple[tuple[tuple[str, ...], str, tuple[str, ...]], ...] = ()
-    """(terms, state entry, judged) of each sum kept between two runs: it adds its input (one
-    term) or the first minus the second; only where the ``judged`` terms are plausible (inputs only
-    the checks read, which may be implausible on an active sample)."""
+    sums: tuple[Sum, ...] = ()
+    """The sums kept between two runs."""
 
     def composed(self, active: ca.SX) -> ca.SX:
         """Their values after a sample that was ``active`` (a held one keeps them)."""
@@ -102,13 +111,13 @@ class CheckKernel:
 
     function: ca.Function
     """(state, input[, params]) -> the segment after a run."""
-    sums: tuple[tuple[tuple[str, ...], str, tuple[str, ...]], ...]
-    """(terms, state entry, judged): :attr:`CheckSegment.sums`."""
+    sums: tuple[Sum, ...]
+    """The sums it keeps between two runs."""
 
     @property
     def gated(self) -> bool:
         """Whether a sum takes only the plausible values of its inputs."""
-        return any(judged for *_, judged in self.sums)
+        return any(total.judged for total in self.sums)
 
 
 def hold_entry(states: Layout) -> str:

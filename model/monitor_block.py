@@ -35,7 +35,7 @@ from functools import cached_property
 import casadi as ca
 
 from vsegen.model import consistency, input_monitors, status
-from vsegen.model.estimator import CheckSegment, Derived
+from vsegen.model.estimator import CheckSegment, Derived, Sum
 from vsegen.model.filters import held_flag
 from vsegen.model.input_checks import Watch
 from vsegen.model.layout import Layout
@@ -180,7 +180,7 @@ class MonitorBlock:
                    countdown: s[countdown] - 1}
         segment = CheckSegment(names, ca.vertcat(*(ran[n] for n in names)), s[countdown] > 0,
                                ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)),
-                               tuple((terms, sums[name], tuple(t for t in terms if t in self.monitored))
+                               tuple(Sum(terms, sums[name], tuple(t for t in terms if t in self.monitored))
                                      for name, terms in averaged.items()))
         return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 

@@ -77,9 +77,9 @@ def period(settings, T: float) -> int:
 def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], active: bool, settings,
         T: float, inputs, vehicle: Mapping[str, float]) -> dict:
     """The checks' new entries after a sample (every sample): a held sample keeps them; on an
-    ``active`` one, while their countdown runs, the countdown one less and a_y, r and a_x
-    (where plausible) added to their sums; when it is 0, a run at their period on the period's means (the other inputs
-    this sample's) and the countdown and sums restarted."""
+    ``active`` one, while their countdown runs, the countdown one less and each of
+    :data:`AVERAGED` added to its sum (where plausible); when it is 0, a run at their period on
+    the period's means (the other inputs this sample's) and the countdown and sums restarted."""
     kept = {name: x[name] for name in states(settings, inputs)}
     if not active:
         return kept
@@ -106,7 +106,8 @@ def _summand(u: Mapping[str, float], ok: Mapping[str, bool], terms: tuple[str, .
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,
          inputs, vehicle: Mapping[str, float], raw: Mapping[str, float]) -> tuple[dict, int]:
     """(new entries, status bits) of one run of the checks that are on at period ``T``, on an
-    active sample: ``u`` the inputs (a_y, r and a_x their period's means), ``raw`` the sample's own."""
+    active sample: ``u`` the inputs and the period's means of :data:`AVERAGED`, ``raw`` the
+    sample's own inputs."""
     new, code = {}, 0
     for check in _on(settings, inputs):
         checked, bits = check.step(x, u, ok, settings, T, inputs, vehicle, raw)

@@ -8,8 +8,8 @@ inputs, state entries and status bits, and each step's updates and status code.
 
 The checks run after the method, every ``check_period`` on an active sample, in a kernel of their
 own (``model.estimator.CheckSegment``): :class:`Watch` gives them that period as their sample time,
-a_y, r and a_x as the period's means and the sample's own inputs. A check whose setting is 0 has no
-state and generates no code. Flags and selections are arithmetic, so the kernel has no branch
+the period's means (``model.input_monitors.AVERAGED``) and the sample's own inputs. A check whose
+setting is 0 has no state and generates no code. Flags and selections are arithmetic, so the kernel has no branch
 (``model.guard``).
 """
 

@@ -6,7 +6,8 @@ reads beside the method's), ``enabled(settings, inputs)``, ``raises(settings, in
 status bits it raises as configured, OR-ed), ``states(settings, inputs)``,
 ``initial(settings, inputs, first)`` and ``step(x, u, ok, settings, T, inputs, vehicle, raw)`` ->
 (new entries, status bits), called on an active sample when the checks run (every check_period,
-``T`` that period; ``u`` holds a_y and r as the period's means, ``raw`` the sample's own inputs).
+``T`` that period; ``u`` holds the period's means of ``harness.reference.monitors.AVERAGED``, ``raw``
+the sample's own inputs).
 """
 
 from __future__ import annotations

@@ -12,14 +12,17 @@ from vsegen.harness.reference import blocks
 ORDER = 3
 
 
-def _axle(settings) -> tuple[str, str]:
-    axle = "r" if settings["wheel_check_axle"] == "rear" else "f"
-    return f"omega_{axle}l", f"omega_{axle}r"
+def _axle(settings) -> str:
+    return "r" if settings["wheel_check_axle"] == "rear" else "f"
+
+
+def _wheels(settings) -> tuple[str, str]:
+    return f"omega_{_axle(settings)}l", f"omega_{_axle(settings)}r"
 
 
 def reads(settings) -> tuple[str, ...]:
     """With the check on: the steer angle, a_x, r and the checked axle's wheel speeds."""
-    return ("delta", "ax", "r", *_axle(settings)) if settings["wheel_check_limit"] > 0 else ()
+    return ("delta", "ax", "r", *_wheels(settings)) if settings["wheel_check_limit"] > 0 else ()
 
 
 def enabled(settings, inputs) -> bool:
@@ -50,7 +53,7 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
         new["wheel_yaw_rate"] = x["wheel_yaw_rate"]
     if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
         steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
-        difference = u["omega_r_diff" if settings["wheel_check_axle"] == "rear" else "omega_f_diff"]
+        difference = u[f"omega_{_axle(settings)}_diff"]     # the period's mean right minus left
         wheel_yaw_rate = vehicle["wheel_radius"] * difference / (vehicle["track_width"] * steer)
         new["wheel_yaw_residual"] = blocks.low_pass(new["wheel_yaw_residual"], u["r"] - wheel_yaw_rate, T,
                                                     settings["wheel_check_time"])
