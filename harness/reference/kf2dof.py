@@ -28,9 +28,12 @@ def input_names(config) -> tuple[str, ...]:
 
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
-    block = _monitors(config)
-    return (input_names(config), ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
-                     *block.states, "holding", *block.segment), OUTPUTS)
+    return input_names(config), _state_names(_monitors(config)), OUTPUTS
+
+
+def _state_names(block) -> tuple[str, ...]:
+    return ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", *block.states, "holding",
+            *block.segment)
 
 
 def _settings(config):
@@ -53,7 +56,7 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(block.inputs, u))
-    x = dict(zip(names(config)[1], state))
+    x = dict(zip(_state_names(block), state))
     entries = {k: x[k] for k in block.states}    # the model checks' entries when they are on
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],

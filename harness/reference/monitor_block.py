@@ -84,7 +84,7 @@ class MonitorBlock:
         ``active``, else 0."""
         if not self.segment:
             return {}, 0
-        new = monitors.run(x, u, ok, active, self.settings, T, self.inputs, vehicle)
+        new = monitors.run(x, u, ok, active, self.settings, T, self.inputs, vehicle, self.segment)
         return new, int(x["checks_code"]) if active else 0
 
     def judge_model(self, x, innovation, T: float, ay: float, ay_model: float | None = None,

@@ -75,12 +75,13 @@ def period(settings, T: float) -> int:
 
 
 def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], active: bool, settings,
-        T: float, inputs, vehicle: Mapping[str, float]) -> dict:
+        T: float, inputs, vehicle: Mapping[str, float], entries: tuple[str, ...]) -> dict:
     """The checks' new entries after a sample (every sample): a held sample keeps them; on an
     ``active`` one, while their countdown runs, the countdown one less and each of
     :data:`AVERAGED` added to its sum (where plausible); when it is 0, a run at their period on
-    the period's means (the other inputs this sample's) and the countdown and sums restarted."""
-    kept = {name: x[name] for name in states(settings, inputs)}
+    the period's means (the other inputs this sample's) and the countdown and sums restarted.
+    ``entries``: their names (:func:`states`)."""
+    kept = {name: x[name] for name in entries}
     if not active:
         return kept
     terms = averaged(inputs)
