@@ -55,7 +55,7 @@ def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
 def check_sums(estimator, limits, real: str) -> list[tuple[str, str, str | None]]:
     """(state entry, C value, C plausibility test or None) of each sum the input checks keep
     between two runs (``model.estimator.Sum``): the value its input, or the first minus the
-    second; the test, |input| <= its [inputs] limit for each judged input."""
+    second; the test of a judged sum, |value| <= the [inputs] limit of its first input."""
     checks = getattr(estimator.structure, "checks", None)
     if checks is None:
         return []
@@ -65,8 +65,7 @@ def check_sums(estimator, limits, real: str) -> list[tuple[str, str, str | None]
     for total in checks.sums:
         terms = total.terms
         value = ref[terms[0]] if len(terms) == 1 else f"({ref[terms[0]]} - {ref[terms[1]]})"
-        tests = [f"({fabs}({ref[t]}) <= {literal(limits[LIMIT_KEYS[t]], real)})" for t in total.judged]
-        gate = (tests[0] if len(tests) == 1 else f"({' && '.join(tests)})") if tests else None
+        gate = f"({fabs}({value}) <= {literal(limits[LIMIT_KEYS[terms[0]]], real)})" if total.judged else None
         sums.append((total.entry, value, gate))
     return sums
 

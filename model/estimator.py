@@ -55,8 +55,11 @@ class Sum(NamedTuple):
     """The input it adds, or the first minus the second (an axle's right and left wheel speed)."""
     entry: str
     """Its state entry."""
-    judged: tuple[str, ...]
-    """The terms only the checks read: it adds nothing on a sample where one is implausible."""
+    judged: bool
+    """Whether its terms are read by the checks alone (so they can be implausible on an active
+    sample): then it adds its value only where |value| <= the [inputs] limit of its first term
+    (false for NaN and +-Inf; for a wheel-speed difference, one test of the difference: a wheel
+    speed gone wrong shows in it, and the check is there to see it)."""
 
 
 @dataclass(frozen=True)

@@ -78,11 +78,11 @@ def held_flag(left, raised, active, duration, T: float):
 
 def low_pass(previous, value, time_constant, T: float, sampled=None):
     """One step of the first-order low-pass y_k = y_k-1 + (1 - exp(-T / time_constant)) (x_k -
-    y_k-1); with a 0/1 flag ``sampled``, the step is taken only where it is 1 (held elsewhere;
-    arithmetic, so a guarded kernel stays branch-free). ``time_constant`` may be a calibration
-    symbol; a number folds the gain at generation time."""
-    gain = 1 - ca.exp(-T / time_constant)
-    return previous + (gain if sampled is None else sampled * gain) * (value - previous)
+    y_k-1); with a 0/1 flag ``sampled``, the step is taken only where it is 1 (held elsewhere, a
+    select of the step, so a ``value`` that is not finite where it is 0 never reaches the state).
+    ``time_constant`` may be a calibration symbol; a number folds the gain at generation time."""
+    step = (1 - ca.exp(-T / time_constant)) * (value - previous)
+    return previous + (step if sampled is None else ca.if_else(sampled, step, 0))
 
 
 def tustin_derivative(time_constant: float, T: float) -> tuple[float, float]:

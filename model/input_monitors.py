@@ -17,7 +17,7 @@ import casadi as ca
 
 from vsegen.model import signals, status
 from vsegen.model.filters import held_flag
-from vsegen.model.guard import hold
+from vsegen.model.guard import LIMIT_KEYS, hold
 from vsegen.model.input_checks import Watch, registered
 from vsegen.model.layout import Layout
 from vsegen.model.schema import nonnegative
@@ -100,16 +100,16 @@ def sum_state(name: str) -> Signal:
     return Signal(f"checks_sum_{name}", unit, f"input checks: sum of {name} since their last run")
 
 
-def summand(name: str, u, plausible, monitored: tuple[str, ...]):
+def summand(name: str, u, limits=None):
     """The value ``name`` of :data:`AVERAGED` adds to its sum on an active sample: its input, or
-    right minus left wheel speed; 0 where an input only the checks read (``monitored``) is
-    implausible (the sum stays finite)."""
+    right minus left wheel speed; with ``limits`` (the [inputs] table: its inputs are read by the
+    checks alone, ``model.estimator.Sum``), 0 where |value| exceeds the limit of its first input
+    (the sum stays finite)."""
     terms = AVERAGED[name]
     value = u[terms[0]] if len(terms) == 1 else u[terms[0]] - u[terms[1]]
-    judged = [plausible[term] for term in terms if term in monitored]
-    if not judged:
+    if limits is None:
         return value
-    return hold(value, judged[0] if len(judged) == 1 else judged[0] * judged[1], 0)
+    return hold(value, ca.fabs(value) <= limits[LIMIT_KEYS[terms[0]]], 0)
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:

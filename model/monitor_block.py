@@ -149,25 +149,26 @@ class MonitorBlock:
         return input_monitors.period(self.numeric, sample_time) * sample_time
 
     def watch_inputs(self, s: dict, u: dict, plausible: dict, active, settings, sample_time: float,
-                     vehicle) -> Step:
+                     vehicle, limits) -> Step:
         """The input monitors' stage from the state entries ``s``, the raw inputs ``u``, their
         plausibility flags and the guard's ``active`` flag; ``settings`` and ``vehicle`` numbers or
-        calibration symbols.
+        calibration symbols, ``limits`` the [inputs] table.
 
         The checks run after the method, on an active sample whose countdown is 0 (every
         ``check_period``), stepped at that period, in a kernel of their own
         (``model.estimator.CheckSegment``): on such a sample every input the method reads is
         plausible, so only the monitored-only inputs are judged there. a_y, r and a_x are read as
         their means over the period, and so is each axle's right minus left wheel speed
-        (``model.input_monitors.AVERAGED``; an input only the checks read summed where
-        plausible). The method reads their last run: its updates keep their entries, its code
+        (``model.input_monitors.AVERAGED``; an input only the checks read summed where its value
+        is plausible, ``model.estimator.Sum``). The method reads their last run: its updates keep their entries, its code
         is ``active`` times their kept code."""
         if not self.segment:
             return Step({}, ca.SX(0))
         period = input_monitors.period(self.numeric, sample_time)
         averaged = input_monitors.averaged(self.inputs.names)
         sums = {name: input_monitors.sum_state(name).name for name in averaged}
-        added = {name: input_monitors.summand(name, u, plausible, self.monitored) for name in sums}
+        judged_sums = {name: any(t in self.monitored for t in terms) for name, terms in averaged.items()}
+        added = {name: input_monitors.summand(name, u, limits if judged_sums[name] else None) for name in sums}
         means = {name: (s[entry] + added[name]) / period for name, entry in sums.items()}
         judged = {name: plausible[name] if name in self.monitored else ca.SX(1) for name in plausible}
         updates, code = input_monitors.monitor(Watch(s, {**u, **means}, judged, ca.SX(1), settings, self.numeric,
@@ -180,8 +181,7 @@ class MonitorBlock:
                    countdown: s[countdown] - 1}
         segment = CheckSegment(names, ca.vertcat(*(ran[n] for n in names)), s[countdown] > 0,
                                ca.vertcat(*(counted[n] for n in names)), ca.vertcat(*(s[n] for n in names)),
-                               tuple(Sum(terms, sums[name], tuple(t for t in terms if t in self.monitored))
-                                     for name, terms in averaged.items()))
+                               tuple(Sum(terms, sums[name], judged_sums[name]) for name, terms in averaged.items()))
         return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,

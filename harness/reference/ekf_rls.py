@@ -121,7 +121,7 @@ def step(config, state, u):
     inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5, block.monitored)
-    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle)   # beyond the paper
+    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle, config.limits)   # beyond the paper
     if not active:
         held = dict(x, holding=1.0) | watched
         return (np.array([held[k] for k in names]),

@@ -61,7 +61,7 @@ def step(config, state, u):
     vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                          x["holding"] > 0.5, block.monitored)
-    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle)
+    watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle, config.limits)
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
     if not active:
         P0 = np.array(s["initial_covariance"])

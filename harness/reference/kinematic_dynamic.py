@@ -95,11 +95,14 @@ def init(config, table, block, u0, extra: tuple[str, ...] = ()):
 
 
 def held(config, table, x, inputs, ok):
-    """State while holding (§2.10)."""
+    """State while holding (§2.10): the estimate restarts, and so does switching's kinematic dwell
+    count (``kin_samples``, where it has one)."""
     P0 = np.array(config.settings(table)["initial_covariance"])
     new = dict(x)
     new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0, P_vy_vy=P0[0, 0], P_vy_r=P0[0, 1],
                P_r_r=P0[1, 1])
+    if "kin_samples" in new:
+        new["kin_samples"] = 0.0
     new["delta_prev"], new["vx_prev"] = blocks.kept_previous(inputs, ok, x["delta_prev"],
                                                              x["vx_prev"])
     return new
@@ -168,7 +171,7 @@ def step(config, table, block, state, u, scheme, extra: tuple[str, ...] = ()):
     inputs = dict(zip(block.inputs, u))
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                           x["holding"] > 0.5, block.monitored)
-    watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle)
+    watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle, config.limits)
     if not active:
         new = held(config, table, x, inputs, ok) | watched
         return (np.array([new[k] for k in names]),

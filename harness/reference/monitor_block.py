@@ -78,13 +78,14 @@ class MonitorBlock:
         """s between two runs of the input checks."""
         return monitors.period(self.settings, T) * T
 
-    def watch_inputs(self, x, u, ok, active: bool, T: float, vehicle) -> tuple[dict, int]:
+    def watch_inputs(self, x, u, ok, active: bool, T: float, vehicle, limits) -> tuple[dict, int]:
         """(the input monitors' entries after the sample, the status bits the method reports) on
         every sample: the checks run after the method, which reports their last run's code while
-        ``active``, else 0."""
+        ``active``, else 0. ``limits``: the [inputs] table."""
         if not self.segment:
             return {}, 0
-        new = monitors.run(x, u, ok, active, self.settings, T, self.inputs, vehicle, self.segment)
+        new = monitors.run(x, u, ok, active, self.settings, T, self.inputs, vehicle, self.segment, limits,
+                           self.monitored)
         return new, int(x["checks_code"]) if active else 0
 
     def judge_model(self, x, innovation, T: float, ay: float, ay_model: float | None = None,

@@ -75,33 +75,38 @@ def period(settings, T: float) -> int:
 
 
 def run(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], active: bool, settings,
-        T: float, inputs, vehicle: Mapping[str, float], entries: tuple[str, ...]) -> dict:
+        T: float, inputs, vehicle: Mapping[str, float], entries: tuple[str, ...], limits: Mapping[str, float],
+        monitored: tuple[str, ...]) -> dict:
     """The checks' new entries after a sample (every sample): a held sample keeps them; on an
     ``active`` one, while their countdown runs, the countdown one less and each of
-    :data:`AVERAGED` added to its sum (where plausible); when it is 0, a run at their period on
+    :data:`AVERAGED` added to its sum (:func:`_summand`); when it is 0, a run at their period on
     the period's means (the other inputs this sample's) and the countdown and sums restarted.
-    ``entries``: their names (:func:`states`)."""
+    ``entries``: their names (:func:`states`); ``limits`` the [inputs] table, ``monitored`` the
+    inputs only the checks read."""
     kept = {name: x[name] for name in entries}
     if not active:
         return kept
     terms = averaged(inputs)
     sums = {name: f"checks_sum_{name}" for name in terms}
+    added = {name: _summand(u, terms[name], limits if set(terms[name]) & set(monitored) else None) for name in sums}
     if x["checks_countdown"] > 0:
-        return kept | {entry: x[entry] + _summand(u, ok, terms[name]) for name, entry in sums.items()} | {
+        return kept | {entry: x[entry] + added[name] for name, entry in sums.items()} | {
             "checks_countdown": x["checks_countdown"] - 1}
     n = period(settings, T)
-    means = {name: (x[entry] + _summand(u, ok, terms[name])) / n for name, entry in sums.items()}
+    means = {name: (x[entry] + added[name]) / n for name, entry in sums.items()}
     new, code = step(x, u | means, ok, settings, n * T, inputs, vehicle, raw=u)
     return kept | new | dict.fromkeys(sums.values(), 0.0) | {"checks_countdown": float(n - 1),
                                                               "checks_code": float(code)}
 
 
-def _summand(u: Mapping[str, float], ok: Mapping[str, bool], terms: tuple[str, ...]) -> float:
-    """The input ``terms[0]`` (minus ``terms[1]``) where they are plausible, else 0 (a sum of it
-    stays finite; on an active sample only an input the checks alone read can be implausible)."""
-    if not all(ok[term] for term in terms):
+def _summand(u: Mapping[str, float], terms: tuple[str, ...], limits: Mapping[str, float] | None) -> float:
+    """The input ``terms[0]`` (minus ``terms[1]``); with ``limits`` (inputs the checks alone read,
+    which can be implausible on an active sample), 0 unless that value is plausible by the limit of
+    ``terms[0]``, so a sum of it stays finite."""
+    value = u[terms[0]] - (u[terms[1]] if len(terms) > 1 else 0.0)
+    if limits is not None and not blocks.plausible(limits, terms[0], value):
         return 0.0
-    return u[terms[0]] - (u[terms[1]] if len(terms) > 1 else 0.0)
+    return value
 
 
 def step(x: Mapping[str, float], u: Mapping[str, float], ok: Mapping[str, bool], settings, T: float,

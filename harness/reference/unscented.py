@@ -75,7 +75,7 @@ class Variant:
         inputs = dict(zip(input_names, u))
         active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                               x["hold_reason"] > 0.5, block.monitored)
-        watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle)
+        watched, flags = block.watch_inputs(x, inputs, ok, active, config.sample_time, config.vehicle, config.limits)
         if not active:       # hold; hold_reason = 2 marks a low-speed hold, 1 an invalid input
             held = dict(x, hold_reason=2.0 if status & blocks.LOW_SPEED else 1.0) | watched
             return (np.array([held[k] for k in state_names]),

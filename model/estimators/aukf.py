@@ -404,7 +404,7 @@ def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, ay_
     judged = sym.monitors.judge_model(f.s, active, settings, T, innovation, u["ay"], ay_model, held_here=False)
     extra = {**extra, **judged.updates}
     watched = sym.monitors.watch_inputs(kept, u, guard.plausible, active, settings, T,   # from the state as it came in
-                                        sym.params.config.vehicle)
+                                        sym.params.config.vehicle, sym.params.config.limits)
     stuck = watched.updates
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),

@@ -335,7 +335,8 @@ def build(params: Parameters) -> Estimator:
     vx_min = settings["vx_min"]
     vx = model_speed(hold(u["vx"], ok["vx"], vx_min), vx_min, config.limits["vx_max"])
     measured = _Measured(delta, ax, roll_corrected(ay_measured, settings["roll_gradient"]), r_m, vx)
-    watched = block.watch_inputs(s, u, ok, guard.active, settings, config.sample_time, config.vehicle)
+    watched = block.watch_inputs(s, u, ok, guard.active, settings, config.sample_time, config.vehicle,
+                                 config.limits)
     stiffness = _stiffness(config, settings, choices, s, measured, inputs_suspect=watched.code > 0)
     ekf = _ekf(config, settings, s, stiffness, measured.r)
     next_state, output = _fused(config, settings, choices, layout, block, s, guard, measured, stiffness, ekf,

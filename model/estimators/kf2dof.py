@@ -195,7 +195,7 @@ def build(params: Parameters) -> Estimator:
     vy_next = ca.if_else(active, result["x_next"][0], 0)
     r_next = ca.if_else(active, result["x_next"][1], s["r"])
     P_next = ca.if_else(active, result["P_next"], P0)
-    watched = block.watch_inputs(s, u, ok, active, settings, config.sample_time, config.vehicle)
+    watched = block.watch_inputs(s, u, ok, active, settings, config.sample_time, config.vehicle, config.limits)
     judged = block.judge_model(s, active, settings, config.sample_time, result["innovation"], u["ay"],
                                result["ay_model"])
     code = guard.status + watched.code + judged.code

@@ -198,7 +198,8 @@ class KinematicDynamic:
         history = [ay_b] + [s[f"ay_b_hist_{i}"] for i in range(1, self.n_median)]
         suspect = ca.logic_or(r_check.forced, ay_check.forced)
         code = guard.status + ca.if_else(ca.logic_and(active, suspect), status.REFERENCE_SUSPECT, 0)
-        watched = self.monitors.watch_inputs(s, u, ok, active, settings, self.T, self.params.config.vehicle)
+        watched = self.monitors.watch_inputs(s, u, ok, active, settings, self.T, self.params.config.vehicle,
+                                                   self.params.config.limits)
         code = code + watched.code
 
         def keep(name, value):

@@ -57,9 +57,9 @@ def states(numeric_settings) -> tuple[Signal, ...]:
 
 
 def near_straight(settings, ay_filtered, r_checked, vx, offset):
-    """Whether the offset learns on this sample: |a_y,f - c| and |r v_x| below offset_band."""
-    band = settings["offset_band"]
-    return ca.logic_and(ca.fabs(ay_filtered - offset) < band, ca.fabs(r_checked * vx) < band)
+    """Whether the offset learns on this sample: |a_y,f - c| and |r v_x| below offset_band (the
+    larger of the two, one comparison)."""
+    return ca.fmax(ca.fabs(ay_filtered - offset), ca.fabs(r_checked * vx)) < settings["offset_band"]
 
 
 def learned(settings, sample_time: float, previous, ay, r, vx, learning):
@@ -67,12 +67,14 @@ def learned(settings, sample_time: float, previous, ay, r, vx, learning):
     return low_pass(previous, ay - r * vx, settings["offset_memory"], sample_time, learning)
 
 
-def update(settings, sample_time: float, previous, pre, vx, allowed):
-    """c_k for this sample from c_k-1 = ``previous``, the shared pre-processing ``pre`` (filtered
-    and checked a_y, r) and the speed ``vx`` (finite: the held value on an implausible sample, as
-    the update is arithmetic): learned while ``allowed`` and :func:`near_straight`."""
-    learning = ca.logic_and(allowed, near_straight(settings, pre.ay_filtered, pre.r_checked, vx, previous))
-    return learned(settings, sample_time, previous, pre.updates["ay_last"], pre.updates["r_last"], vx, learning)
+def update(settings, sample_time: float, previous, ay_filtered, r_checked, ay, r, vx, allowed=None):
+    """c_k for this sample from c_k-1 = ``previous``, the filtered a_y and checked r the
+    pre-processing judges on (:func:`near_straight`), the checked a_y and r it learns from and the
+    measured speed ``vx``: learned where :func:`near_straight` and ``allowed`` (default always:
+    the caller runs it only where allowed) hold; v_x is plausible wherever it is allowed."""
+    learning = near_straight(settings, ay_filtered, r_checked, vx, previous)
+    learning = learning if allowed is None else ca.logic_and(allowed, learning)
+    return learned(settings, sample_time, previous, ay, r, vx, learning)
 
 
 def sensor_part(settings, offset):

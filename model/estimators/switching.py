@@ -50,7 +50,6 @@ from vsegen.model.estimators.kinematic_dynamic import (
     KinematicDynamic,
 )
 from vsegen.model.estimators.kinematic_dynamic import STATUS_BITS as KINEMATIC_DYNAMIC_STATUS
-from vsegen.model.guard import hold
 from vsegen.model.input_checks import frozen
 from vsegen.model.layout import Layout
 from vsegen.model.monitor_block import Checks
@@ -85,7 +84,7 @@ SCHEMA = EstimatorSchema(
 HOLD = 2
 PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
 DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f| last fell below the "
-                                   "threshold (kinematic_max_dwell)")
+                                   "threshold or the estimator held (kinematic_max_dwell)")
 
 
 def _dwell_bounded(settings) -> bool:
@@ -151,9 +150,10 @@ def wanted_scheme(seed: KinematicDynamic, pre, mode_prev, peak=None):
 def dwell_limited(seed: KinematicDynamic, candidate, samples):
     """(mode, new kin_samples, limited) of the kinematic dwell bound: the kinematic scheme may run
     for kinematic_max_dwell seconds while |a_y,f| stays above the threshold (``candidate`` KIN);
-    then the dynamic scheme takes over until ``candidate`` is DYN again, which resets the count.
-    (n + 1/2) T > max_dwell counts whole samples, robust to rounding in float builds."""
-    limited = ca.logic_and(candidate == KIN, (samples + 0.5) * seed.T > seed.settings["kinematic_max_dwell"])
+    then the dynamic scheme takes over until ``candidate`` is DYN again, which resets the count
+    (so does a held sample: the estimate restarts from the KF). n > max_dwell / T - 1/2 counts
+    whole samples, robust to rounding in float builds."""
+    limited = ca.logic_and(candidate == KIN, samples > seed.settings["kinematic_max_dwell"] / seed.T - 0.5)
     mode = ca.if_else(limited, DYN, candidate)
     new_samples = (candidate == KIN) * (samples + (mode == KIN))
     return mode, new_samples, limited
@@ -190,14 +190,15 @@ def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX, Chec
     status = pre.status
     if DWELL in seed.extra:
         mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
-        extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
+        extra["kin_samples"] = active * samples      # a held sample resets the count
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
+    scheme = ca.if_else(active, mode, HOLD)
     if kinematic_offset.OFFSET in seed.extra:    # learned in near-straight dynamic driving
-        speed = hold(u["vx"], pre.guard.plausible["vx"], seed.vx_min)      # finite on every sample
-        extra["kin_offset"] = kinematic_offset.update(seed.settings, T, s["kin_offset"], pre, speed,
-                                                      ca.logic_and(active, mode == DYN))
+        extra["kin_offset"] = kinematic_offset.update(
+            seed.settings, T, s["kin_offset"], pre.ay_filtered, pre.r_checked, pre.updates["ay_last"],
+            pre.updates["r_last"], u["vx"], scheme == DYN)
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
-    scratch = SCRATCH.pack({"scheme": ca.if_else(active, mode, HOLD), "r_checked": pre.r_checked,
+    scratch = SCRATCH.pack({"scheme": scheme, "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
                             "mode_prev": s["mode"], "status": status})
     return mid, scratch, pre.checks

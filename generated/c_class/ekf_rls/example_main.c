@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 190b5186dd3dab318920bc0e727cf3cba4ad8c547c4b5ce9b889383b4757119a
- * Operations: step 477, input checks 223 a run (every check_period), init 124 (CasADi SX instructions).
+ * Operations: step 477, input checks 220 a run (every check_period), init 124 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 27c44475324666e9705c73d7fb939c8a1ccf745242225e94c8d2f20bdb53c961
-# Operations: step 586, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
+# Operations: step 585, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 # median_window: 5 samples

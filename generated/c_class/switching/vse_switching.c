@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 1858642307f2085bc8af81bb2226cd0392be3b42ec42b2b337ffd54ad3ef8e24
- * Operations: step 1192, input checks 244 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1181, input checks 243 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -99,7 +99,7 @@ void vse_switching_step(vse_switching_state *state, const vse_switching_input *i
             /* read by the checks alone: added where plausible (false for NaN) */
             state->x[VSE_SWITCHING_STATE_CHECKS_SUM_AX] += (fabs(u[2]) <= 30.0) ? u[2] : 0.0;
             /* read by the checks alone: added where plausible (false for NaN) */
-            state->x[VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_R_DIFF] += ((fabs(u[6]) <= 400.0) && (fabs(u[5]) <= 400.0)) ? (u[6] - u[5]) : 0.0;
+            state->x[VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_R_DIFF] += (fabs((u[6] - u[5])) <= 400.0) ? (u[6] - u[5]) : 0.0;
         } else {
             arg[0] = state->x;
             arg[1] = u;

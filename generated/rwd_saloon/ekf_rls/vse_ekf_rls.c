@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 82d71d62468f61294f92432341788be941889781b584b95c4c14ad596236b132
- * Operations: step 477, input checks 225 a run (every check_period), init 124 (CasADi SX instructions).
+ * Operations: step 477, input checks 222 a run (every check_period), init 124 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -83,7 +83,7 @@ void vse_ekf_rls_step(vse_ekf_rls_state *state, const vse_ekf_rls_input *in, vse
             state->x[VSE_EKF_RLS_STATE_CHECKS_SUM_R] += u[4];
             state->x[VSE_EKF_RLS_STATE_CHECKS_SUM_AX] += u[2];
             /* read by the checks alone: added where plausible (false for NaN) */
-            state->x[VSE_EKF_RLS_STATE_CHECKS_SUM_OMEGA_F_DIFF] += ((fabs(u[6]) <= 400.0) && (fabs(u[5]) <= 400.0)) ? (u[6] - u[5]) : 0.0;
+            state->x[VSE_EKF_RLS_STATE_CHECKS_SUM_OMEGA_F_DIFF] += (fabs((u[6] - u[5])) <= 400.0) ? (u[6] - u[5]) : 0.0;
         } else {
             arg[0] = state->x;
             arg[1] = u;

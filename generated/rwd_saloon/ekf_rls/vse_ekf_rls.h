@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 82d71d62468f61294f92432341788be941889781b584b95c4c14ad596236b132
- * Operations: step 477, input checks 225 a run (every check_period), init 124 (CasADi SX instructions).
+ * Operations: step 477, input checks 222 a run (every check_period), init 124 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: e611174a6419de965cf8d9d2331562baddf9ab76c879d4a9cf7ecc9eec0d9016
-# Operations: step 579, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
+# Operations: step 578, input checks 142 a run (every check_period), init 104 (CasADi SX instructions).
 # discretisation: zoh
 # zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
 # median_window: 5 samples

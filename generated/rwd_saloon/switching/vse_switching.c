@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9030875ca65d27346f3c7bfd4a1a570bed06e259b36e89b588b9769072d4d27a
- * Operations: step 1187, input checks 246 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1176, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -99,7 +99,7 @@ void vse_switching_step(vse_switching_state *state, const vse_switching_input *i
             /* read by the checks alone: added where plausible (false for NaN) */
             state->x[VSE_SWITCHING_STATE_CHECKS_SUM_AX] += (fabs(u[2]) <= 30.0) ? u[2] : 0.0;
             /* read by the checks alone: added where plausible (false for NaN) */
-            state->x[VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_F_DIFF] += ((fabs(u[6]) <= 400.0) && (fabs(u[5]) <= 400.0)) ? (u[6] - u[5]) : 0.0;
+            state->x[VSE_SWITCHING_STATE_CHECKS_SUM_OMEGA_F_DIFF] += (fabs((u[6] - u[5])) <= 400.0) ? (u[6] - u[5]) : 0.0;
         } else {
             arg[0] = state->x;
             arg[1] = u;
