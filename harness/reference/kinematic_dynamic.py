@@ -95,14 +95,11 @@ def init(config, table, block, u0, extra: tuple[str, ...] = ()):
 
 
 def held(config, table, x, inputs, ok):
-    """State while holding (§2.10): the estimate restarts, and so does switching's kinematic dwell
-    count (``kin_samples``, where it has one)."""
+    """State while holding (§2.10)."""
     P0 = np.array(config.settings(table)["initial_covariance"])
     new = dict(x)
     new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0, P_vy_vy=P0[0, 0], P_vy_r=P0[0, 1],
                P_r_r=P0[1, 1])
-    if "kin_samples" in new:
-        new["kin_samples"] = 0.0
     new["delta_prev"], new["vx_prev"] = blocks.kept_previous(inputs, ok, x["delta_prev"],
                                                              x["vx_prev"])
     return new

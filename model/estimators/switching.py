@@ -84,7 +84,7 @@ SCHEMA = EstimatorSchema(
 HOLD = 2
 PEAK = Signal("ay_peak", "m/s^2", "remembered peak |a_y,f| (adaptive threshold)")
 DWELL = Signal("kin_samples", "-", "samples in the kinematic scheme since |a_y,f| last fell below the "
-                                   "threshold or the estimator held (kinematic_max_dwell)")
+                                   "threshold (kinematic_max_dwell)")
 
 
 def _dwell_bounded(settings) -> bool:
@@ -150,9 +150,10 @@ def wanted_scheme(seed: KinematicDynamic, pre, mode_prev, peak=None):
 def dwell_limited(seed: KinematicDynamic, candidate, samples):
     """(mode, new kin_samples, limited) of the kinematic dwell bound: the kinematic scheme may run
     for kinematic_max_dwell seconds while |a_y,f| stays above the threshold (``candidate`` KIN);
-    then the dynamic scheme takes over until ``candidate`` is DYN again, which resets the count
-    (so does a held sample: the estimate restarts from the KF). n > max_dwell / T - 1/2 counts
-    whole samples, robust to rounding in float builds."""
+    then the dynamic scheme takes over until ``candidate`` is DYN again, which resets the count (a
+    held sample keeps it: resetting it there would let the integrator restart from the KF's reset
+    state for a whole dwell). n > max_dwell / T - 1/2 counts whole samples, robust to rounding in
+    float builds."""
     limited = ca.logic_and(candidate == KIN, samples > seed.settings["kinematic_max_dwell"] / seed.T - 0.5)
     mode = ca.if_else(limited, DYN, candidate)
     new_samples = (candidate == KIN) * (samples + (mode == KIN))
@@ -190,7 +191,7 @@ def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX, Chec
     status = pre.status
     if DWELL in seed.extra:
         mode, samples, limited = dwell_limited(seed, mode, s["kin_samples"])
-        extra["kin_samples"] = active * samples      # a held sample resets the count
+        extra["kin_samples"] = ca.if_else(active, samples, s["kin_samples"])
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
     scheme = ca.if_else(active, mode, HOLD)
     if kinematic_offset.OFFSET in seed.extra:    # learned in near-straight dynamic driving

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 1858642307f2085bc8af81bb2226cd0392be3b42ec42b2b337ffd54ad3ef8e24
- * Operations: step 1181, input checks 243 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1184, input checks 243 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9030875ca65d27346f3c7bfd4a1a570bed06e259b36e89b588b9769072d4d27a
- * Operations: step 1176, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1179, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -94,7 +94,7 @@ enum {
     VSE_SWITCHING_STATE_DELTA_PREV = 19, /* rad: last plausible steer angle */
     VSE_SWITCHING_STATE_VX_PREV = 20, /* m/s: last plausible speed */
     VSE_SWITCHING_STATE_HOLDING = 21, /* -: 1 while holding (low speed or invalid input), else 0 */
-    VSE_SWITCHING_STATE_KIN_SAMPLES = 22, /* -: samples in the kinematic scheme since |a_y,f| last fell below the threshold or the estimator held (kinematic_max_dwell) */
+    VSE_SWITCHING_STATE_KIN_SAMPLES = 22, /* -: samples in the kinematic scheme since |a_y,f| last fell below the threshold (kinematic_max_dwell) */
     VSE_SWITCHING_STATE_KIN_OFFSET = 23, /* m/s^2: learned kinematic offset c: mean of a_y - r v_x in near-straight driving (offset_memory) */
     VSE_SWITCHING_STATE_FROZEN_AX_VALUE = 24, /* m/s^2: frozen-signal monitor: last plausible ax */
     VSE_SWITCHING_STATE_FROZEN_AX_REPEATS = 25, /* -: frozen-signal monitor: samples ax has repeated its value (at most frozen_time / T) */

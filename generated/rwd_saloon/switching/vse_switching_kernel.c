@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9030875ca65d27346f3c7bfd4a1a570bed06e259b36e89b588b9769072d4d27a
- * Operations: step 1176, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1179, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -740,23 +740,26 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][21]=a12;
   a08=(casadi_real)(a08==a01);
   a12=(casadi_real)(a23==a01);
-  a13=(a13+a12);
-  a08=(a08*a13);
-  a08=(a10*a08);
+  a12=(a13+a12);
+  a08=(a08*a12);
+  a08=((a10!=0.)?a08:0.);
+  a12=(casadi_real)(a10==0.);
+  a12=((a12!=0.)?a13:0.);
+  a08=(a08+a12);
   res[0][22]=a08;
   a08=arg[0][23];
   a23=((a10!=0.)?a23:0.);
-  a13=(casadi_real)(a10==0.);
-  a13=((a13!=0.)?a22:0.);
-  a23=(a23+a13);
+  a12=(casadi_real)(a10==0.);
+  a12=((a12!=0.)?a22:0.);
+  a23=(a23+a12);
   a11=(casadi_real)(a23==a11);
   a20=(a20-a08);
   a20=casadi_fabs(a20);
-  a13=(a07*a02);
-  a13=casadi_fabs(a13);
-  a20=casadi_fmax(a20,a13);
-  a13=5.0000000000000000e-01;
-  a20=(casadi_real)(a20<a13);
+  a12=(a07*a02);
+  a12=casadi_fabs(a12);
+  a20=casadi_fmax(a20,a12);
+  a12=5.0000000000000000e-01;
+  a20=(casadi_real)(a20<a12);
   a11=(casadi_real)((a11!=0.)&&(a20!=0.));
   a20=1.9801326693244747e-02;
   a21=(a21*a02);
@@ -791,7 +794,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_switching_kernel_select: 275 operations (CasADi SX instructions)
+ * vse_switching_kernel_select: 278 operations (CasADi SX instructions)
  * arg[0] state[47]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, P_vy_vy,
  *     P_vy_r, P_r_r, delta_prev, vx_prev, holding, kin_samples, kin_offset, frozen_ax_value,

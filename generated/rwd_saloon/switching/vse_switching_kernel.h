@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 9030875ca65d27346f3c7bfd4a1a570bed06e259b36e89b588b9769072d4d27a
- * Operations: step 1176, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
+ * Operations: step 1179, input checks 245 a run (every check_period), init 96 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
