@@ -122,7 +122,7 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     """(new state entries, {YAW_RATE_MISMATCH: 1 while the yaw rates disagree}); call only when
     :func:`enabled`. It reads the period's means (``model.input_monitors.AVERAGED``): r, the
     axle's right minus left wheel speed and a_x, whether the car rolls freely (one sample carries
-    its sensor's whole noise; an implausible wheel speed or a_x adds nothing to its sum)."""
+    its sensor's whole noise; an implausible a_x or wheel-speed difference adds nothing to its sum)."""
     s, u, active, settings, numeric_settings = watch.s, watch.u, watch.active, watch.settings, watch.numeric
     sample_time, vehicle = watch.sample_time, watch.vehicle
     steer = ca.cos(u["delta"]) if numeric_settings["wheel_check_axle"] == "front" else 1
