@@ -160,8 +160,8 @@ class MonitorBlock:
         plausible, so only the monitored-only inputs are judged there. a_y, r and a_x are read as
         their means over the period, and so is each axle's right minus left wheel speed
         (``model.input_monitors.AVERAGED``; an input only the checks read summed where its value
-        is plausible, ``model.estimator.Sum``). The method reads their last run: its updates keep their entries, its code
-        is ``active`` times their kept code."""
+        is plausible, ``model.estimator.Sum``). The method reads their last run: its updates keep
+        their entries, its code is ``active`` times their kept code."""
         if not self.segment:
             return Step({}, ca.SX(0))
         period = input_monitors.period(self.numeric, sample_time)

@@ -25,7 +25,22 @@ class Checks:
     linear_range_hold after."""
 
     def block(self, method_inputs, settings: Mapping) -> MonitorBlock:
-        return MonitorBlock(self, tuple(method_inputs), settings)
+        """The block for ``settings`` (an estimator's table), built once per table: a reference
+        estimator asks for it on every step, and its layout is the same each time."""
+        key = (self, tuple(method_inputs), id(settings))
+        kept = _BUILT.get(key)
+        if kept is None or kept.settings is not settings:
+            if len(_BUILT) >= _KEEP:
+                _BUILT.clear()
+            kept = _BUILT[key] = MonitorBlock(self, key[1], settings)
+        return kept
+
+
+_KEEP = 64
+"""How many built blocks are kept (all are let go when there are more): a run uses one per estimator."""
+_BUILT: dict[tuple, MonitorBlock] = {}
+"""Blocks by (checks, method inputs, id of the settings table); an entry keeps its table alive, so
+the id is not reused while it is kept."""
 
 
 @dataclass(frozen=True)
