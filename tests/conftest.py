@@ -11,6 +11,7 @@ from pathlib import Path
 
 os.environ.pop("COLUMNS", None)     # pytest-xdist's workers set 80; the commands' tables honour it
 
+import one_thread  # noqa: F401  (before NumPy loads: one BLAS thread per xdist worker)
 import pytest
 from click.testing import CliRunner
 from locations import DEFAULT_VEHICLE, REPO, REVS

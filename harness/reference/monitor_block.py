@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from vsegen.harness.reference import blocks, monitors
+from vsegen.harness.reference.input_checks import checks
 
 
 @dataclass(frozen=True)
@@ -25,9 +26,10 @@ class Checks:
     linear_range_hold after."""
 
     def block(self, method_inputs, settings: Mapping) -> MonitorBlock:
-        """The block for ``settings`` (an estimator's table), built once per table: a reference
-        estimator asks for it on every step, and its layout is the same each time."""
-        key = (self, tuple(method_inputs), id(settings))
+        """The block for ``settings`` (an estimator's table), built once per table and set of
+        check modules: a reference estimator asks for it on every step, and its layout is the same
+        each time."""
+        key = (self, tuple(method_inputs), id(settings), checks())
         kept = _BUILT.get(key)
         if kept is None or kept.settings is not settings:
             if len(_BUILT) >= _KEEP:
@@ -39,8 +41,8 @@ class Checks:
 _KEEP = 64
 """How many built blocks are kept (all are let go when there are more): a run uses one per estimator."""
 _BUILT: dict[tuple, MonitorBlock] = {}
-"""Blocks by (checks, method inputs, id of the settings table); an entry keeps its table alive, so
-the id is not reused while it is kept."""
+"""Blocks by (checks, method inputs, id of the settings table, check modules); an entry keeps its
+table alive, so the id is not reused while it is kept."""
 
 
 @dataclass(frozen=True)
