@@ -55,17 +55,23 @@ def template_environment(folder: Path = TEMPLATES) -> jinja2.Environment:
 def check_sums(estimator, limits, real: str) -> list[tuple[str, str, str | None]]:
     """(state entry, C value, C plausibility test or None) of each sum the input checks keep
     between two runs (``model.estimator.Sum``): the value its input, or the first minus the
-    second; the test of a judged sum, |value| <= the [inputs] limit of its first input."""
+    second; the test of a judged sum, |value| <= the [inputs] limit of its first input (in a
+    calibratable build the limit's calibration entry, ``p``, as the kernels' guard reads it)."""
     checks = getattr(estimator.structure, "checks", None)
     if checks is None:
         return []
     ref = {name: f"u[{estimator.inputs.index(name)}]" for name in estimator.inputs.names}
     fabs = "fabsf" if real == "float" else "fabs"
+    calibrated = estimator.parameters.names
+
+    def limit(key: str) -> str:
+        return f"p[{calibrated.index(key)}]" if key in calibrated else literal(limits[key], real)
+
     sums = []
     for total in checks.sums:
         terms = total.terms
         value = ref[terms[0]] if len(terms) == 1 else f"({ref[terms[0]]} - {ref[terms[1]]})"
-        gate = f"({fabs}({value}) <= {literal(limits[LIMIT_KEYS[terms[0]]], real)})" if total.judged else None
+        gate = f"({fabs}({value}) <= {limit(LIMIT_KEYS[terms[0]])})" if total.judged else None
         sums.append((total.entry, value, gate))
     return sums
 

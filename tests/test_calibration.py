@@ -142,6 +142,29 @@ def test_each_calibration_field_changes_the_output_as_regeneration_does(config, 
     assert changed >= len(names) // 2
 
 
+def test_the_checks_sums_read_a_recalibrated_input_limit(config):
+    """switching's yaw-rate check alone reads a_x, summed between its runs only where |a_x| is
+    within the [inputs] limit: in a calibratable build that is the calibration's ax_max, as the
+    kernels' guard reads it. Recalibrated to 0.3 m/s^2, inside the DLC's a_x, the C keeps the
+    state and outputs the reference of a file with that limit keeps (the sums' test once read the
+    generated value)."""
+    tuning = load_tuning_estimator(config, "switching")
+    names = tuning.estimator.parameters.names
+    calibration = list(calibration_values(config, "switching", names))
+    calibration[names.index("ax_max")] = 0.3
+    tuning.set_calibration(calibration)
+    inputs = Case.of("dlc", speed_kmh=100.0).simulate(config, 100.0).matrix(tuning.estimator.inputs.names)
+    assert 0.1 < np.mean(np.abs(inputs[:, tuning.estimator.inputs.index("ax")]) > 0.3) < 0.9
+    c_out, c_states = tuning.run(inputs)
+    ref_out, ref_states = run_reference(REFERENCES["switching"], _with_entry(config, "switching", "ax_max", 0.3),
+                                        inputs)
+    sum_ax = tuning.estimator.states.index("checks_sum_ax")
+    np.testing.assert_allclose(c_states[:, sum_ax], ref_states[:, sum_ax], rtol=1e-12, atol=1e-12)
+    for i, signal in enumerate(tuning.estimator.outputs.names):
+        assert difference(signal, c_out[:, i], ref_out[:, i], TOLERANCES["double"],
+                          integer=signal in ("status", "mode")).ok, signal
+
+
 @pytest.mark.parametrize("name", ["kf2dof", pytest.param("switching", marks=pytest.mark.slow),
                                   pytest.param("pf_improved", marks=pytest.mark.slow)])
 def test_an_invalid_calibration_holds_with_its_status(config, name):
