@@ -91,9 +91,8 @@ def build(params: Parameters) -> Estimator:
     offset, learned = ca.SX(0), {}
     if kinematic_offset.enabled(numeric):    # learned in near-straight driving, used from the next sample
         offset = s["kin_offset"]
-        learned = {"kin_offset": kinematic_offset.update(
-            seed.settings, T, offset, pre.ay_filtered, pre.r_checked, pre.updates["ay_last"], pre.updates["r_last"],
-            hold(u["vx"], ok["vx"], seed.vx_min), active)}
+        learned = {"kin_offset": kinematic_offset.update(seed.settings, T, offset, pre,
+                                                         hold(u["vx"], ok["vx"], seed.vx_min), active)}
     result = kf2dof.dynamic_update(params, NAME)(
         x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),

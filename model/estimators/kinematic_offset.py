@@ -67,14 +67,12 @@ def learned(settings, sample_time: float, previous, ay, r, vx, learning):
     return low_pass(previous, ay - r * vx, settings["offset_memory"], sample_time, learning)
 
 
-def update(settings, sample_time: float, previous, ay_filtered, r_checked, ay, r, vx, allowed=None):
-    """c_k for this sample from c_k-1 = ``previous``, the filtered a_y and checked r the
-    pre-processing judges on (:func:`near_straight`), the checked a_y and r it learns from and the
-    measured speed ``vx``: learned where :func:`near_straight` and ``allowed`` (default always:
-    the caller runs it only where allowed) hold; v_x is plausible wherever it is allowed."""
-    learning = near_straight(settings, ay_filtered, r_checked, vx, previous)
-    learning = learning if allowed is None else ca.logic_and(allowed, learning)
-    return learned(settings, sample_time, previous, ay, r, vx, learning)
+def update(settings, sample_time: float, previous, pre, vx, allowed):
+    """c_k for this sample from c_k-1 = ``previous``, the shared pre-processing ``pre`` (filtered
+    and checked a_y, r) and the measured speed ``vx``: learned while ``allowed`` (only on an
+    active sample, where v_x is plausible) and :func:`near_straight`."""
+    learning = ca.logic_and(allowed, near_straight(settings, pre.ay_filtered, pre.r_checked, vx, previous))
+    return learned(settings, sample_time, previous, pre.updates["ay_last"], pre.updates["r_last"], vx, learning)
 
 
 def sensor_part(settings, offset):

@@ -195,9 +195,8 @@ def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX, Chec
         status = status + ca.if_else(ca.logic_and(active, limited), KINEMATIC_DWELL_LIMITED, 0)
     scheme = ca.if_else(active, mode, HOLD)
     if kinematic_offset.OFFSET in seed.extra:    # learned in near-straight dynamic driving
-        extra["kin_offset"] = kinematic_offset.update(
-            seed.settings, T, s["kin_offset"], pre.ay_filtered, pre.r_checked, pre.updates["ay_last"],
-            pre.updates["r_last"], u["vx"], scheme == DYN)
+        extra["kin_offset"] = kinematic_offset.update(seed.settings, T, s["kin_offset"], pre, u["vx"],
+                                                      scheme == DYN)
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
     scratch = SCRATCH.pack({"scheme": scheme, "r_checked": pre.r_checked,
                             "r_prev": s["r_last"], "ay_prev": s["ay_last"],
