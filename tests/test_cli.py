@@ -18,7 +18,7 @@ def test_verify_default_vehicle_prints_table(vsegen):
     """The command end to end on two estimators (every estimator of the default vehicle is verified
     in this form by tests/test_equivalence.py and tests/test_pf_adaptive_pf_improved.py)."""
     result = vsegen.process("verify", "--real", "double", "--params", "baked", "--estimator", "kf2dof",
-                            "--estimator", "ukf")
+                            "--estimator", "switching")
     assert result.exit_code == 0, result.stderr
     assert f"verify passed: {2 * len(VERIFICATION_SET)} runs in 1 form(s)" in result.stdout
 

@@ -108,8 +108,8 @@ def test_stiffness_stays_inside_its_clamp_and_the_weight_in_0_1(config):
 def test_tyres_past_their_linear_range_raise_beyond_linear_range(vehicle_text):
     """linear_range and stiffness_drop_limit (beyond the paper): the bit follows |a_y| and the learned
     stiffness exactly as documented, the C equals the reference, and both off raise nothing."""
-    text = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.7).replace(
-        "[estimator.ekf_rls]\n", "[estimator.ekf_rls]\nlinear_range = 6.0\n", 1)
+    text = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.7, linear_range=6.0,
+                         linear_range_hold=0.0)
     config = parse_vehicle(text, "flagged.toml", "c_class")
     case = Case.of("dlc", speed_kmh=100.0, mu=0.8)
     est, log, outputs, _ = run(config, case)
@@ -123,7 +123,8 @@ def test_tyres_past_their_linear_range_raise_beyond_linear_range(vehicle_text):
     np.testing.assert_array_equal(flagged, expected)
     (result,) = verify_estimator(config, NAME, cases=(case,))
     assert result.ok, result
-    off = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.0)    # shipped: 0.5
+    off = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.0,   # shipped: 0.5, 6 m/s^2
+                        linear_range=0.0)
     _, _, plain, _ = run(parse_vehicle(off, "plain.toml", "c_class"), case)
     assert not np.any(plain[:, est.outputs.index("status")].astype(int) & status.BEYOND_LINEAR_RANGE)
 
