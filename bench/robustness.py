@@ -79,9 +79,9 @@ COPING = [
     "(a bank and an offset cannot be told apart from a_y and r; 0.4 balances their worst cases); "
     "switching bounds its kinematic dwell (64), fusion flags its schemes parting (4096);",
     "* fusion pulls its integrator to a KF with saturating tyres within 0.2 s (k_c = 5/s), so a bank, "
-    "an offset or a wrong yaw-rate scale cannot carry its output; fusion and ekf_rls flag |a_y| beyond "
-    "6 m/s² (256 BEYOND_LINEAR_RANGE: β rests on the friction the model assumes; kf2dof, ukf and aukf "
-    "from 4 m/s²);",
+    "an offset or a wrong yaw-rate scale cannot carry its output; kf2dof, fusion, ukf and aukf flag |a_y| "
+    "beyond 4 m/s², ekf_rls, whose stiffness follows the tyres, beyond 6 m/s² (256 BEYOND_LINEAR_RANGE: "
+    "β rests on the friction or the stiffness the model assumes);",
     "* the particle filters integrate v_y without a measurement and flag it (1024 DEAD_RECKONING): "
     "under a bank or an offset they are 3–15° off, and say so.",
     "",
