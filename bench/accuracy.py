@@ -1,7 +1,9 @@
 """Accuracy of every estimator on the common scenario set, against the truth plant.
 
-    python -m bench.accuracy [--vehicle FILE] [--seeds N] [--out docs/accuracy.md]
+    python -m bench.accuracy [--vehicle FILE] [--seeds N] [--out FILE]
         [--scheduler local|serial|ADDRESS] [--common-only]
+
+(--out: docs/accuracy.md for the default vehicle, docs/accuracy_<vehicle>.md for another.)
 
 Prints and writes a Markdown table: per scenario whether the run stayed in the cones / spun, and per
 estimator the beta max / mean / RMSE in degrees (seed 000 Table 3 format; with --seeds N > 1,
@@ -75,13 +77,17 @@ def main(argv: list[str] | None = None) -> None:
                         help="seeds of the comparison of options beyond the paper")
     parser.add_argument("--pf-runs", type=int, default=50,
                         help="Monte-Carlo runs of the seed-003 reproduction")
-    parser.add_argument("--out", type=Path, default=REPO / "docs" / "accuracy.md")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="default: docs/accuracy.md for the default vehicle, else docs/accuracy_<vehicle>.md")
     parser.add_argument("--scheduler", default=None,
                         help="'local' (default), 'serial' or a Dask scheduler address (also $VSEGEN_SCHEDULER)")
     parser.add_argument("--common-only", action="store_true",
                         help="only the common table (no paper reproductions, figures or tuning section)")
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
+    if args.out is None:
+        same = args.vehicle.resolve() == Path(DEFAULT_VEHICLE).resolve()
+        args.out = REPO / "docs" / ("accuracy.md" if same else f"accuracy_{config.name}.md")
     names = [n for n in config.estimators if "beta" in build(n, config).outputs.names]  # sideslip
     rows = ["| scenario | stayed in cones | spun | estimator | β max (°) | β mean (°) | β RMSE (°) "
             "| v_y RMSE (m/s) | r RMSE (°/s) |", "|---|---|---|---|---|---|---|---|---|"]
