@@ -23,6 +23,8 @@ from vsegen.model.params import parse_vehicle
 
 pytestmark = pytest.mark.skipif(bool(pil.available()), reason=pil.available() or "")
 
+PARTICLE_FILTERS = ("pf_adaptive", "pf_improved")
+
 
 @pytest.fixture(scope="module")
 def config():
@@ -91,9 +93,9 @@ def test_every_estimator_runs_under_pil(board, car):
     the particle filters, whose 100,000 instructions a step take most of the emulator's time, on
     the default car's board only. `python -m bench.pil --vehicle FILE` runs a car on both boards
     and every scenario (docs/pil.md)."""
-    vehicle = load_vehicle(REPO / "vehicles" / f"{car}.toml")
-    names = tuple(n for n in vehicle.estimators
-                  if REPO / "vehicles" / f"{car}.toml" == DEFAULT_VEHICLE or not n.startswith("pf_"))
+    path = REPO / "vehicles" / f"{car}.toml"
+    vehicle = load_vehicle(path)
+    names = tuple(n for n in vehicle.estimators if path == DEFAULT_VEHICLE or n not in PARTICLE_FILTERS)
     results = pil.pil(vehicle, names, board, "baked", DECISIVE)
     failures = [(r.reference.estimator, r.reference.case) for r in results if not r.ok]
     assert failures == []
