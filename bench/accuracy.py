@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     config = load_vehicle(args.vehicle)
     if args.out is None:
-        same = args.vehicle.resolve() == Path(DEFAULT_VEHICLE).resolve()
+        same = args.vehicle.resolve() == DEFAULT_VEHICLE.resolve()
         args.out = REPO / "docs" / ("accuracy.md" if same else f"accuracy_{config.name}.md")
     names = [n for n in config.estimators if "beta" in build(n, config).outputs.names]  # sideslip
     rows = ["| scenario | stayed in cones | spun | estimator | β max (°) | β mean (°) | β RMSE (°) "

@@ -1,6 +1,7 @@
-"""Scenario subsets for the tests that repeat a check already made on every scenario elsewhere."""
+"""Scenario and estimator subsets for the tests that repeat a check already made in full elsewhere."""
 
 from vsegen.harness.sim.scenarios import VERIFICATION_SET
+from vsegen.model.estimators import pf
 
 DECISIVE = tuple(case for case in VERIFICATION_SET if case.label in (
     "dlc(outliers=True,speed_kmh=120.0)", "dlc(mu=0.5,speed_kmh=120.0)",
@@ -9,3 +10,6 @@ DECISIVE = tuple(case for case in VERIFICATION_SET if case.label in (
 inputs, the speed rule, implausible and extreme inputs): where a build for another target or a
 wrapper could part from the C that verify checks on all of them."""
 assert len(DECISIVE) == 6, "a decisive scenario was renamed in harness.sim.scenarios"
+
+PARTICLE_FILTERS = tuple(definition.name for definition in pf.DEFINITIONS)
+"""The particle filters: about 100,000 instructions a step, the heaviest runs of a check."""

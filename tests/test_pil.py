@@ -10,7 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from cases import DECISIVE
+from cases import DECISIVE, PARTICLE_FILTERS
 from junit_reports import read_junit
 from locations import DEFAULT_VEHICLE, REPO
 
@@ -22,8 +22,6 @@ from vsegen.harness.verify.equivalence import against_reference, case_inputs, pr
 from vsegen.model.params import parse_vehicle
 
 pytestmark = pytest.mark.skipif(bool(pil.available()), reason=pil.available() or "")
-
-PARTICLE_FILTERS = ("pf_adaptive", "pf_improved")
 
 
 @pytest.fixture(scope="module")
