@@ -42,6 +42,7 @@ def test_verify_compiles_the_checked_in_c_and_fails_first_on_an_edit(tmp_path, v
     assert missing.exit_code == 1 and "generated/c_class/switching is missing" in missing.stderr
 
 
+@pytest.mark.slow      # 35 s (verify runs two forms on every scenario); the default suite keeps generate --check
 def test_a_form_generated_once_is_declared_then_regenerated_checked_and_verified(tmp_path, vsegen):
     (tmp_path / "vehicles").mkdir()
     vehicle = tmp_path / "vehicles" / "c_class.toml"

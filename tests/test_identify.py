@@ -149,6 +149,7 @@ def test_a_file_copied_to_another_car_warns_and_the_shipped_files_do_not(tmp_pat
             "derived for this vehicle (see vsegen identify") in warnings[0]
 
 
+@pytest.mark.slow      # 29 s; the default suite keeps identify's fits without a reference
 def test_a_gnss_lateral_velocity_reference_enters_the_fit_and_narrows_it(config):
     cf, cr = 120000.0, 110000.0
     text = (VEHICLES / "c_class.toml").read_text().replace("roll_gradient = 0.0082", "roll_gradient = 0.0")
