@@ -70,11 +70,14 @@ LINEAR_RANGE_STATE = Signal("linear_range_hold_left", "-", "samples BEYOND_LINEA
                             "(linear_range_hold)")
 
 
-def beyond_linear_range(ay, settings, ay_model=None):
+def beyond_linear_range(ay, settings, ay_model=None, friction_scale=None):
     """1 when |``ay``| (measured), or |``ay_model``| (the filter's prior a_y, where it has one),
-    exceeds ``linear_range`` (> 0)."""
+    exceeds ``linear_range`` (> 0), times the estimated ``friction_scale`` where the filter has one
+    (the linear range shrinks with the road's friction: on a road of a third of the file's friction
+    the tyres saturate at a third of the a_y)."""
     seen = ca.fabs(ay) if ay_model is None else ca.fmax(ca.fabs(ay), ca.fabs(ay_model))
-    return ca.logic_and(settings["linear_range"] > 0, seen > settings["linear_range"])
+    limit = settings["linear_range"] if friction_scale is None else settings["linear_range"] * friction_scale
+    return ca.logic_and(settings["linear_range"] > 0, seen > limit)
 
 
 def holds_linear_range(numeric_settings) -> bool:

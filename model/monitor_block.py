@@ -185,14 +185,16 @@ class MonitorBlock:
         return Step({n: s[n] for n in names}, active * s[kept_code], checks=segment)
 
     def judge_model(self, s: dict, active, settings, sample_time: float, innovation=None, ay=None,
-                    ay_model=None, concerns=None, beyond: tuple = (), held_here: bool = True) -> Step:
+                    ay_model=None, concerns=None, beyond: tuple = (), held_here: bool = True,
+                    friction_scale=None) -> Step:
         """The model checks' stage: the consistency monitor of the prior ``innovation`` (its
         entries kept while not active, unless ``held_here`` is False: an estimator that selects its
         whole state by ``active`` holds them itself; MODEL_INCONSISTENT where ``concerns``, default
         always: an estimator whose output the filter carries only in part says when it does), and
         BEYOND_LINEAR_RANGE while |``ay``| or |``ay_model``| (the filter's prior a_y, where it has
-        one) > ``linear_range``, held ``linear_range_hold`` after, or while any of the estimator's
-        own ``beyond`` tests holds. Only the checks that are on generate code."""
+        one) > ``linear_range`` (times the filter's estimated ``friction_scale``, where it has one),
+        held ``linear_range_hold`` after, or while any of the estimator's own ``beyond`` tests holds.
+        Only the checks that are on generate code."""
         updates, code, first = {}, ca.SX(0), ca.SX(0)
         if self.consistency:
             check = consistency.monitor(s, innovation, settings, sample_time)
@@ -204,7 +206,7 @@ class MonitorBlock:
             first = ca.logic_and(active, check.first)
         tests = list(beyond)
         if self.checks.linear_range and self.numeric["linear_range"] > 0:
-            over = consistency.beyond_linear_range(ay, settings, ay_model)
+            over = consistency.beyond_linear_range(ay, settings, ay_model, friction_scale)
             if self.linear_range_held:
                 name = consistency.LINEAR_RANGE_STATE.name
                 updates[name], over = held_flag(s[name], over, active, settings["linear_range_hold"], sample_time)

@@ -413,6 +413,14 @@ KF_FIELDS: tuple[Field, ...] = (
                 "(the road carries what the car does; a tyre_friction set too low cannot make the filter "
                 "read the measured a_y as a runaway slip angle; 0 = tyre_friction alone; tyre_model = "
                 "\"saturating\" only)", default=1.15),
+    nonnegative("friction_noise", "1/s", "beyond the papers: the filter estimates a friction scale rho "
+                "(1 = tyre_friction) as a third state, a random walk of this intensity (rho^2 per s) that "
+                "the measurements move where the tyres saturate, so a slippery road lowers the model's "
+                "friction; 0 = tyre_friction and the floor alone (tyre_model = \"saturating\" only)",
+                default=0.0),
+    positive("friction_time", "s", "the estimated friction scale returns to 1 (the file's tyre_friction) "
+             "with this time constant where the driving no longer shows the friction (friction_noise > 0 "
+             "only)", default=5.0),
     *LOW_SPEED_FIELDS,
 )
 """The 2-DOF Kalman filter's settings, shared by every estimator that runs it."""

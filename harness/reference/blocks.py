@@ -153,11 +153,12 @@ MONITOR_STATES = ("residual", "residual_hold_left")
 """The consistency monitor's state entries (model.consistency.STATES)."""
 
 
-def beyond_linear_range(ay: float, settings, ay_model: float | None = None) -> bool:
+def beyond_linear_range(ay: float, settings, ay_model: float | None = None, friction_scale: float = 1.0) -> bool:
     """Whether |``ay``| (the logged a_y, m/s^2), or |``ay_model``| (the filter's prior a_y, where
-    it has one), exceeds the setting ``linear_range`` (0 = never)."""
+    it has one), exceeds the setting ``linear_range`` (0 = never) times the filter's estimated
+    ``friction_scale`` (1 where it has none)."""
     seen = abs(ay) if ay_model is None else max(abs(ay), abs(ay_model))
-    return settings["linear_range"] > 0 and seen > settings["linear_range"]
+    return settings["linear_range"] > 0 and seen > settings["linear_range"] * friction_scale
 
 
 def residual_monitor(x, innovation, settings, T):

@@ -4,9 +4,7 @@ beta = w beta_kin + (1 - w) beta_KF with w = clamp(|a_y,f| / (2 a_yT), 0, 1)."""
 
 from __future__ import annotations
 
-import numpy as np
-
-from vsegen.harness.reference import blocks, kinematic_dynamic
+from vsegen.harness.reference import bicycle_kf, blocks, kinematic_dynamic
 from vsegen.harness.reference.input_checks import frozen
 from vsegen.harness.reference.kinematic_dynamic import DYN, KINEMATIC_INPUTS
 from vsegen.harness.reference.monitor_block import Checks
@@ -44,15 +42,18 @@ def step(config, state, u):
 def _fuse(config, block, x, updates, r_k, ay_f, status, u):
     s = config.settings(TABLE)
     T = config.sample_time
-    P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
+    kf, P = bicycle_kf.state(s, x)
     offset, learned = x.get("kin_offset", 0.0), {}     # beyond the paper: the kinematic offset
     if s["offset_memory"] > 0:
         learned["kin_offset"] = kinematic_dynamic.learned_offset(s, T, offset, ay_f, updates["ay_last"],
                                                                  updates["r_last"], u["vx"])
-    xk, P, innovation, ay_model = kinematic_dynamic.kalman(config, TABLE, x["vy"], x["r"], P, x["delta_prev"],
+    xk, P, innovation, ay_model = kinematic_dynamic.kalman(config, TABLE, kf, P, x["delta_prev"],
                                                  x["vx_prev"], u, r_k,
-                                                 ay_offset=s["offset_sensor_share"] * offset)
-    monitor, judgement, _ = block.judge_model(x, innovation, T, u["ay"], ay_model)   # beyond the paper
+                                                 ay_offset=s["offset_sensor_share"] * offset,
+                                                 inputs_frozen=frozen.any_frozen(x, s, block.check_time(T),
+                                                                                 KINEMATIC_INPUTS))
+    monitor, judgement, _ = block.judge_model(x, innovation, T, u["ay"], ay_model,   # beyond the paper
+                                              friction_scale=bicycle_kf.friction_scale(s, xk))
     status |= judgement
     vy_kin = (x["vy_kin"] + T * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)
               + T * s["integral_gain"] * (x["vy"] - x["vy_kin"]))
@@ -64,7 +65,6 @@ def _fuse(config, block, x, updates, r_k, ay_f, status, u):
     beta = w * beta_kin + (1 - w) * beta_kf
     if s["disagreement_limit"] > 0 and w * abs(beta_kin - beta_kf) > s["disagreement_limit"]:
         status |= blocks.SCHEMES_DISAGREE            # beyond the paper: the schemes part
-    new = {**x, **updates, "vy": xk[0], "r": xk[1], "vy_kin": vy_kin, "P_vy_vy": P[0, 0],
-           "P_vy_r": P[0, 1], "P_r_r": P[1, 1], "delta_prev": u["delta"], "vx_prev": u["vx"],
-           "holding": 0.0, "mode": DYN, **monitor, **learned}
+    new = {**x, **updates, **bicycle_kf.entries(s, xk, P), "vy_kin": vy_kin, "delta_prev": u["delta"],
+           "vx_prev": u["vx"], "holding": 0.0, "mode": DYN, **monitor, **learned}
     return new, [beta, w * vy_kin + (1 - w) * xk[0], r_k, w, status]

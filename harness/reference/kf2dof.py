@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from vsegen.harness.reference import bicycle_kf, blocks
+from vsegen.harness.reference.input_checks import frozen
 from vsegen.harness.reference.monitor_block import Checks
 
 INPUTS = ("delta", "vx", "ay", "r")
@@ -28,12 +29,12 @@ def input_names(config) -> tuple[str, ...]:
 
 def names(config):
     """(inputs, states, outputs) names of the flat vectors."""
-    return input_names(config), _state_names(_monitors(config)), OUTPUTS
+    return input_names(config), _state_names(_settings(config), _monitors(config)), OUTPUTS
 
 
-def _state_names(block) -> tuple[str, ...]:
-    return ("vy", "r", "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev", *block.states, "holding",
-            *block.segment)
+def _state_names(s, block) -> tuple[str, ...]:
+    return (*bicycle_kf.names(s), *bicycle_kf.covariance_names(s), "delta_prev", "vx_prev", *block.states,
+            "holding", *block.segment)
 
 
 def _settings(config):
@@ -45,10 +46,9 @@ def init(config, u0) -> np.ndarray:
     block = _monitors(config)
     first, holding = blocks.first_sample(config.limits, dict(zip(block.inputs, u0)), s["vx_min"],
                                          s["vx_resume"], block.monitored)
-    P0 = np.array(s["initial_covariance"])
-    entries = block.initial(first)
-    return np.array([0.0, first["r"], P0[0, 0], P0[0, 1], P0[1, 1], first["delta"], first["vx"],
-                     *(entries[k] for k in block.states), holding, *(entries[k] for k in block.segment)])
+    entries = {**bicycle_kf.initial_entries(s, first["r"]), "delta_prev": first["delta"], "vx_prev": first["vx"],
+               **block.initial(first), "holding": holding}
+    return np.array([entries[k] for k in _state_names(s, block)])
 
 
 def step(config, state, u):
@@ -56,29 +56,30 @@ def step(config, state, u):
     T = config.sample_time
     vx_max = config.limits["vx_max"]
     inputs = dict(zip(block.inputs, u))
-    x = dict(zip(_state_names(block), state))
+    names = _state_names(s, block)
+    x = dict(zip(names, state))
     entries = {k: x[k] for k in block.states}    # the model checks' entries when they are on
-    vy, r, p11, p12, p22, delta_prev, vx_prev = state[:7]
+    kf, P = bicycle_kf.state(s, x)
+    delta_prev, vx_prev = x["delta_prev"], x["vx_prev"]
     active, status, ok = blocks.hold_rule(config.limits, inputs, s["vx_min"], s["vx_resume"],
                                          x["holding"] > 0.5, block.monitored)
     watched, flags = block.watch_inputs(x, inputs, ok, active, T, config.vehicle, config.limits)
     delta_keep, vx_keep = blocks.kept_previous(inputs, ok, delta_prev, vx_prev)
-    if not active:
-        P0 = np.array(s["initial_covariance"])
-        new = np.array([0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta_keep, vx_keep,
-                        *entries.values(), 1.0, *(watched[k] for k in block.segment)])
-        return new, np.array([0.0, 0.0, r, float(status)])
+    if not active:       # vy := 0, P := P_0; r and the friction scale held
+        held = {**x, **bicycle_kf.entries(s, np.array([0.0, *kf[1:]]), bicycle_kf.initial_covariance(s)),
+                "delta_prev": delta_keep, "vx_prev": vx_keep, "holding": 1.0, **{k: watched[k] for k in block.segment}}
+        return np.array([held[k] for k in names]), np.array([0.0, 0.0, x["r"], float(status)])
 
     def clamp(v):
         return min(max(v, s["vx_min"]), vx_max)
 
     vx = clamp(inputs["vx"])
-    x_new, P, innovation, ay_model = bicycle_kf.step(s, config.vehicle, T, np.array([vy, r]),
-                                                 np.array([[p11, p12], [p12, p22]]), delta_prev, clamp(vx_prev),
-                                                 inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]))
-    judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"], ay_model)
-    entries.update(judged)
+    x_new, P, innovation, ay_model = bicycle_kf.step(s, config.vehicle, T, kf, P, delta_prev, clamp(vx_prev),
+                                                     inputs["delta"], vx, np.array([inputs["ay"], inputs["r"]]),
+                                                     frozen.any_frozen(x, s, block.check_time(T), ("ay", "r")))
+    judged, judgement, _ = block.judge_model(entries, innovation, T, inputs["ay"], ay_model,
+                                             friction_scale=bicycle_kf.friction_scale(s, x_new))
     status |= flags | judgement
-    new = np.array([x_new[0], x_new[1], P[0, 0], P[0, 1], P[1, 1], delta_keep, vx_keep, *entries.values(), 0.0,
-                    *(watched[k] for k in block.segment)])
-    return new, np.array([math.atan2(x_new[0], vx), x_new[0], x_new[1], float(status)])
+    new = {**x, **bicycle_kf.entries(s, x_new, P), "delta_prev": delta_keep, "vx_prev": vx_keep, **judged,
+           "holding": 0.0, **{k: watched[k] for k in block.segment}}
+    return np.array([new[k] for k in names]), np.array([math.atan2(x_new[0], vx), x_new[0], x_new[1], float(status)])

@@ -33,10 +33,11 @@ def state_names(config, table, block, extra: tuple[str, ...] = ()) -> tuple[str,
     (``harness.reference.monitor_block``: its model checks', and last its input checks'), ``extra``
     its own entries (0 at init, kept while holding)."""
     n = median_length(config, table)
+    s = config.settings(table)
     return ("ay_m_1", "ay_m_2", "ay_b_1", "ay_b_2",
             *(f"ay_b_hist_{i}" for i in range(1, n)),
-            "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin", "vy", "r",
-            "P_vy_vy", "P_vy_r", "P_r_r", "delta_prev", "vx_prev",
+            "r_last", "ay_last", "r_rejections", "ay_rejections", "mode", "vy_kin",
+            *bicycle_kf.names(s), *bicycle_kf.covariance_names(s), "delta_prev", "vx_prev",
             *block.states, "holding", *extra, *block.segment)
 
 
@@ -86,20 +87,21 @@ def init(config, table, block, u0, extra: tuple[str, ...] = ()):
     ay_b = ay * b.sum() / a.sum()  # DC steady state of the prefilter
     r_ref = reference_yaw_rate(config, delta, clamp(config, table, vx))
     r_last = r if abs(r - r_ref) <= s["yaw_rate_band"] or s["yaw_rate_check"] == "yaw_acceleration" else r_ref
-    P0 = np.array(s["initial_covariance"])
     n = median_length(config, table)
-    monitor = block.initial(first)
-    return np.array([ay, ay, ay_b, ay_b, *([ay_b] * (n - 1)), r_last, ay_b, 0.0, 0.0, DYN, 0.0,
-                     0.0, r, P0[0, 0], P0[0, 1], P0[1, 1], delta, vx, *(monitor[k] for k in block.states),
-                     holding, *([0.0] * len(extra)), *(monitor[k] for k in block.segment)])
+    entries = {"ay_m_1": ay, "ay_m_2": ay, "ay_b_1": ay_b, "ay_b_2": ay_b,
+               **{f"ay_b_hist_{i}": ay_b for i in range(1, n)}, "r_last": r_last, "ay_last": ay_b,
+               "r_rejections": 0.0, "ay_rejections": 0.0, "mode": DYN, "vy_kin": 0.0,
+               **bicycle_kf.initial_entries(s, r), "delta_prev": delta, "vx_prev": vx, **block.initial(first),
+               "holding": holding, **dict.fromkeys(extra, 0.0)}
+    return np.array([entries[k] for k in state_names(config, table, block, extra)])
 
 
 def held(config, table, x, inputs, ok):
     """State while holding (§2.10)."""
-    P0 = np.array(config.settings(table)["initial_covariance"])
+    s = config.settings(table)
     new = dict(x)
-    new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0, P_vy_vy=P0[0, 0], P_vy_r=P0[0, 1],
-               P_r_r=P0[1, 1])
+    new.update(vy_kin=0.0, vy=0.0, mode=DYN, holding=1.0,
+               **dict(zip(bicycle_kf.covariance_names(s), blocks.packed(bicycle_kf.initial_covariance(s)))))
     new["delta_prev"], new["vx_prev"] = blocks.kept_previous(inputs, ok, x["delta_prev"],
                                                              x["vx_prev"])
     return new
@@ -143,13 +145,15 @@ def learned_offset(s, T: float, offset: float, ay_f: float, ay: float, r: float,
     return blocks.low_pass(offset, ay - r * vx, T, s["offset_memory"])
 
 
-def kalman(config, table, vy, r, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0):
-    """The 2-DOF KF (harness.reference.bicycle_kf): predict with the previous inputs, update with
+def kalman(config, table, x, P, delta_prev, vx_prev, u, r_k, ay_offset: float = 0.0, inputs_frozen: bool = False):
+    """The 2-DOF KF (harness.reference.bicycle_kf) from its state ``x`` ([vy, r], and the friction
+    scale where it is estimated) and ``P``: predict with the previous inputs, update with
     z = [a_y,m - ay_offset, r_k]; returns (x, P, the prior innovation z - h(x-), the prior's a_y)
-    as bicycle_kf.step."""
+    as bicycle_kf.step (``inputs_frozen``: a_y or r frozen)."""
     z = np.array([roll_corrected(config, table, u["ay"]) - ay_offset, r_k])
-    return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, np.array([vy, r]), P,
-                           delta_prev, clamp(config, table, vx_prev), u["delta"], clamp(config, table, u["vx"]), z)
+    return bicycle_kf.step(config.settings(table), config.vehicle, config.sample_time, x, P,
+                           delta_prev, clamp(config, table, vx_prev), u["delta"], clamp(config, table, u["vx"]), z,
+                           inputs_frozen)
 
 
 def beta(config, table, vy, vx):

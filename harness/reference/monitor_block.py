@@ -106,17 +106,19 @@ class MonitorBlock:
         return new, int(x["checks_code"]) if active else 0
 
     def judge_model(self, x, innovation, T: float, ay: float, ay_model: float | None = None,
-                    concerns: bool = True, beyond: bool = False) -> tuple[dict, int, bool]:
+                    concerns: bool = True, beyond: bool = False,
+                    friction_scale: float = 1.0) -> tuple[dict, int, bool]:
         """(new entries, status bits, first firing) of the model checks on an active sample: the
         consistency monitor (MODEL_INCONSISTENT where ``concerns``) and BEYOND_LINEAR_RANGE while
-        |``ay``| or |``ay_model``| (the filter's prior a_y) > linear_range, held linear_range_hold
-        after, or while the estimator's own ``beyond`` holds."""
+        |``ay``| or |``ay_model``| (the filter's prior a_y) > linear_range times the filter's
+        estimated ``friction_scale``, held linear_range_hold after, or while the estimator's own
+        ``beyond`` holds."""
         new, code, first = {}, 0, False
         if self.consistent:
             new, suspect, first = blocks.residual_monitor(x, innovation, self.settings, T)
             code |= blocks.MODEL_INCONSISTENT if suspect and concerns else 0
         if self.checks.linear_range:
-            over = blocks.beyond_linear_range(ay, self.settings, ay_model)
+            over = blocks.beyond_linear_range(ay, self.settings, ay_model, friction_scale)
             if self.range_held:
                 new["linear_range_hold_left"], over = blocks.held_flag(x["linear_range_hold_left"], over,
                                                                        self.settings["linear_range_hold"], T)

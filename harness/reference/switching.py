@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from vsegen.harness.reference import blocks, kinematic_dynamic
+from vsegen.harness.reference import bicycle_kf, blocks, kinematic_dynamic
 from vsegen.harness.reference.input_checks import frozen
 from vsegen.harness.reference.kinematic_dynamic import DYN, KIN, KINEMATIC_INPUTS
 from vsegen.harness.reference.monitor_block import Checks
@@ -73,15 +71,15 @@ def _switch(config, x, updates, r_k, ay_f, status, u):
         vy_kin += config.sample_time * (x["ay_last"] - x["r_last"] * x["vx_prev"] - offset)  # [E14]
         new["vy_kin"] = vy = vy_kin
     else:
+        x0, P = bicycle_kf.state(s, x)
         if x["mode"] == KIN:                                                           # [E26]
-            vy0, r0, P = x["vy_kin"], x["r_last"], np.array(s["initial_covariance"])
-        else:
-            vy0, r0 = x["vy"], x["r"]
-            P = np.array([[x["P_vy_vy"], x["P_vy_r"]], [x["P_vy_r"], x["P_r_r"]]])
+            x0[0], x0[1], P = x["vy_kin"], x["r_last"], bicycle_kf.initial_covariance(s)
         sensor = s["offset_sensor_share"] * new["kin_offset"] if s["offset_memory"] > 0 else 0.0
-        xk, P, _, _ = kinematic_dynamic.kalman(config, TABLE, vy0, r0, P, x["delta_prev"], x["vx_prev"], u, r_k,
-                                            ay_offset=sensor)   # beyond the paper: the offset's sensor share
-        new.update(vy=xk[0], r=xk[1], P_vy_vy=P[0, 0], P_vy_r=P[0, 1], P_r_r=P[1, 1])
+        inputs_frozen = frozen.any_frozen(x, s, _monitors(config).check_time(config.sample_time), KINEMATIC_INPUTS)
+        xk, P, _, _ = kinematic_dynamic.kalman(config, TABLE, x0, P, x["delta_prev"], x["vx_prev"], u, r_k,
+                                            ay_offset=sensor,   # beyond the paper: the offset's sensor share
+                                            inputs_frozen=inputs_frozen)
+        new.update(bicycle_kf.entries(s, xk, P))
         vy = xk[0]
     new.update(delta_prev=u["delta"], vx_prev=u["vx"], holding=0.0)
     return new, [kinematic_dynamic.beta(config, TABLE, vy, u["vx"]), vy, r_k, mode, status]

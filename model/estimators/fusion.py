@@ -29,7 +29,6 @@ from vsegen.model.estimator import (
 )
 from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
-    COVARIANCE,
     KINEMATIC_DYNAMIC_FIELDS,
     KINEMATIC_INPUTS,
     YAW_RATE_CHECK_TUNABLES,
@@ -94,11 +93,12 @@ def build(params: Parameters) -> Estimator:
         learned = {"kin_offset": kinematic_offset.update(seed.settings, T, offset, pre,
                                                          hold(u["vx"], ok["vx"], seed.vx_min), active)}
     result = kf2dof.dynamic_update(params, NAME)(
-        x=ca.vertcat(s["vy"], s["r"]), P=ca.vertcat(*[s[n] for n in COVARIANCE]),
+        x=seed.kf.x(s), P=seed.kf.P(s),
         delta_prev=s["delta_prev"], vx_prev=s["vx_prev"], delta=hold(u["delta"], ok["delta"], 0),
         vx=hold(u["vx"], ok["vx"], seed.vx_min),
         ay=hold(seed.roll_corrected(u["ay"]) - kinematic_offset.sensor_part(seed.settings, offset), ok["ay"], 0),
         r_meas=pre.r_checked,
+        **seed.kf.learning(pre.kinematic_inputs_frozen),
         **params.keyword())
     vy_kf = result["x_next"][0]
     vy_kin = s["vy_kin"] + T * (s["ay_last"] - s["r_last"] * s["vx_prev"] - offset) \
@@ -110,6 +110,7 @@ def build(params: Parameters) -> Estimator:
     beta_kin = sideslip(vy_kin, vx)
     beta = weight * beta_kin + (1 - weight) * result["beta"]
     judged = seed.monitors.judge_model(s, active, seed.settings, T, result["innovation"], u["ay"], result["ay_model"],
+                                       friction_scale=seed.kf.friction_scale(result["x_next"]),
                                        held_here=False)
     code, monitor = pre.status + judged.code, judged.updates
     limit = seed.settings["disagreement_limit"]
@@ -117,8 +118,7 @@ def build(params: Parameters) -> Estimator:
         apart = weight * ca.fabs(beta_kin - result["beta"]) > limit
         code = code + status.SCHEMES_DISAGREE * (active * apart)
     running = seed.advanced({**s, **pre.updates}, u, {
-        "vy": vy_kf, "r": result["x_next"][1], "vy_kin": vy_kin,
-        **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}, **monitor, **learned})
+        **seed.kf.entries(result["x_next"], result["P_next"]), "vy_kin": vy_kin, **monitor, **learned})
     holding = seed.held({**s, **pre.updates}, u, guard.plausible)
     next_state = ca.if_else(active, layout.pack(running), layout.pack(holding))
     output = OUTPUTS.pack({

@@ -8,10 +8,11 @@ The dynamic scheme of docs/methods.md, seed 000 (sections 2.5, 2.8-2.10), alone:
 * beta = atan2(vy, vx_k).
 
 Beyond the paper, ``tyre_model = "saturating"`` makes it an extended KF of the bicycle model with
-saturating axle forces (model.tyres), right where the tyres reach their friction limit.
+saturating axle forces (model.tyres), right where the tyres reach their friction limit; with
+``friction_noise`` > 0 its state has a third entry, the friction scale rho (:class:`KalmanState`).
 
-Hold rule (model.guard): while not active, vy := 0, P := P_0, r is held, the previous inputs keep
-their last plausible values, and the output is beta = 0, vy = 0, r = held r. The model is always
+Hold rule (model.guard): while not active, vy := 0, P := P_0, r (and rho) are held, the previous
+inputs keep their last plausible values, and the output is beta = 0, vy = 0, r = held r. The model is always
 evaluated at vx clamped to [vx_min, vx_max], so no division by a small speed can happen.
 Initialisation: vy = 0, r = r_0, P = P_0, previous inputs = sample 0; holding unless sample 0 is
 plausible and vx_0 >= vx_resume.
@@ -34,6 +35,7 @@ from vsegen.model.estimator import (
     make_guarded,
 )
 from vsegen.model.guard import first_sample, hold, input_guard, model_speed, previous_inputs, symbolic
+from vsegen.model.input_checks import frozen
 from vsegen.model.layout import Layout, covariance_signals
 from vsegen.model.monitor_block import Checks, MonitorBlock
 from vsegen.model.schema import KF_FIELDS, LOW_SPEED_RULES, EstimatorSchema
@@ -49,13 +51,64 @@ CHECKS = Checks(METHOD_INPUTS, channels=CHANNELS, linear_range=True)
 """Beyond the paper: the monitor block (model.monitor_block)."""
 SCHEMA = EstimatorSchema(fields=(*KF_FIELDS, *CHECKS.fields), rules=LOW_SPEED_RULES)
 
-_ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
-_COVARIANCE = kalman.packed_names("P", ("vy", "r"))
+ESTIMATES = (Signal("vy", "m/s", "lateral velocity estimate"), Signal("r", "rad/s", "yaw-rate estimate"))
+FRICTION_SCALE = Signal("friction", "-", "estimated friction scale rho (1 = the file's tyre_friction)")
+
+
+def friction_estimated(settings) -> bool:
+    """Whether the KF estimates the friction scale (structural: ``friction_noise`` > 0 when it is
+    generated, with saturating tyres)."""
+    return settings["tyre_model"] == "saturating" and settings["friction_noise"] > 0
+
+
+class KalmanState:
+    """The 2-DOF KF's state entries of one settings table: [vy, r], and the friction scale rho
+    where it is estimated, with the packed covariance; P_0 is ``initial_covariance`` with rho
+    known (variance 0: the file's friction until the driving shows another)."""
+
+    def __init__(self, numeric_settings, settings, estimates: tuple[Signal, Signal] = ESTIMATES,
+                 covariance_doc: str | None = None) -> None:
+        self.signals = (*estimates, *((FRICTION_SCALE,) if friction_estimated(numeric_settings) else ()))
+        self.names = tuple(entry.name for entry in self.signals)
+        self.covariance = kalman.packed_names("P", self.names)
+        self.covariance_signals = (covariance_signals("P", self.signals, doc=covariance_doc) if covariance_doc
+                                   else covariance_signals("P", self.signals))
+        P0 = matrix(settings["initial_covariance"])
+        if len(self.names) == 3:
+            P0 = ca.diagcat(P0, ca.SX(0))
+        self.P0 = kalman.pack_symmetric(P0)
+
+    def x(self, s: dict) -> ca.SX:
+        """The state vector from the entries ``s``."""
+        return ca.vertcat(*[s[n] for n in self.names])
+
+    def P(self, s: dict) -> ca.SX:
+        """The packed covariance from the entries ``s``."""
+        return ca.vertcat(*[s[n] for n in self.covariance])
+
+    def entries(self, x, P) -> dict:
+        """The state entries of ``x`` and the packed ``P``."""
+        return {**{n: x[i] for i, n in enumerate(self.names)}, **{n: P[i] for i, n in enumerate(self.covariance)}}
+
+    def learning(self, inputs_frozen) -> dict:
+        """The update's ``inputs_frozen`` keyword where the friction scale is estimated."""
+        return {"inputs_frozen": inputs_frozen} if len(self.names) == 3 else {}
+
+    def friction_scale(self, x):
+        """The estimated friction scale of the state vector ``x``; None where it is not estimated."""
+        return x[2] if len(self.names) == 3 else None
+
+    def initial(self, r0) -> dict:
+        """vy = 0, r = ``r0``, rho = 1, P = P_0."""
+        return self.entries(ca.vertcat(0, r0, *([1] if len(self.names) == 3 else [])), self.P0)
+
+
 def states(settings) -> Layout:
-    """The state layout; the monitors' entries only when they are on."""
+    """The state layout; the monitors' entries and the friction scale only when they are on."""
+    kf = KalmanState(settings, settings)
     return Layout((
-        *_ESTIMATES,
-        *covariance_signals("P", _ESTIMATES),
+        *kf.signals,
+        *kf.covariance_signals,
         Signal("delta_prev", "rad", "last plausible steer angle (input of the next prediction)"),
         Signal("vx_prev", "m/s", "last plausible speed (input of the next prediction)"),
         *CHECKS.block(settings).states,
@@ -86,10 +139,14 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     """One Kalman predict + update of the 2-DOF model, as a named CasADi Function: the linear
     model's KF, or with ``tyre_model = "saturating"`` the EKF of model.tyres' saturating axles.
 
-    Inputs: ``x`` = [vy, r] (m/s, rad/s), ``P`` = packed covariance [P11, P12, P22],
+    Inputs: ``x`` = [vy, r] (m/s, rad/s; [vy, r, rho] where the friction scale is estimated, see
+    :func:`friction_update`), ``P`` = its packed covariance (upper triangle, row by row),
     ``delta_prev`` (rad), ``vx_prev`` (m/s): the inputs held over the prediction (ZOH);
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
-    With calibratable parameters, a last input ``params`` carries them. ``table`` names the
+    Where the friction scale is estimated, ``inputs_frozen`` (1 while a_y or r is frozen,
+    ``model.input_checks.frozen``) keeps it at its prior: a stuck measurement would teach it a
+    friction the road does not have. With calibratable parameters, a last input ``params`` carries
+    them. ``table`` names the
     [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
     Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad; as atan(vy / vx), the
     speed being clamped positive), ``innovation`` =
@@ -105,17 +162,21 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     Qd = matrix(settings["process_noise"]) * T
     R = matrix(settings["measurement_noise"])
     plan = zoh_plan(params, table)
-    x = ca.SX.sym("x", 2)
-    P_packed = ca.SX.sym("P", kalman.packed_size(2))
-    delta_prev, vx_prev, delta, vx, ay, r_meas = (
-        ca.SX.sym(n) for n in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"))
+    n = 3 if friction_estimated(params.numeric.settings(table)) else 2
+    x = ca.SX.sym("x", n)
+    P_packed = ca.SX.sym("P", kalman.packed_size(n))
+    delta_prev, vx_prev, delta, vx, ay, r_meas, inputs_frozen = (
+        ca.SX.sym(n) for n in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas", "inputs_frozen"))
 
     def seen_speed(speed):
         return model_speed(speed, vx_min, vx_max)
 
-    P = kalman.unpack_symmetric(P_packed, 2)
+    P = kalman.unpack_symmetric(P_packed, n)
     z = ca.vertcat(ay, r_meas)
-    if settings["tyre_model"] == "saturating":
+    if n == 3:
+        x_new, P_new, innovation = friction_update(settings, vehicle, T, plan, x, P, z, delta_prev,
+                                                   seen_speed(vx_prev), delta, seen_speed(vx), inputs_frozen)
+    elif settings["tyre_model"] == "saturating":
         # EKF: x- = x + Gamma_I f(x), the Jacobian's Phi and Gamma_I = int_0^T e^(A s) ds by the
         # configured method (exact for the linear model: Phi x + Gamma delta), P- = Phi P Phi' + Q_d
         friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], ay)
@@ -131,14 +192,45 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
         x_pred, P_pred = kalman.predict(x, P, Phi, Gamma, delta_prev, Qd)
         _, _, C, D = bicycle_matrices(vehicle, seen_speed(vx))
         x_new, P_new, innovation = kalman.update_joseph(x_pred, P_pred, z, C, D, delta, R)
-    names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"]
+    names = ["x", "P", "delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas"] + ["inputs_frozen"] * (n == 3)
     return ca.Function(
         f"{table}_dynamic_update",
-        [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *params.inputs()],
+        [x, P_packed, delta_prev, vx_prev, delta, vx, ay, r_meas, *([inputs_frozen] if n == 3 else []),
+         *params.inputs()],
         [x_new, kalman.pack_symmetric(P_new), sideslip(x_new[0], seen_speed(vx)), innovation, ay - innovation[0]],
         names + ["params"] * params.calibratable,
         ["x_next", "P_next", "beta", "innovation", "ay_model"],
     )
+
+
+def friction_update(settings, vehicle, T: float, plan, x, P, z, delta_prev, vx_prev, delta, vx, inputs_frozen):
+    """The EKF step of the saturating model with the friction scale rho as a third state
+    (``friction_noise`` > 0): (x+, P+, the prior innovation). Both speeds are clamped already.
+
+    rho scales both axles' ``tyre_friction`` (the floor still holds, model.tyres.friction); between
+    samples it returns to 1 with ``friction_time`` tau, rho- = 1 + (rho - 1) e^(-T / tau), a random
+    walk of intensity ``friction_noise`` q on top. Phi and Gamma of [vy, r] are the 2-state EKF's; rho
+    is held over the sample in their equation, so the transition is block-triangular:
+    F = [[Phi, Gamma df/drho], [0, e^(-T / tau)]], Q_d = diag(Q_c T, q T). The a_y measurement's
+    Jacobian gains da_y/drho, which is 0 in the linear range: only a saturating axle moves rho. The
+    updated rho is clamped to ``model.tyres.FRICTION_SCALE_RANGE``, and kept at its prior while
+    ``inputs_frozen``."""
+    decay = ca.exp(-T / settings["friction_time"])
+    friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], x[2])
+    prior = tyres.saturating_bicycle(vehicle, friction, x[:2], delta_prev, vx_prev)
+    Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
+    F = ca.blockcat([[Phi, ca.mtimes(Gamma, prior.f_friction)], [ca.SX.zeros(1, 2), decay]])
+    Qd = ca.diagcat(matrix(settings["process_noise"]) * T, settings["friction_noise"] * T)
+    x_pred, P_pred = kalman.ekf_predict(ca.vertcat(x[:2] + ca.mtimes(Gamma, prior.f), 1 + (x[2] - 1) * decay),
+                                        P, F, Qd)
+    friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], x_pred[2])
+    seen = tyres.saturating_bicycle(vehicle, friction, x_pred[:2], delta, vx)
+    innovation = z - ca.vertcat(seen.ay, x_pred[1])
+    H = ca.horzcat(seen.H, ca.vertcat(seen.ay_friction, 0))
+    x_new, P_new = kalman.correct(x_pred, P_pred, innovation, H, matrix(settings["measurement_noise"]))
+    low, high = tyres.FRICTION_SCALE_RANGE
+    scale = ca.if_else(inputs_frozen, x_pred[2], ca.fmin(ca.fmax(x_new[2], low), high))
+    return ca.vertcat(x_new[:2], scale), P_new, innovation
 
 
 def zoh_plan(params: Parameters, table: str = NAME) -> discretize.ZohPlan:
@@ -170,7 +262,7 @@ def build(params: Parameters) -> Estimator:
     limits = config.limits
     settings = config.settings(NAME)
     vx_min, vx_resume = settings["vx_min"], settings["vx_resume"]
-    P0 = kalman.pack_symmetric(matrix(settings["initial_covariance"]))
+    kf = KalmanState(params.numeric.settings(NAME), settings)
     update = dynamic_update(params)
     block = CHECKS.block(params.numeric.settings(NAME))
     layout = states(params.numeric.settings(NAME))
@@ -181,28 +273,27 @@ def build(params: Parameters) -> Estimator:
     guard, decisions = symbolic(input_guard(u, limits, vx_min, vx_resume, s["holding"], block.monitored))
     ok = guard.plausible
     result = update(
-        x=ca.vertcat(s["vy"], s["r"]),
-        P=ca.vertcat(*[s[n] for n in _COVARIANCE]),
+        x=kf.x(s),
+        P=kf.P(s),
         delta_prev=s["delta_prev"],
         vx_prev=s["vx_prev"],
         delta=hold(u["delta"], ok["delta"], 0),
         vx=hold(u["vx"], ok["vx"], vx_min),
         ay=hold(u["ay"], ok["ay"], 0),
         r_meas=hold(u["r"], ok["r"], 0),
+        **kf.learning(frozen.any_frozen(s, settings, block.check_time(config.sample_time), CHANNELS)),
         **params.keyword(),
     )
     active = guard.active
-    vy_next = ca.if_else(active, result["x_next"][0], 0)
-    r_next = ca.if_else(active, result["x_next"][1], s["r"])
-    P_next = ca.if_else(active, result["P_next"], P0)
+    x_next = ca.if_else(active, result["x_next"], ca.vertcat(0, kf.x(s)[1:]))
+    vy_next, r_next = x_next[0], x_next[1]
+    P_next = ca.if_else(active, result["P_next"], kf.P0)
     watched = block.watch_inputs(s, u, ok, active, settings, config.sample_time, config.vehicle, config.limits)
     judged = block.judge_model(s, active, settings, config.sample_time, result["innovation"], u["ay"],
-                               result["ay_model"])
+                               result["ay_model"], friction_scale=kf.friction_scale(result["x_next"]))
     code = guard.status + watched.code + judged.code
     next_state = layout.pack({
-        "vy": vy_next,
-        "r": r_next,
-        **{name: P_next[i] for i, name in enumerate(_COVARIANCE)},
+        **kf.entries(x_next, P_next),
         **previous_inputs(u, ok, s),
         **watched.updates, **judged.updates,
         "holding": ca.if_else(active, 0, 1),
@@ -214,23 +305,21 @@ def build(params: Parameters) -> Estimator:
         "status": code,
     })
 
-    init_state = _initial_state(params, layout, block, u, P0)
+    init_state = _initial_state(params, layout, block, u, kf)
     init, structure = make_guarded(NAME, in_layout, layout, OUTPUTS, inputs, state, init_state,
                                    next_state, output, params, decisions, watched.checks)
     return Estimator(NAME, "sideslip from the 2-DOF bicycle model + Kalman filter",
                      in_layout, layout, OUTPUTS, init, structure, params, zoh_note(params))
 
 
-def _initial_state(params: Parameters, layout: Layout, block: MonitorBlock, u: dict, P0) -> ca.SX:
-    """Initialisation: vy = 0, r = r_0, P = P_0 (packed), previous inputs = sample 0, the monitors
-    at their first-sample entries; holding unless sample 0 is plausible and vx_0 >= vx_resume."""
+def _initial_state(params: Parameters, layout: Layout, block: MonitorBlock, u: dict, kf: KalmanState) -> ca.SX:
+    """Initialisation: vy = 0, r = r_0, rho = 1, P = P_0 (packed), previous inputs = sample 0, the
+    monitors at their first-sample entries; holding unless sample 0 is plausible and vx_0 >= vx_resume."""
     settings = params.config.settings(NAME)
     first, holding = first_sample(u, params.config.limits, settings["vx_min"], settings["vx_resume"],
                                   block.monitored)
     return layout.pack({
-        "vy": ca.SX(0),
-        "r": first["r"],
-        **{name: P0[i] for i, name in enumerate(_COVARIANCE)},
+        **kf.initial(first["r"]),
         "delta_prev": first["delta"],
         "vx_prev": first["vx"],
         **block.initial_entries(first),

@@ -11,14 +11,14 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from vsegen.model import filters, kalman, signals, status
+from vsegen.model import filters, signals, status
 from vsegen.model.bicycle import stability_factor
-from vsegen.model.calibration import Parameters, matrix
+from vsegen.model.calibration import Parameters
 from vsegen.model.estimator import BEYOND_LINEAR, CheckSegment, Tunable
 from vsegen.model.estimators import kf2dof
 from vsegen.model.guard import Guard, first_sample, hold, input_guard, model_speed, plausibility, previous_inputs
 from vsegen.model.input_checks import frozen
-from vsegen.model.layout import Layout, covariance_signals
+from vsegen.model.layout import Layout
 from vsegen.model.monitor_block import Checks
 from vsegen.model.schema import ROLL_CORRECTION, Field, choice, positive
 from vsegen.model.sensors import roll_corrected
@@ -26,8 +26,8 @@ from vsegen.model.signals import Signal
 
 KINEMATIC_INPUTS = ("ay", "r")
 """The inputs the kinematic integrator v_y += T (a_y - r v_x - c) reads beside the speed."""
-COVARIANCE = kalman.packed_names("P", ("vy", "r"))
 _KF_ESTIMATES = (Signal("vy", "m/s", "KF lateral velocity"), Signal("r", "rad/s", "KF yaw rate"))
+_KF_COVARIANCE_DOC = "KF covariance entry (upper triangle, row by row)"
 DYN, KIN = 0, 1
 STATUS_BITS = (status.LOW_SPEED, status.INVALID_INPUT, status.REFERENCE_SUSPECT)
 """What seed 000's estimators can raise beside their monitor block's bits: the hold rule's bits and
@@ -76,11 +76,11 @@ def window(params: Parameters, table: str) -> int:
     return filters.median_window(1.0 / numeric.sample_time, numeric.settings(table)["median_span"])
 
 
-def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal, ...] = (),
-           segment: tuple[Signal, ...] = ()) -> Layout:
-    """The state layout; ``extra`` are an estimator's own entries (0 at init, kept while holding),
-    ``monitors`` its monitor block's model checks', ``segment`` its input checks' (last;
-    ``model.monitor_block``)."""
+def states(n_median: int, kf: kf2dof.KalmanState, extra: tuple[Signal, ...] = (),
+           monitors: tuple[Signal, ...] = (), segment: tuple[Signal, ...] = ()) -> Layout:
+    """The state layout; ``kf`` the KF's entries, ``extra`` an estimator's own entries (0 at init,
+    kept while holding), ``monitors`` its monitor block's model checks', ``segment`` its input
+    checks' (last; ``model.monitor_block``)."""
     return Layout((
         Signal("ay_m_1", "m/s^2", "prefilter input one sample back"),
         Signal("ay_m_2", "m/s^2", "prefilter input two samples back"),
@@ -94,8 +94,8 @@ def states(n_median: int, extra: tuple[Signal, ...] = (), monitors: tuple[Signal
         Signal("ay_rejections", "-", "consecutive a_y rejections"),
         Signal("mode", "-", "0 dynamic, 1 kinematic"),
         Signal("vy_kin", "m/s", "kinematic integrator"),
-        *_KF_ESTIMATES,
-        *covariance_signals("P", _KF_ESTIMATES, doc="KF covariance entry (upper triangle, row by row)"),
+        *kf.signals,
+        *kf.covariance_signals,
         Signal("delta_prev", "rad", "last plausible steer angle"),
         Signal("vx_prev", "m/s", "last plausible speed"),
         *monitors,
@@ -152,12 +152,13 @@ class KinematicDynamic:
         self.monitors = checks.block(params.numeric.settings(table))
         self.inputs = self.monitors.inputs
         """The input layout: the KF's inputs and what the monitors read beside them."""
-        self.layout = states(self.n_median, extra, self.monitors.states, self.monitors.segment)
+        self.kf = kf2dof.KalmanState(params.numeric.settings(table), self.settings, _KF_ESTIMATES, _KF_COVARIANCE_DOC)
+        """The KF's state entries ([vy, r], and the friction scale where it is estimated)."""
+        self.layout = states(self.n_median, self.kf, extra, self.monitors.states, self.monitors.segment)
         self.biquad = prefilter(params, table)
         self.timeout = max(1, round(params.numeric.settings(table)["reference_timeout"] / self.T))
         self.vx_min, self.vx_resume = self.settings["vx_min"], self.settings["vx_resume"]
         self.vx_max = params.config.limits["vx_max"]
-        self.P0 = kalman.pack_symmetric(matrix(self.settings["initial_covariance"]))
 
     def roll_corrected(self, ay_measured):
         """a_y at the CG from a body-fixed accelerometer (``model.sensors.roll_corrected``)."""
@@ -226,7 +227,7 @@ class KinematicDynamic:
         plausible = plausible or plausibility(v, self.params.config.limits)
         new = dict(m)
         new.update({"vy_kin": ca.SX(0), "vy": ca.SX(0), "mode": ca.SX(DYN), "holding": ca.SX(1),
-                    **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
+                    **{n: self.kf.P0[i] for i, n in enumerate(self.kf.covariance)},
                     **previous_inputs(v, plausible, m)})
         return new
 
@@ -253,8 +254,7 @@ class KinematicDynamic:
             "ay_m_1": ay0, "ay_m_2": ay0, "ay_b_1": ay_b0, "ay_b_2": ay_b0,
             **{f"ay_b_hist_{i}": ay_b0 for i in range(1, self.n_median)},
             "r_last": r_last0, "ay_last": ay_b0, "r_rejections": ca.SX(0),
-            "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), "vy": ca.SX(0),
-            "r": r0, **{n: self.P0[i] for i, n in enumerate(COVARIANCE)},
+            "ay_rejections": ca.SX(0), "mode": ca.SX(DYN), "vy_kin": ca.SX(0), **self.kf.initial(r0),
             "delta_prev": delta0, "vx_prev": vx0,
             **self.monitors.initial_entries(first),
             "holding": holding,

@@ -41,7 +41,6 @@ from vsegen.model.estimator import (
 )
 from vsegen.model.estimators import kf2dof, kinematic_offset
 from vsegen.model.estimators.kinematic_dynamic import (
-    COVARIANCE,
     DYN,
     KIN,
     KINEMATIC_DYNAMIC_FIELDS,
@@ -115,6 +114,13 @@ SCRATCH = Layout((
     Signal("mode_prev", "-", "mode of the previous sample"),
     Signal("status", "-", "status bits of this sample"),
 ))
+KF_INPUTS_FROZEN = Signal("kf_inputs_frozen", "-", "1 while a_y or r is frozen: the KF's friction scale keeps its "
+                          "prior")
+
+
+def scratch_layout(seed: KinematicDynamic) -> Layout:
+    """SCRATCH, and whether the KF's inputs are frozen where it estimates the friction."""
+    return Layout((*SCRATCH.signals, *((KF_INPUTS_FROZEN,) if seed.kf.learning(0) else ())))
 
 
 def remembered_peak(seed: KinematicDynamic, ay_filtered, previous_peak):
@@ -169,7 +175,8 @@ def build(params: Parameters) -> Estimator:
     inputs, u = seed.inputs.symbols("input")
     mid, scratch, checks = _select(seed, s, u)
     schemes, next_state, out = make_schemes(
-        NAME, layout, SCRATCH, state, inputs, layout.pack(mid), scratch, _schemes(params, seed), params, checks)
+        NAME, layout, scratch_layout(seed), state, inputs, layout.pack(mid), scratch, _schemes(params, seed), params,
+        checks)
     init, step = make_functions(NAME, seed.inputs, layout, OUTPUTS, inputs, state,
                                 seed.initial_state(u), next_state, out, params, checks)
     return Estimator(NAME, "sideslip by switching between a kinematic and a KF scheme (seed 000)",
@@ -198,9 +205,10 @@ def _select(seed: KinematicDynamic, s: dict, u: dict) -> tuple[dict, ca.SX, Chec
         extra["kin_offset"] = kinematic_offset.update(seed.settings, T, s["kin_offset"], pre, u["vx"],
                                                       scheme == DYN)
     mid = {**s, **pre.updates, **extra, "mode": ca.if_else(active, mode, DYN)}
-    scratch = SCRATCH.pack({"scheme": scheme, "r_checked": pre.r_checked,
-                            "r_prev": s["r_last"], "ay_prev": s["ay_last"],
-                            "mode_prev": s["mode"], "status": status})
+    layout = scratch_layout(seed)
+    frozen_inputs = {KF_INPUTS_FROZEN.name: pre.kinematic_inputs_frozen} if KF_INPUTS_FROZEN in layout.signals else {}
+    scratch = layout.pack({"scheme": scheme, "r_checked": pre.r_checked, "r_prev": s["r_last"],
+                           "ay_prev": s["ay_last"], "mode_prev": s["mode"], "status": status, **frozen_inputs})
     return mid, scratch, pre.checks
 
 
@@ -216,7 +224,7 @@ def _schemes(params: Parameters, seed: KinematicDynamic) -> list:
 
     def scheme(label, body):
         mid_sym, m = layout.symbols("state_mid")
-        scratch_sym, c = SCRATCH.symbols("scratch")
+        scratch_sym, c = scratch_layout(seed).symbols("scratch")
         input_sym, v = seed.inputs.symbols("input")
         next_state, output = body(m, c, v)
         return label, mid_sym, scratch_sym, input_sym, layout.pack(next_state), output
@@ -224,17 +232,17 @@ def _schemes(params: Parameters, seed: KinematicDynamic) -> list:
     def dynamic(m, c, v):
         from_kin = c["mode_prev"] == KIN
         x = ca.vertcat(ca.if_else(from_kin, m["vy_kin"], m["vy"]),
-                       ca.if_else(from_kin, c["r_prev"], m["r"]))
-        P = ca.if_else(from_kin, seed.P0, ca.vertcat(*[m[n] for n in COVARIANCE]))
+                       ca.if_else(from_kin, c["r_prev"], m["r"]), *[m[n] for n in seed.kf.names[2:]])
+        P = ca.if_else(from_kin, seed.kf.P0, seed.kf.P(m))
         result = update(x=x, P=P, delta_prev=m["delta_prev"], vx_prev=m["vx_prev"],
                         delta=v["delta"], vx=v["vx"],
                         ay=seed.roll_corrected(v["ay"])
                         - kinematic_offset.sensor_part(seed.settings, m.get("kin_offset", 0)),
                         r_meas=c["r_checked"],
+                        **seed.kf.learning(c.get(KF_INPUTS_FROZEN.name)),
                         **params.keyword())
         vy = result["x_next"][0]
-        changes = {"vy": vy, "r": result["x_next"][1],
-                   **{n: result["P_next"][i] for i, n in enumerate(COVARIANCE)}}
+        changes = seed.kf.entries(result["x_next"], result["P_next"])
         return (seed.advanced(m, v, changes),
                 _output(result["beta"], vy, c["r_checked"], DYN, c["status"]))
 
