@@ -37,8 +37,8 @@ PAPER_SWITCHING = {"offset_memory": 0.0, "kinematic_max_dwell": 0.0}
 docs/robustness.md)."""
 PAPER_FUSION = {"tyre_model": "linear", "integral_gain": 0.5, "offset_memory": 0.0}
 """The paper's comparison method as docs/methods.md reconstructs it: a linear KF, k_c = 0.5 1/s, no
-learned kinematic offset (the shipped files give it the saturating KF, k_c = 5 1/s and the learned
-offset, docs/robustness.md)."""
+learned kinematic offset (the shipped files give it the saturating KF that estimates the friction,
+k_c = 5 1/s and the learned offset, docs/robustness.md)."""
 
 
 def _paper_fusion(vehicle_text: str, source: str, name: str):
@@ -63,7 +63,7 @@ def methods(vehicle_text: str, source: str, name: str):
             ("switching (the paper)", switching(), "switching"),
             ("switching (shipped: learned offset, bounded kinematic dwell)", base, "switching"),
             ("fusion (comparison, the paper's stand-in)", paper_fusion, "fusion"),
-            ("fusion (shipped: saturating KF, k_c 5 1/s, learned offset)", base, "fusion"),
+            ("fusion (shipped: saturating KF estimating the friction, k_c 5 1/s, learned offset)", base, "fusion"),
             ("switching, literal a_y (no roll compensation)", literal, "switching"),
             ("fusion, literal a_y", literal, "fusion"))
 
