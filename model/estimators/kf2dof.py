@@ -12,8 +12,8 @@ saturating axle forces (model.tyres), right where the tyres reach their friction
 ``friction_noise`` > 0 its state has a third entry, the friction scale rho (:class:`KalmanState`).
 
 Hold rule (model.guard): while not active, vy := 0, P := P_0, r (and rho) are held, the previous
-inputs keep their last plausible values, and the output is beta = 0, vy = 0, r = held r. The model is always
-evaluated at vx clamped to [vx_min, vx_max], so no division by a small speed can happen.
+inputs keep their last plausible values, and the output is beta = 0, vy = 0, r = held r. The model
+is always evaluated at vx clamped to [vx_min, vx_max], so no division by a small speed can happen.
 Initialisation: vy = 0, r = r_0, P = P_0, previous inputs = sample 0; holding unless sample 0 is
 plausible and vx_0 >= vx_resume.
 """
@@ -146,8 +146,7 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     Where the friction scale is estimated, ``inputs_frozen`` (1 while a_y or r is frozen,
     ``model.input_checks.frozen``) keeps it at its prior: a stuck measurement would teach it a
     friction the road does not have. With calibratable parameters, a last input ``params`` carries
-    them. ``table`` names the
-    [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
+    them. ``table`` names the [estimator.<table>] whose KF settings (model.schema.KF_FIELDS) it uses.
     Outputs: ``x_next``, ``P_next`` (packed), ``beta`` = atan2(vy, vx) (rad; as atan(vy / vx), the
     speed being clamped positive), ``innovation`` =
     z - C x- - D delta (the prior innovation of [a_y, r], for the consistency monitor) and
@@ -166,7 +165,7 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     x = ca.SX.sym("x", n)
     P_packed = ca.SX.sym("P", kalman.packed_size(n))
     delta_prev, vx_prev, delta, vx, ay, r_meas, inputs_frozen = (
-        ca.SX.sym(n) for n in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas", "inputs_frozen"))
+        ca.SX.sym(name) for name in ("delta_prev", "vx_prev", "delta", "vx", "ay", "r_meas", "inputs_frozen"))
 
     def seen_speed(speed):
         return model_speed(speed, vx_min, vx_max)
