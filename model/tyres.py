@@ -89,12 +89,12 @@ def saturating_bicycle(vehicle: Mapping[str, float], friction: Friction, x: ca.S
                       ca.vertcat(ay_friction, (a * rho_front - b * rho_rear) / iz), ay_friction)
 
 
-def friction(tyre_friction: Sequence, floor, ay, scale=1.0) -> Friction:
-    """Each axle's friction: ``scale`` (the estimated friction scale rho, 1 without an estimate)
+def friction(tyre_friction: Sequence, floor, ay, scale=None) -> Friction:
+    """Each axle's friction: ``scale`` (the estimated friction scale rho; None without an estimate)
     times the file's ``tyre_friction``, raised to ``floor`` |ay| / g where the measured lateral
     acceleration ``ay`` (m/s^2) shows the road carries more (``floor`` 0: the scaled file's alone)."""
     shown = floor * ca.fabs(ay) / GRAVITY
-    scaled = [scale * mu for mu in tyre_friction]
+    scaled = list(tyre_friction) if scale is None else [scale * mu for mu in tyre_friction]
     return Friction([ca.fmax(mu, shown) for mu in scaled],
                     [ca.if_else(mu >= shown, file_mu, 0) for mu, file_mu in zip(scaled, tyre_friction)])
 

@@ -69,33 +69,24 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
     z = [a_y, r]; returns (x+, P+, the prior innovation z - h(x-), the prior's a_y: a_y minus its
     innovation, as the model's ``ay_model``). While ``inputs_frozen`` (a_y or r), an estimated
     friction scale keeps its prior."""
-    Qd = np.array(settings["process_noise"]) * T
-    R = np.array(settings["measurement_noise"])
-    if estimates_friction(settings):
-        return _step_with_friction(settings, vehicle, T, x, P, delta_prev, vx_prev, delta, vx, z, inputs_frozen)
     if settings["tyre_model"] == "saturating":
-        shown = settings["friction_floor"] * abs(z[0]) / GRAVITY     # the road carries the measured a_y
-        mu = [max(m, shown) for m in settings["tyre_friction"]]
-        f, A, _, _ = saturating(vehicle, mu, x, delta_prev, vx_prev)
-        Phi, Gamma = blocks.discretise(settings["discretisation"], A, np.eye(2), T)
-        x_pred, P_pred = x + Gamma @ f, Phi @ P @ Phi.T + Qd
-        _, _, ay, H = saturating(vehicle, mu, x_pred, delta, vx)
-        innovation = np.asarray(z) - np.array([ay, x_pred[1]])
-        x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, H, R)
-        return x_new, P_new, innovation, z[0] - innovation[0]
+        return _saturating_step(settings, vehicle, T, x, P, delta_prev, vx_prev, delta, vx, z, inputs_frozen)
     A, B, _, _ = blocks.bicycle(vehicle, vx_prev)
     Phi, Gamma = blocks.discretise(settings["discretisation"], A, B, T)
+    Qd = np.array(settings["process_noise"]) * T
     x_pred, P_pred = blocks.kf_predict(x, P, Phi, Gamma, np.array([delta_prev]), Qd)
     _, _, C, D = blocks.bicycle(vehicle, vx)
     innovation = np.asarray(z) - C @ x_pred - D @ np.array([delta])
-    x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, C, R)
+    x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, C, np.array(settings["measurement_noise"]))
     return x_new, P_new, innovation, z[0] - innovation[0]
 
 
-def _step_with_friction(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_prev: float,
-                        vx_prev: float, delta: float, vx: float, z, inputs_frozen: bool):
-    decay = math.exp(-T / settings["friction_time"])
-    floor = settings["friction_floor"] * abs(z[0]) / GRAVITY
+def _saturating_step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_prev: float,
+                     vx_prev: float, delta: float, vx: float, z, inputs_frozen: bool):
+    """The extended KF of the saturating model, with the friction scale as a third state where it
+    is estimated."""
+    estimated = estimates_friction(settings)
+    floor = settings["friction_floor"] * abs(z[0]) / GRAVITY     # the road carries the measured a_y
 
     def friction(scale):
         """Each axle's mu and dmu/drho (0 where the floor holds it)."""
@@ -103,23 +94,28 @@ def _step_with_friction(settings: Mapping, vehicle: Mapping[str, float], T: floa
         return ([max(m, floor) for m in scaled],
                 [m_file if m >= floor else 0.0 for m, m_file in zip(scaled, settings["tyre_friction"])])
 
-    mu, slope = friction(x[2])
+    mu, slope = friction(x[2] if estimated else 1.0)
     f, A, _, _ = saturating(vehicle, mu, x[:2], delta_prev, vx_prev)
-    df, _ = friction_sensitivity(vehicle, mu, slope, x[:2], delta_prev, vx_prev)
     Phi, Gamma = blocks.discretise(settings["discretisation"], A, np.eye(2), T)
-    F = np.zeros((3, 3))
-    F[:2, :2], F[:2, 2], F[2, 2] = Phi, Gamma @ df, decay
-    x_pred = np.array([*(x[:2] + Gamma @ f), 1 + (x[2] - 1) * decay])
-    Qd = np.zeros((3, 3))
-    Qd[:2, :2], Qd[2, 2] = np.array(settings["process_noise"]) * T, settings["friction_noise"] * T
+    n = len(x)
+    F, Qd = np.zeros((n, n)), np.zeros((n, n))
+    F[:2, :2], Qd[:2, :2] = Phi, np.array(settings["process_noise"]) * T
+    x_pred = np.array([*(x[:2] + Gamma @ f), *x[2:]])
+    if estimated:
+        decay = math.exp(-T / settings["friction_time"])
+        F[:2, 2] = Gamma @ friction_sensitivity(vehicle, mu, slope, x[:2], delta_prev, vx_prev)[0]
+        F[2, 2], Qd[2, 2] = decay, settings["friction_noise"] * T
+        x_pred[2] = 1 + (x[2] - 1) * decay
+        mu, slope = friction(x_pred[2])
     P_pred = F @ P @ F.T + Qd
-    mu, slope = friction(x_pred[2])
-    _, _, ay, H2 = saturating(vehicle, mu, x_pred[:2], delta, vx)
-    _, day = friction_sensitivity(vehicle, mu, slope, x_pred[:2], delta, vx)
-    H = np.hstack([H2, [[day], [0.0]]])
+    _, _, ay, H = saturating(vehicle, mu, x_pred[:2], delta, vx)
+    if estimated:
+        H = np.hstack([H, [[friction_sensitivity(vehicle, mu, slope, x_pred[:2], delta, vx)[1]], [0.0]]])
     innovation = np.asarray(z) - np.array([ay, x_pred[1]])
     x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, H, np.array(settings["measurement_noise"]))
-    x_new[2] = x_pred[2] if inputs_frozen else min(max(x_new[2], FRICTION_SCALE_RANGE[0]), FRICTION_SCALE_RANGE[1])
+    if estimated:
+        low, high = FRICTION_SCALE_RANGE
+        x_new[2] = x_pred[2] if inputs_frozen else min(max(x_new[2], low), high)
     return x_new, P_new, innovation, z[0] - innovation[0]
 
 

@@ -68,15 +68,14 @@ class KalmanState:
 
     def __init__(self, numeric_settings, settings, estimates: tuple[Signal, Signal] = ESTIMATES,
                  covariance_doc: str | None = None) -> None:
-        self.signals = (*estimates, *((FRICTION_SCALE,) if friction_estimated(numeric_settings) else ()))
+        self.estimates_friction = friction_estimated(numeric_settings)
+        self.signals = (*estimates, *((FRICTION_SCALE,) if self.estimates_friction else ()))
         self.names = tuple(entry.name for entry in self.signals)
         self.covariance = kalman.packed_names("P", self.names)
-        self.covariance_signals = (covariance_signals("P", self.signals, doc=covariance_doc) if covariance_doc
-                                   else covariance_signals("P", self.signals))
+        self.covariance_signals = covariance_signals("P", self.signals, **({"doc": covariance_doc} if covariance_doc
+                                                                             else {}))
         P0 = matrix(settings["initial_covariance"])
-        if len(self.names) == 3:
-            P0 = ca.diagcat(P0, ca.SX(0))
-        self.P0 = kalman.pack_symmetric(P0)
+        self.P0 = kalman.pack_symmetric(ca.diagcat(P0, ca.SX(0)) if self.estimates_friction else P0)
 
     def x(self, s: dict) -> ca.SX:
         """The state vector from the entries ``s``."""
@@ -92,15 +91,15 @@ class KalmanState:
 
     def learning(self, inputs_frozen) -> dict:
         """The update's ``inputs_frozen`` keyword where the friction scale is estimated."""
-        return {"inputs_frozen": inputs_frozen} if len(self.names) == 3 else {}
+        return {"inputs_frozen": inputs_frozen} if self.estimates_friction else {}
 
     def friction_scale(self, x):
         """The estimated friction scale of the state vector ``x``; None where it is not estimated."""
-        return x[2] if len(self.names) == 3 else None
+        return x[2] if self.estimates_friction else None
 
     def initial(self, r0) -> dict:
         """vy = 0, r = ``r0``, rho = 1, P = P_0."""
-        return self.entries(ca.vertcat(0, r0, *([1] if len(self.names) == 3 else [])), self.P0)
+        return self.entries(ca.vertcat(0, r0, *([1] if self.estimates_friction else [])), self.P0)
 
 
 def states(settings) -> Layout:
@@ -172,19 +171,10 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
 
     P = kalman.unpack_symmetric(P_packed, n)
     z = ca.vertcat(ay, r_meas)
-    if n == 3:
-        x_new, P_new, innovation = friction_update(settings, vehicle, T, plan, x, P, z, delta_prev,
-                                                   seen_speed(vx_prev), delta, seen_speed(vx), inputs_frozen)
-    elif settings["tyre_model"] == "saturating":
-        # EKF: x- = x + Gamma_I f(x), the Jacobian's Phi and Gamma_I = int_0^T e^(A s) ds by the
-        # configured method (exact for the linear model: Phi x + Gamma delta), P- = Phi P Phi' + Q_d
-        friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], ay)
-        prior = tyres.saturating_bicycle(vehicle, friction, x, delta_prev, seen_speed(vx_prev))
-        Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
-        x_pred, P_pred = kalman.ekf_predict(x + ca.mtimes(Gamma, prior.f), P, Phi, Qd)
-        seen = tyres.saturating_bicycle(vehicle, friction, x_pred, delta, seen_speed(vx))
-        innovation = z - ca.vertcat(seen.ay, x_pred[1])
-        x_new, P_new = kalman.correct(x_pred, P_pred, innovation, seen.H, R)
+    if settings["tyre_model"] == "saturating":
+        x_new, P_new, innovation = saturating_update(settings, vehicle, T, plan, x, P, z, delta_prev,
+                                                     seen_speed(vx_prev), delta, seen_speed(vx),
+                                                     inputs_frozen if n == 3 else None)
     else:
         A, B, _, _ = bicycle_matrices(vehicle, seen_speed(vx_prev))
         Phi, Gamma = discretize.discretise(settings["discretisation"], A, B, T, plan)
@@ -202,34 +192,43 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     )
 
 
-def friction_update(settings, vehicle, T: float, plan, x, P, z, delta_prev, vx_prev, delta, vx, inputs_frozen):
-    """The EKF step of the saturating model with the friction scale rho as a third state
-    (``friction_noise`` > 0): (x+, P+, the prior innovation). Both speeds are clamped already.
+def saturating_update(settings, vehicle, T: float, plan, x, P, z, delta_prev, vx_prev, delta, vx,
+                      inputs_frozen=None):
+    """The EKF step of the saturating model (model.tyres): (x+, P+, the prior innovation). Both
+    speeds are clamped already. x- = x + Gamma_I f(x), with Phi and Gamma_I = int_0^T e^(A s) ds of
+    the Jacobian A by the configured method (exact for the linear model: Phi x + Gamma delta),
+    P- = Phi P Phi' + Q_d, the update from [a_y, r] with their Jacobian H.
 
-    rho scales both axles' ``tyre_friction`` (the floor still holds, model.tyres.friction); between
-    samples it returns to 1 with ``friction_time`` tau, rho- = 1 + (rho - 1) e^(-T / tau), a random
-    walk of intensity ``friction_noise`` q on top. Phi and Gamma of [vy, r] are the 2-state EKF's; rho
-    is held over the sample in their equation, so the transition is block-triangular:
-    F = [[Phi, Gamma df/drho], [0, e^(-T / tau)]], Q_d = diag(Q_c T, q T). The a_y measurement's
-    Jacobian gains da_y/drho, which is 0 in the linear range: only a saturating axle moves rho. The
-    updated rho is clamped to ``model.tyres.FRICTION_SCALE_RANGE``, and kept at its prior while
-    ``inputs_frozen``."""
-    decay = ca.exp(-T / settings["friction_time"])
-    friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], x[2])
+    With ``inputs_frozen`` (not None: ``friction_noise`` > 0) x = [vy, r, rho]: rho scales both
+    axles' ``tyre_friction`` (the floor still holds, model.tyres.friction); between samples it
+    returns to 1 with ``friction_time`` tau, rho- = 1 + (rho - 1) e^(-T / tau), a random walk of
+    intensity ``friction_noise`` q on top. It is held over the sample in the equation of [vy, r], so
+    the transition is block-triangular: F = [[Phi, Gamma df/drho], [0, e^(-T / tau)]],
+    Q_d = diag(Q_c T, q T). H gains da_y/drho, which is 0 in the linear range: only a saturating
+    axle moves rho. The updated rho is clamped to ``model.tyres.FRICTION_SCALE_RANGE``, and kept at
+    its prior while ``inputs_frozen``."""
+    estimated = inputs_frozen is not None
+    scale = x[2] if estimated else None
+    friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], scale)
     prior = tyres.saturating_bicycle(vehicle, friction, x[:2], delta_prev, vx_prev)
     Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
-    F = ca.blockcat([[Phi, ca.mtimes(Gamma, prior.f_friction)], [ca.SX.zeros(1, 2), decay]])
-    Qd = ca.diagcat(matrix(settings["process_noise"]) * T, settings["friction_noise"] * T)
-    x_pred, P_pred = kalman.ekf_predict(ca.vertcat(x[:2] + ca.mtimes(Gamma, prior.f), 1 + (x[2] - 1) * decay),
-                                        P, F, Qd)
-    friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], x_pred[2])
+    F, Qd, x_pred = Phi, matrix(settings["process_noise"]) * T, x[:2] + ca.mtimes(Gamma, prior.f)
+    if estimated:
+        decay = ca.exp(-T / settings["friction_time"])
+        F = ca.blockcat([[Phi, ca.mtimes(Gamma, prior.f_friction)], [ca.SX.zeros(1, 2), decay]])
+        Qd = ca.diagcat(Qd, settings["friction_noise"] * T)
+        x_pred = ca.vertcat(x_pred, 1 + (scale - 1) * decay)
+        friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], x_pred[2])
+    x_pred, P_pred = kalman.ekf_predict(x_pred, P, F, Qd)
     seen = tyres.saturating_bicycle(vehicle, friction, x_pred[:2], delta, vx)
     innovation = z - ca.vertcat(seen.ay, x_pred[1])
-    H = ca.horzcat(seen.H, ca.vertcat(seen.ay_friction, 0))
+    H = ca.horzcat(seen.H, ca.vertcat(seen.ay_friction, 0)) if estimated else seen.H
     x_new, P_new = kalman.correct(x_pred, P_pred, innovation, H, matrix(settings["measurement_noise"]))
+    if not estimated:
+        return x_new, P_new, innovation
     low, high = tyres.FRICTION_SCALE_RANGE
-    scale = ca.if_else(inputs_frozen, x_pred[2], ca.fmin(ca.fmax(x_new[2], low), high))
-    return ca.vertcat(x_new[:2], scale), P_new, innovation
+    kept = ca.if_else(inputs_frozen, x_pred[2], ca.fmin(ca.fmax(x_new[2], low), high))
+    return ca.vertcat(x_new[:2], kept), P_new, innovation
 
 
 def zoh_plan(params: Parameters, table: str = NAME) -> discretize.ZohPlan:

@@ -120,7 +120,7 @@ KF_INPUTS_FROZEN = Signal("kf_inputs_frozen", "-", "1 while a_y or r is frozen: 
 
 def scratch_layout(seed: KinematicDynamic) -> Layout:
     """SCRATCH, and whether the KF's inputs are frozen where it estimates the friction."""
-    return Layout((*SCRATCH.signals, *((KF_INPUTS_FROZEN,) if seed.kf.learning(0) else ())))
+    return Layout((*SCRATCH.signals, *((KF_INPUTS_FROZEN,) if seed.kf.estimates_friction else ())))
 
 
 def remembered_peak(seed: KinematicDynamic, ay_filtered, previous_peak):
