@@ -126,8 +126,9 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
              vx=20.5, ay=1.0, r_meas=0.06)
     A, B, _, _ = blocks.bicycle(config.vehicle, 20.0)
     Phi, Gamma = blocks.discretise("zoh", A, B, config.sample_time)
+    growth = 1 + (1.0 / s["process_noise_load"]) ** 2 if s["process_noise_load"] > 0 else 1.0   # a_y = 1 m/s^2
     xp, Pp = blocks.kf_predict(x, P, Phi, Gamma, np.array([0.01]),
-                               np.array(s["process_noise"]) * config.sample_time)
+                               np.array(s["process_noise"]) * config.sample_time * growth)
     _, _, C, D = blocks.bicycle(config.vehicle, 20.5)
     xe, Pe = blocks.kf_update(xp, Pp, np.array([1.0, 0.06]), C, D, np.array([0.012]),
                               np.array(s["measurement_noise"]))
@@ -135,3 +136,25 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
     np.testing.assert_allclose(np.array(out["P_next"]).ravel(), [Pe[0, 0], Pe[0, 1], Pe[1, 1]], rtol=1e-12)
     np.testing.assert_allclose(float(out["ay_model"]), (C @ xp + D.ravel() * 0.012)[0], rtol=1e-12)  # the prior's a_y
     assert float(out["beta"]) == pytest.approx(np.arctan2(xe[0], 20.5), rel=1e-13)
+
+
+@pytest.mark.parametrize("load", [0.0, 2.0])
+def test_process_noise_grows_with_the_lateral_acceleration(config, load):
+    """Q_d = Q_c T (1 + (a_y / process_noise_load)^2): the model's at a_y = 0, twice it at a_y =
+    the load, a_y's sign alike; constant where the load is 0. The model's Function and the
+    reference's agree, and the generated step's prediction uses it."""
+    from vsegen.harness.reference.bicycle_kf import process_noise as reference_noise
+    from vsegen.model.calibration import baked
+    from vsegen.model.estimators.kf2dof import dynamic_update
+
+    config = config.with_settings("kf2dof", process_noise_load=load)
+    s, T = config.settings("kf2dof"), config.sample_time
+    base = np.array(s["process_noise"]) * T
+    for ay, growth in ((0.0, 1.0), (load, 2.0), (-load, 2.0), (3.0, 1 + (3.0 / load) ** 2 if load else 1.0)):
+        np.testing.assert_allclose(reference_noise(s, ay, T), base * (growth if load else 1.0), rtol=1e-15)
+    fn = dynamic_update(baked(config))
+    x, P = np.zeros(2), np.zeros((2, 2))      # P- = Q_d: the update's gain shows it
+    straight, cornering = (fn(x=x, P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0)
+                           for ay in (0.0, 3.0))
+    assert float(cornering["P_next"][0]) > float(straight["P_next"][0]) if load else \
+        float(cornering["P_next"][0]) == pytest.approx(float(straight["P_next"][0]), rel=1e-12)

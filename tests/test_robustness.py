@@ -16,7 +16,7 @@ from bench.silent import MODEL_BASED
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
-from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time
+from vsegen.harness.score.metrics import SILENT_DURATION, silent_error_time, worse_than_zero
 from vsegen.harness.sim.scenarios import Case
 
 BANK = {"bank": 100.0 * math.tan(math.radians(3.0))}
@@ -85,3 +85,17 @@ def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
     worse = [(car, disturbance, case.label, name) for (car, disturbance, case), rows in zip(runs, results)
              for name, row in rows.items() if name in MODEL_BASED and row["worse"] is not None]
     assert len(worse) <= WORSE_THAN_ZERO_RUNS, worse
+
+
+@pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
+def test_kf_noise_growing_with_a_y_beats_zero_where_a_constant_noise_does_not(car):
+    """The steering angle frozen in the 80 km/h DLC's reversal: for 0.3 s nothing can tell it from
+    a held wheel, and kf2dof's error grows to 1-2 deg before its monitors see it. With the shipped
+    Q_c growing with a_y (process_noise_load) its straight-line noise is low enough that the run,
+    flags and all, beats answering beta = 0; with the papers' constant Q_c it does not."""
+    config = load_vehicle(VEHICLES / f"{car}.toml")
+    assert config.settings("kf2dof")["process_noise_load"] > 0
+    log = Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:2").simulate(config, 1.0 / config.sample_time)
+    constant = config.with_settings("kf2dof", process_noise=[[0.25, 0.0], [0.0, 0.01]], process_noise_load=0.0)
+    assert worse_than_zero(log, run_estimator(config, "kf2dof", log)) is None
+    assert worse_than_zero(log, run_estimator(constant, "kf2dof", log)) is not None

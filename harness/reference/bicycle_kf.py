@@ -73,12 +73,18 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
         return _saturating_step(settings, vehicle, T, x, P, delta_prev, vx_prev, delta, vx, z, inputs_frozen)
     A, B, _, _ = blocks.bicycle(vehicle, vx_prev)
     Phi, Gamma = blocks.discretise(settings["discretisation"], A, B, T)
-    Qd = np.array(settings["process_noise"]) * T
+    Qd = process_noise(settings, z[0], T)
     x_pred, P_pred = blocks.kf_predict(x, P, Phi, Gamma, np.array([delta_prev]), Qd)
     _, _, C, D = blocks.bicycle(vehicle, vx)
     innovation = np.asarray(z) - C @ x_pred - D @ np.array([delta])
     x_new, P_new = blocks.kf_correct(x_pred, P_pred, innovation, C, np.array(settings["measurement_noise"]))
     return x_new, P_new, innovation, z[0] - innovation[0]
+
+
+def process_noise(settings: Mapping, ay: float, T: float):
+    """Q_d = Q_c T (1 + (a_y / process_noise_load)^2), the growth only where that setting is > 0."""
+    load = settings["process_noise_load"]
+    return np.array(settings["process_noise"]) * T * (1.0 + (ay / load) ** 2 if load > 0 else 1.0)
 
 
 def _saturating_step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_prev: float,
@@ -99,7 +105,7 @@ def _saturating_step(settings: Mapping, vehicle: Mapping[str, float], T: float, 
     Phi, Gamma = blocks.discretise(settings["discretisation"], A, np.eye(2), T)
     n = len(x)
     F, Qd = np.zeros((n, n)), np.zeros((n, n))
-    F[:2, :2], Qd[:2, :2] = Phi, np.array(settings["process_noise"]) * T
+    F[:2, :2], Qd[:2, :2] = Phi, process_noise(settings, z[0], T)
     x_pred = np.array([*(x[:2] + Gamma @ f), *x[2:]])
     if estimated:
         decay = math.exp(-T / settings["friction_time"])

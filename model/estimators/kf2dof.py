@@ -139,7 +139,7 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     model's KF, or with ``tyre_model = "saturating"`` the EKF of model.tyres' saturating axles.
 
     Inputs: ``x`` = [vy, r] (m/s, rad/s; [vy, r, rho] where the friction scale is estimated, see
-    :func:`friction_update`), ``P`` = its packed covariance (upper triangle, row by row),
+    :func:`saturating_update`), ``P`` = its packed covariance (upper triangle, row by row),
     ``delta_prev`` (rad), ``vx_prev`` (m/s): the inputs held over the prediction (ZOH);
     ``delta`` (rad), ``vx`` (m/s), ``ay`` (m/s^2), ``r_meas`` (rad/s): this sample.
     Where the friction scale is estimated, ``inputs_frozen`` (1 while a_y or r is frozen,
@@ -157,7 +157,6 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     vehicle, T = config.vehicle, config.sample_time
     settings = config.settings(table)
     vx_min, vx_max = settings["vx_min"], config.limits["vx_max"]
-    Qd = matrix(settings["process_noise"]) * T
     R = matrix(settings["measurement_noise"])
     plan = zoh_plan(params, table)
     n = 3 if friction_estimated(params.numeric.settings(table)) else 2
@@ -171,8 +170,9 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
 
     P = kalman.unpack_symmetric(P_packed, n)
     z = ca.vertcat(ay, r_meas)
+    Qd = process_noise(params.numeric.settings(table), settings, ay, T)
     if settings["tyre_model"] == "saturating":
-        x_new, P_new, innovation = saturating_update(settings, vehicle, T, plan, x, P, z, delta_prev,
+        x_new, P_new, innovation = saturating_update(settings, vehicle, T, plan, x, P, z, Qd, delta_prev,
                                                      seen_speed(vx_prev), delta, seen_speed(vx),
                                                      inputs_frozen if n == 3 else None)
     else:
@@ -192,12 +192,23 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     )
 
 
-def saturating_update(settings, vehicle, T: float, plan, x, P, z, delta_prev, vx_prev, delta, vx,
+def process_noise(numeric_settings, settings, ay, T: float) -> ca.SX:
+    """Q_d of [vy, r] for a sample whose measured lateral acceleration is ``ay`` (m/s^2): Q_c T, grown
+    by 1 + (a_y / ``process_noise_load``)^2 where that setting is > 0 (structural: decided on the
+    ``numeric_settings``; ``settings`` may hold calibration symbols)."""
+    Qd = matrix(settings["process_noise"]) * T
+    if numeric_settings["process_noise_load"] > 0.0:
+        Qd = Qd * (1 + (ay / settings["process_noise_load"]) ** 2)
+    return Qd
+
+
+def saturating_update(settings, vehicle, T: float, plan, x, P, z, Qd, delta_prev, vx_prev, delta, vx,
                       inputs_frozen=None):
     """The EKF step of the saturating model (model.tyres): (x+, P+, the prior innovation). Both
     speeds are clamped already. x- = x + Gamma_I f(x), with Phi and Gamma_I = int_0^T e^(A s) ds of
     the Jacobian A by the configured method (exact for the linear model: Phi x + Gamma delta),
-    P- = Phi P Phi' + Q_d, the update from [a_y, r] with their Jacobian H.
+    P- = Phi P Phi' + Q_d (``Qd``, :func:`process_noise`), the update from [a_y, r] with their
+    Jacobian H.
 
     With ``inputs_frozen`` (not None: ``friction_noise`` > 0) x = [vy, r, rho]: rho scales both
     axles' ``tyre_friction`` (the floor still holds, model.tyres.friction); between samples it
@@ -212,7 +223,7 @@ def saturating_update(settings, vehicle, T: float, plan, x, P, z, delta_prev, vx
     friction = tyres.friction(settings["tyre_friction"], settings["friction_floor"], z[0], scale)
     prior = tyres.saturating_bicycle(vehicle, friction, x[:2], delta_prev, vx_prev)
     Phi, Gamma = discretize.discretise(settings["discretisation"], prior.A, ca.SX.eye(2), T, plan)
-    F, Qd, x_pred = Phi, matrix(settings["process_noise"]) * T, x[:2] + ca.mtimes(Gamma, prior.f)
+    F, x_pred = Phi, x[:2] + ca.mtimes(Gamma, prior.f)
     if estimated:
         decay = ca.exp(-T / settings["friction_time"])
         F = ca.blockcat([[Phi, ca.mtimes(Gamma, prior.f_friction)], [ca.SX.zeros(1, 2), decay]])
