@@ -22,7 +22,8 @@ from vsegen.model import input_monitors
 from vsegen.model.estimators import build
 
 SECTION = "## What the real-road options cost"
-OPTIONS_OFF = {**input_monitors.OFF, "offset_memory": 0.0, "kinematic_max_dwell": 0.0, "disagreement_limit": 0.0}
+OPTIONS_OFF = {**input_monitors.OFF, "offset_memory": 0.0, "kinematic_max_dwell": 0.0, "disagreement_limit": 0.0,
+               "process_noise_load": 0.0}
 """Every real-road option at its off value (an estimator has some of them)."""
 
 

@@ -27,7 +27,8 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "derived once, 1/vx once, P as three entries, closed-form 2x2 inverse with one "
              "division, no pointer checks); tested equal to the reference. The generated kf2dof "
              "here has the monitors of the shipped file off (residual_window = 0, linear_range "
-             "= 0, the input monitors' limits 0), as the hand-written one has none. "
+             "= 0, the input monitors' limits 0), as the hand-written one has none, and its "
+             "constant process noise (process_noise_load = 0). "
              f"Log: {LOG_CASE.label}, {len(log)} steps. "
              "Cortex-M4F: arm-none-eabi-gcc -O2, linked to the API (`vsegen size`'s build); the "
              "ZOH's series is unrolled (its terms and squarings: the Makefile's zoh_series note), "
@@ -37,7 +38,7 @@ def section(vehicle: Path, log: Log, folder: Path) -> list[str]:
              "|---|---|---|---|---|---|---|---|"]
     for method in ("zoh", "euler"):
         variant, _ = switched_off(vehicle, "kf2dof", input_monitors.OFF, residual_window=0.0, linear_range=0.0,
-                                  discretisation=method)
+                                  process_noise_load=0.0, discretisation=method)
         estimator = build("kf2dof", variant)
         inputs = log.matrix(estimator.inputs.names)
         inputs_file = write_inputs(inputs, folder)

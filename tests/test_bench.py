@@ -41,7 +41,7 @@ void hand_run(int n, const double *raw, const double *inputs, double *outputs)
 def test_handwritten_baseline_equals_the_reference(vehicle_text, method):
     literal = with_settings(vehicle_text, "estimator.kf2dof", residual_window=0.0, linear_range=0.0,
                             frozen_time=0.0, lateral_check_limit=0.0, steering_offset_limit=0.0,
-                            steer_check_limit=0.0)
+                            steer_check_limit=0.0, process_noise_load=0.0)
     config = parse_vehicle(literal.replace('discretisation = "zoh"', f'discretisation = "{method}"'),
                            "v.toml", "c_class")          # the hand-written filter has no monitors
     sources = {n: (HERE / "handwritten" / n).read_text() for n in ("kf2dof_hand.c", "kf2dof_hand.h")}

@@ -140,14 +140,14 @@ def test_a_baseline_table_of_several_settings_files_is_matched_by_name_or_refuse
 
 
 def test_a_silently_wrong_run_is_listed_and_fails_the_campaign(database, cache, vsegen, tmp_path, write_vehicle):
-    wrong = write_vehicle("mass = 1412.0", "mass = 5000.0", name="wrong.toml")      # kf2dof: 0.63 s silent
+    wrong = write_vehicle("mass = 1412.0", "mass = 5000.0", name="wrong.toml")      # switching: 0.80 s silent
     out = tmp_path / "out"
-    result = vsegen("campaign", str(database / "dlc_60.csv"), "--estimator", "kf2dof", "--vehicle", str(wrong),
+    result = vsegen("campaign", str(database / "dlc_60.csv"), "--estimator", "switching", "--vehicle", str(wrong),
                     "--scheduler", "serial", "--out", str(out))
     assert result.exit_code == 1, result.output
-    assert "vsegen: silently wrong: kf2dof (wrong) on" in result.stderr and "for 0.63 s" in result.stderr
+    assert "vsegen: silently wrong: switching (wrong) on" in result.stderr and "for 0.80 s" in result.stderr
     section = (out / "summary.md").read_text().split("## Silently wrong (a bug)")[1]
-    assert "| dlc_60.csv | wrong | kf2dof | 0.63 |" in section
+    assert "| dlc_60.csv | wrong | switching | 0.80 |" in section
     assert "Silently wrong (a bug)" in (out / "report.html").read_text()
 
 

@@ -141,8 +141,8 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
 @pytest.mark.parametrize("load", [0.0, 2.0])
 def test_process_noise_grows_with_the_lateral_acceleration(config, load):
     """Q_d = Q_c T (1 + (a_y / process_noise_load)^2): the model's at a_y = 0, twice it at a_y =
-    the load, a_y's sign alike; constant where the load is 0. The model's Function and the
-    reference's agree, and the generated step's prediction uses it."""
+    the load, a_y's sign alike, no further growth beyond 1 g; constant where the load is 0. The
+    model's Function and the reference's agree, and the generated step's prediction uses it."""
     from vsegen.harness.reference.bicycle_kf import process_noise as reference_noise
     from vsegen.model.calibration import baked
     from vsegen.model.estimators.kf2dof import dynamic_update
@@ -150,11 +150,16 @@ def test_process_noise_grows_with_the_lateral_acceleration(config, load):
     config = config.with_settings("kf2dof", process_noise_load=load)
     s, T = config.settings("kf2dof"), config.sample_time
     base = np.array(s["process_noise"]) * T
-    for ay, growth in ((0.0, 1.0), (load, 2.0), (-load, 2.0), (3.0, 1 + (3.0 / load) ** 2 if load else 1.0)):
+    ceiling = 1 + (9.81 / load) ** 2 if load else 1.0
+    for ay, growth in ((0.0, 1.0), (load, 2.0), (-load, 2.0), (3.0, 1 + (3.0 / load) ** 2 if load else 1.0),
+                       (9.81, ceiling), (-45.0, ceiling)):
         np.testing.assert_allclose(reference_noise(s, ay, T), base * (growth if load else 1.0), rtol=1e-15)
     fn = dynamic_update(baked(config))
-    x, P = np.zeros(2), np.zeros((2, 2))      # P- = Q_d: the update's gain shows it
-    straight, cornering = (fn(x=x, P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0)
-                           for ay in (0.0, 3.0))
-    assert float(cornering["P_next"][0]) > float(straight["P_next"][0]) if load else \
-        float(cornering["P_next"][0]) == pytest.approx(float(straight["P_next"][0]), rel=1e-12)
+    x = np.zeros(2)      # P = 0, so P- = Q_d: the updated P shows it
+    straight, cornering, at_1g, beyond = (
+        float(fn(x=x, P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0)["P_next"][0])
+        for ay in (0.0, 3.0, 9.81, 30.0))
+    if load:
+        assert straight < cornering < at_1g == pytest.approx(beyond, rel=1e-12)
+    else:
+        assert straight == pytest.approx(cornering, rel=1e-12) and at_1g == pytest.approx(beyond, rel=1e-12)

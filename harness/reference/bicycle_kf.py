@@ -82,8 +82,10 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
 
 
 def process_noise(settings: Mapping, ay: float, T: float):
-    """Q_d = Q_c T (1 + (a_y / process_noise_load)^2), the growth only where that setting is > 0."""
+    """Q_d = Q_c T (1 + (min(|a_y|, g) / process_noise_load)^2), the growth only where that setting
+    is > 0."""
     load = settings["process_noise_load"]
+    ay = min(abs(ay), GRAVITY)
     return np.array(settings["process_noise"]) * T * (1.0 + (ay / load) ** 2 if load > 0 else 1.0)
 
 

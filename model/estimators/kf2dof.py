@@ -23,7 +23,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import discretize, kalman, signals, status, tyres
-from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
+from vsegen.model.bicycle import GRAVITY, bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
     BEYOND_LINEAR,
@@ -192,13 +192,19 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
     )
 
 
+LOAD_CEILING = GRAVITY
+"""m/s^2: the process noise grows with |a_y| up to this (the tyres' force, and the model's error,
+stop growing at the friction limit; a larger a_y is a fault the input checks report, or aero)."""
+
+
 def process_noise(numeric_settings, settings, ay, T: float) -> ca.SX:
     """Q_d of [vy, r] for a sample whose measured lateral acceleration is ``ay`` (m/s^2): Q_c T, grown
-    by 1 + (a_y / ``process_noise_load``)^2 where that setting is > 0 (structural: decided on the
-    ``numeric_settings``; ``settings`` may hold calibration symbols)."""
+    by 1 + (min(|a_y|, :data:`LOAD_CEILING`) / ``process_noise_load``)^2 where that setting is > 0
+    (structural: decided on the ``numeric_settings``; ``settings`` may hold calibration symbols)."""
     Qd = matrix(settings["process_noise"]) * T
     if numeric_settings["process_noise_load"] > 0.0:
-        Qd = Qd * (1 + (ay / settings["process_noise_load"]) ** 2)
+        load = settings["process_noise_load"]     # a calibration may set it to 0: constant again
+        Qd = Qd * ca.if_else(load > 0, 1 + (ca.fmin(ca.fabs(ay), LOAD_CEILING) / load) ** 2, 1)
     return Qd
 
 
