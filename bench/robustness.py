@@ -81,7 +81,11 @@ COPING = [
     "* fusion pulls its integrator to a KF with saturating tyres within 0.2 s (k_c = 5/s), so a bank, "
     "an offset or a wrong yaw-rate scale cannot carry its output; kf2dof, fusion, ukf and aukf flag |a_y| "
     "beyond 4 m/s², ekf_rls, whose stiffness follows the tyres, beyond 6 m/s² (256 BEYOND_LINEAR_RANGE: "
-    "β rests on the friction or the stiffness the model assumes);",
+    "β rests on the friction or the stiffness the model assumes), kf2dof for 0.2 s and ukf for 0.3 s "
+    "after |a_y| fell back, while their estimate recovers from the limit;",
+    "* kf2dof and fusion let their KF's process noise grow with |a_y| (process_noise_load): quiet in "
+    "straight driving, so a fault their monitors need 0.3 s to see (a steering angle frozen in a "
+    "reversal) costs less than answering β = 0;",
     "* the particle filters integrate v_y without a measurement and flag it (1024 DEAD_RECKONING): "
     "under a bank or an offset they are 3–15° off, and say so.",
     "",

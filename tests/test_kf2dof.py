@@ -163,3 +163,28 @@ def test_process_noise_grows_with_the_lateral_acceleration(config, load):
         assert straight < cornering < at_1g == pytest.approx(beyond, rel=1e-12)
     else:
         assert straight == pytest.approx(cornering, rel=1e-12) and at_1g == pytest.approx(beyond, rel=1e-12)
+
+
+def test_a_tiny_calibrated_load_counts_as_the_floor_and_zero_as_constant(config):
+    """A calibration may carry a load of 1e-300 (the fuzzer's) or 0: the first grows Q_c as a load
+    of 0.1 m/s^2 does, finite; the second gives the constant Q_c back, in the model and the reference."""
+    from vsegen.harness.reference.bicycle_kf import process_noise as reference_noise
+    from vsegen.model.calibration import calibratable
+    from vsegen.model.estimators.kf2dof import dynamic_update
+
+    params = calibratable(config, "kf2dof")
+    fn = dynamic_update(params)
+    s, T = config.settings("kf2dof"), config.sample_time
+    values = dict(zip(params.names, params.values))
+    def after_a_step(load, ay):
+        p = [load if name == "process_noise_load" else values[name] for name in params.names]
+        return float(fn(x=[0, 0], P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0,
+                        params=p)["P_next"][0])
+
+    assert np.isfinite(after_a_step(1e-300, 3.0))
+    assert after_a_step(1e-300, 3.0) == pytest.approx(after_a_step(0.1, 3.0), rel=1e-12)
+    assert after_a_step(0.1, 3.0) > after_a_step(0.1, 0.0)
+    assert after_a_step(0.0, 3.0) == pytest.approx(after_a_step(0.0, 0.0), rel=1e-12)
+    for load, growth in ((1e-300, 1 + (3.0 / 0.1) ** 2), (0.0, 1.0)):
+        np.testing.assert_allclose(reference_noise({**s, "process_noise_load": load}, 3.0, T),
+                                   np.array(s["process_noise"]) * T * growth, rtol=1e-12)

@@ -195,16 +195,21 @@ def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
 LOAD_CEILING = GRAVITY
 """m/s^2: the process noise grows with |a_y| up to this (the tyres' force, and the model's error,
 stop growing at the friction limit; a larger a_y is a fault the input checks report, or aero)."""
+LOAD_FLOOR = 0.1
+"""m/s^2: a ``process_noise_load`` below this counts as this (Q_c grows at most 1 + (g / 0.1)^2,
+about 10^4-fold: a calibrated 1e-300 must not make Q infinite)."""
 
 
 def process_noise(numeric_settings, settings, ay, T: float) -> ca.SX:
     """Q_d of [vy, r] for a sample whose measured lateral acceleration is ``ay`` (m/s^2): Q_c T, grown
-    by 1 + (min(|a_y|, :data:`LOAD_CEILING`) / ``process_noise_load``)^2 where that setting is > 0
-    (structural: decided on the ``numeric_settings``; ``settings`` may hold calibration symbols)."""
+    by 1 + (min(|a_y|, :data:`LOAD_CEILING`) / max(``process_noise_load``, :data:`LOAD_FLOOR`))^2
+    where that setting is > 0 (structural: decided on the ``numeric_settings``; ``settings`` may
+    hold calibration symbols, and a calibrated 0 gives the constant noise back)."""
     Qd = matrix(settings["process_noise"]) * T
     if numeric_settings["process_noise_load"] > 0.0:
-        load = settings["process_noise_load"]     # a calibration may set it to 0: constant again
-        Qd = Qd * ca.if_else(load > 0, 1 + (ca.fmin(ca.fabs(ay), LOAD_CEILING) / load) ** 2, 1)
+        load = settings["process_noise_load"]
+        growth = 1 + (ca.fmin(ca.fabs(ay), LOAD_CEILING) / ca.fmax(load, LOAD_FLOOR)) ** 2
+        Qd = Qd * ca.if_else(load > 0, growth, 1)
     return Qd
 
 

@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: d7e6ac7618dba155cecfae8587fdeb22e5e5c1732372c844c2261ca8a0d01d8c
- * Operations: step 537, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
+ * Operations: step 538, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 1.0e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */

@@ -6,7 +6,7 @@
  * Options: real=float, params=calibratable.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: d9fd4c3964fa3e5b2c479bdc95d9190ed8197b45c4cffa454d449097ca0716c1
- * Operations: step 529, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
+ * Operations: step 530, input checks 162 a run (every check_period), init 68 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 3 squarings, |Phi - expm(A T)|_inf <= 6.4e-16 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s x 2 (calibration margin)
  */
