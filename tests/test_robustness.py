@@ -26,7 +26,7 @@ was first measured, 62 since ekf_rls flags a learned stiffness below half the fi
 yaw-rate check reads the means of the checks' period, 32 since fusion ships the saturating KF with
 k_c = 5/s and flags from 4 m/s^2 and ekf_rls from 6 m/s^2, 16 since kf2dof's and fusion's process
 noise grows with a_y, kf2dof and ukf hold BEYOND_LINEAR_RANGE 0.2 and 0.3 s and aukf caps the
-adapted noise of v at 3e-4; the count may only fall."""
+adapted noise of v at 2e-3; the count may only fall."""
 OFFSET = {"ay_offset": 0.5}
 
 
