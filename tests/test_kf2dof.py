@@ -138,6 +138,13 @@ def test_kf2dof_dynamic_update_is_a_named_function(config):
     assert float(out["beta"]) == pytest.approx(np.arctan2(xe[0], 20.5), rel=1e-13)
 
 
+def _vy_variance_after_a_step(fn, ay: float, **params) -> float:
+    """P_vy after one step of the KF Function ``fn`` from x = 0, P = 0 (so P- = Q_d) at a_y = ``ay``
+    (straight ahead at 20 m/s): it grows with Q_d's v_y entry."""
+    return float(fn(x=[0, 0], P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0,
+                    **params)["P_next"][0])
+
+
 @pytest.mark.parametrize("load", [0.0, 2.0])
 def test_process_noise_grows_with_the_lateral_acceleration(config, load):
     """Q_d = Q_c T (1 + (a_y / process_noise_load)^2): the model's at a_y = 0, twice it at a_y =
@@ -155,10 +162,7 @@ def test_process_noise_grows_with_the_lateral_acceleration(config, load):
                        (9.81, ceiling), (-45.0, ceiling)):
         np.testing.assert_allclose(reference_noise(s, ay, T), base * (growth if load else 1.0), rtol=1e-15)
     fn = dynamic_update(baked(config))
-    x = np.zeros(2)      # P = 0, so P- = Q_d: the updated P shows it
-    straight, cornering, at_1g, beyond = (
-        float(fn(x=x, P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0)["P_next"][0])
-        for ay in (0.0, 3.0, 9.81, 30.0))
+    straight, cornering, at_1g, beyond = (_vy_variance_after_a_step(fn, ay) for ay in (0.0, 3.0, 9.81, 30.0))
     if load:
         assert straight < cornering < at_1g == pytest.approx(beyond, rel=1e-12)
     else:
@@ -176,10 +180,10 @@ def test_a_tiny_calibrated_load_counts_as_the_floor_and_zero_as_constant(config)
     fn = dynamic_update(params)
     s, T = config.settings("kf2dof"), config.sample_time
     values = dict(zip(params.names, params.values))
+
     def after_a_step(load, ay):
         p = [load if name == "process_noise_load" else values[name] for name in params.names]
-        return float(fn(x=[0, 0], P=[0, 0, 0], delta_prev=0, vx_prev=20.0, delta=0, vx=20.0, ay=ay, r_meas=0,
-                        params=p)["P_next"][0])
+        return _vy_variance_after_a_step(fn, ay, params=p)
 
     assert np.isfinite(after_a_step(1e-300, 3.0))
     assert after_a_step(1e-300, 3.0) == pytest.approx(after_a_step(0.1, 3.0), rel=1e-12)
