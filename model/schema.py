@@ -402,7 +402,7 @@ KF_FIELDS: tuple[Field, ...] = (
                "Q_c; the discrete Q_d = Q_c*T"),
     nonnegative("process_noise_load", "m/s^2", "beyond the papers: the process noise grows with the "
                 "measured lateral acceleration, Q_c (1 + (a_y / process_noise_load)^2), |a_y| counted up "
-                "to 1 g, a load below 0.1 as 0.1: the model's tyre forces err in proportion to the force "
+                "to 6 m/s^2, a load below 0.1 as 0.1: the model's tyre forces err in proportion to the force "
                 "they carry, so the filter trusts the model in straight driving (less noise in beta) and "
                 "the measurements in a hard corner; 0 = a constant Q_c (the papers)", default=0.0),
     spd_matrix("measurement_noise", 2, "[ay, r]: (m/s^2)^2, (rad/s)^2", "R"),

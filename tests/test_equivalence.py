@@ -99,14 +99,7 @@ def test_every_other_shipped_vehicle_verifies_in_its_most_demanding_form(car):
     real, params = OTHER_FORMS.get(car, MOST_DEMANDING)
     results = verify(config, tuple(config.estimators), cases=DECISIVE, real=real, params=params)
     assert len(results) == len(config.estimators) * len(DECISIVE)
-    assert [(r.estimator, r.case) for r in results if not r.ok] == KNOWN_DRIFT.get(car, [])
-
-
-KNOWN_DRIFT = {"rwd_saloon": [("fusion", "input_extremes")]}
-"""Known limits, each an open issue (#44): the saloon's fusion in float with calibratable parameters
-drifts 1.39e-4 in v_y from its reference on input_extremes (tolerance 1e-4; 8.2e-5 baked, 1.2e-5
-before its process noise grew with a_y, up to 25-fold at 1 g). Listed so the test fails when it is
-mended as well as when anything else breaks."""
+    assert [(r.estimator, r.case) for r in results if not r.ok] == []
 
 
 def test_one_millisecond_sample_time(config):

@@ -148,7 +148,7 @@ def _vy_variance_after_a_step(fn, ay: float, **params) -> float:
 @pytest.mark.parametrize("load", [0.0, 2.0])
 def test_process_noise_grows_with_the_lateral_acceleration(config, load):
     """Q_d = Q_c T (1 + (a_y / process_noise_load)^2): the model's at a_y = 0, twice it at a_y =
-    the load, a_y's sign alike, no further growth beyond 1 g; constant where the load is 0. The
+    the load, a_y's sign alike, no further growth beyond 6 m/s^2; constant where the load is 0. The
     model's Function and the reference's agree, and the generated step's prediction uses it."""
     from vsegen.harness.reference.bicycle_kf import process_noise as reference_noise
     from vsegen.model.calibration import baked
@@ -157,16 +157,16 @@ def test_process_noise_grows_with_the_lateral_acceleration(config, load):
     config = config.with_settings("kf2dof", process_noise_load=load)
     s, T = config.settings("kf2dof"), config.sample_time
     base = np.array(s["process_noise"]) * T
-    ceiling = 1 + (9.81 / load) ** 2 if load else 1.0
+    ceiling = 1 + (6.0 / load) ** 2 if load else 1.0
     for ay, growth in ((0.0, 1.0), (load, 2.0), (-load, 2.0), (3.0, 1 + (3.0 / load) ** 2 if load else 1.0),
-                       (9.81, ceiling), (-45.0, ceiling)):
+                       (6.0, ceiling), (9.81, ceiling), (-45.0, ceiling)):
         np.testing.assert_allclose(reference_noise(s, ay, T), base * (growth if load else 1.0), rtol=1e-15)
     fn = dynamic_update(baked(config))
-    straight, cornering, at_1g, beyond = (_vy_variance_after_a_step(fn, ay) for ay in (0.0, 3.0, 9.81, 30.0))
+    straight, cornering, at_ceiling, beyond = (_vy_variance_after_a_step(fn, ay) for ay in (0.0, 3.0, 6.0, 9.81))
     if load:
-        assert straight < cornering < at_1g == pytest.approx(beyond, rel=1e-12)
+        assert straight < cornering < at_ceiling == pytest.approx(beyond, rel=1e-12)
     else:
-        assert straight == pytest.approx(cornering, rel=1e-12) and at_1g == pytest.approx(beyond, rel=1e-12)
+        assert straight == pytest.approx(cornering, rel=1e-12) and at_ceiling == pytest.approx(beyond, rel=1e-12)
 
 
 def test_a_tiny_calibrated_load_counts_as_the_floor_and_zero_as_constant(config):

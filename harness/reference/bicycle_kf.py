@@ -82,10 +82,10 @@ def step(settings: Mapping, vehicle: Mapping[str, float], T: float, x, P, delta_
 
 
 def process_noise(settings: Mapping, ay: float, T: float):
-    """Q_d = Q_c T (1 + (min(|a_y|, g) / max(process_noise_load, 0.1 m/s^2))^2), the growth only
-    where that setting is > 0."""
+    """Q_d = Q_c T (1 + (min(|a_y|, 6 m/s^2) / max(process_noise_load, 0.1 m/s^2))^2), the growth
+    only where that setting is > 0."""
     load = settings["process_noise_load"]
-    growth = 1.0 + (min(abs(ay), GRAVITY) / max(load, 0.1)) ** 2 if load > 0 else 1.0
+    growth = 1.0 + (min(abs(ay), 6.0) / max(load, 0.1)) ** 2 if load > 0 else 1.0
     return np.array(settings["process_noise"]) * T * growth
 
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 84616e8494c7ef0980964a6abd0af495a096e6c0139de7c04d6216fcc1430317
- * Operations: step 1035, input checks 142 a run (every check_period), init 109 (CasADi SX instructions).
+ * Operations: step 1036, input checks 142 a run (every check_period), init 109 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

@@ -623,7 +623,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a01=1.0000000000000000e-04f;
   a15=arg[1][2];
   a19=casadi_fabs(a15);
-  a27=9.8100000000000005e+00f;
+  a27=6.f;
   a27=casadi_fmin(a19,a27);
   a28=2.f;
   a27=(a27/a28);

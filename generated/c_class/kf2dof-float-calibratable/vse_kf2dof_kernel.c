@@ -725,7 +725,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=(casadi_real)(a06<a18);
   a19=arg[1][2];
   a24=casadi_fabs(a19);
-  a21=9.8100000000000005e+00f;
+  a21=6.f;
   a21=casadi_fmin(a24,a21);
   a18=casadi_fmax(a18,a26);
   a21=(a21/a18);

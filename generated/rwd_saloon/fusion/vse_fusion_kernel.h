@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 674c184f076c1383b00b8f3c9caa98c609ef2616813b796a61fafb1fd9d7bf69
- * Operations: step 1028, input checks 142 a run (every check_period), init 109 (CasADi SX instructions).
+ * Operations: step 1029, input checks 142 a run (every check_period), init 109 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

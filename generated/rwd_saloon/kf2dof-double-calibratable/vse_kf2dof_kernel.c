@@ -717,7 +717,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a02=(casadi_real)(a06<a17);
   a18=arg[1][2];
   a22=casadi_fabs(a18);
-  a20=9.8100000000000005e+00;
+  a20=6.;
   a20=casadi_fmin(a22,a20);
   a17=casadi_fmax(a17,a25);
   a20=(a20/a17);
