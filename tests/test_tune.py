@@ -87,6 +87,25 @@ def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_compu
     assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
 
 
+def test_the_growth_of_the_noise_and_the_friction_state_are_searched_where_the_file_has_them(saloon, logs):
+    """fusion's file has the noise growing with a_y and a friction scale in its KF: tune searches the
+    load and the friction's noise and return time, and each reaches the tuning build as regenerating
+    with that value does; switching's file has neither (structural: tune cannot switch them on)."""
+    text, config = saloon
+    keys = {dim.key for dim in dimensions(config, "fusion")}
+    assert {"process_noise_load", "friction_noise", "friction_time"} <= keys
+    assert not {"process_noise_load", "friction_noise", "friction_time"} & {d.key for d in dimensions(config, "switching")}
+    changed = config.with_settings("fusion", process_noise_load=0.7, friction_noise=0.3, friction_time=0.4)
+    log = logs["train"][1][0]
+    estimator, regenerated = compile_estimator(changed, "fusion", "double", "calibratable")
+    tuning = load_tuning_estimator(config, "fusion")
+    inputs = log.matrix(estimator.inputs.names)
+    base = tuning.run(inputs)[0].copy()
+    tuning.set_calibration(calibration_values(changed, "fusion", estimator.parameters.names))
+    assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
+    assert not np.array_equal(tuning.run(inputs)[0], base)
+
+
 def test_keeping_the_base_because_nothing_beat_it_is_no_harm():
     base = Trial({}, [0.010, 0.012], [0.0, 0.0], 0.0, 0.011)
     other = Trial({"threshold": 2.0}, [0.011, 0.013], [0.0, 0.0], 0.1, 0.013)

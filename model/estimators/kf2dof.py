@@ -127,11 +127,21 @@ def _saturating(settings) -> bool:
     return settings["tyre_model"] == "saturating"
 
 
+def _noise_grows(settings) -> bool:
+    return settings["process_noise_load"] > 0
+
+
 KF_TUNABLES = {"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
+               "process_noise_load": Tunable(0.5, 20.0, when=_noise_grows),
                "tyre_friction": Tunable(0.3, 1.6, log=False, when=_saturating, regime=BEYOND_LINEAR),
-               "friction_floor": Tunable(0.8, 1.5, log=False, when=_saturating, regime=BEYOND_LINEAR)}
-"""The settings ``vsegen tune`` may search in every estimator running this KF: the noises, and with
-saturating tyres their friction and its floor (they act beyond the linear range)."""
+               "friction_floor": Tunable(0.8, 1.5, log=False, when=_saturating, regime=BEYOND_LINEAR),
+               "friction_noise": Tunable(1e-4, 1.0, when=friction_estimated, regime=BEYOND_LINEAR),
+               "friction_time": Tunable(0.2, 10.0, when=friction_estimated, regime=BEYOND_LINEAR)}
+"""The settings ``vsegen tune`` may search in every estimator running this KF: the noises and, where
+the process noise grows with a_y, the load of its growth; with saturating tyres their friction and its
+floor, and where the KF estimates the friction scale its noise and its return time (they act beyond
+the linear range). The growth and the friction state are structural: a file with either off keeps
+it off."""
 
 
 def dynamic_update(params: Parameters, table: str = NAME) -> ca.Function:
