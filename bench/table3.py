@@ -31,19 +31,21 @@ CASES = (("continuous DLC (Table 3)", Case.of("continuous_dlc")),
          ("continuous DLC, residual bias", Case.of("continuous_dlc", bias=True)))
 
 
-PAPER_KF = {"process_noise": [0.25, 0.01], "process_noise_load": 0.0}
-"""The KF noise docs/methods.md §3 gives the paper's schemes (the paper gives none): a constant Q_c
-= diag(0.5^2, 0.1^2) s (the shipped files let a smaller Q_c grow with a_y, process_noise_load)."""
+PAPER_KF = {"tyre_model": "linear", "process_noise": [0.25, 0.01], "process_noise_load": 0.0}
+"""The paper's KF: linear tyres and the noise docs/methods.md §3 gives the paper's schemes (the paper
+gives none), a constant Q_c = diag(0.5^2, 0.1^2) s (the shipped files give switching and fusion
+saturating tyres with a friction estimate, and let fusion's smaller Q_c grow with a_y)."""
 PAPER_SWITCHING = {"offset_memory": 0.0, "kinematic_max_dwell": 0.0, **PAPER_KF}
 """The paper's switching estimator: no learned kinematic offset, no bound on the kinematic dwell
 (the shipped files switch both on for roads with bank and sensors with offsets,
-docs/robustness.md), the constant KF noise of :data:`PAPER_KF`."""
-PAPER_FUSION = {"tyre_model": "linear", "integral_gain": 0.5, "offset_memory": 0.0, **PAPER_KF}
+docs/robustness.md), the linear KF of :data:`PAPER_KF`."""
+PAPER_FUSION = {"integral_gain": 0.5, "offset_memory": 0.0, **PAPER_KF}
 """The paper's comparison method as docs/methods.md reconstructs it: a linear KF with the constant
 noise of :data:`PAPER_KF`, k_c = 0.5 1/s, no learned kinematic offset (the shipped files give it the
 saturating KF that estimates the friction, k_c = 5 1/s and the learned offset, docs/robustness.md)."""
 
-SHIPPED_SWITCHING = "switching (shipped: learned offset, bounded kinematic dwell)"
+SHIPPED_SWITCHING = ("switching (shipped: saturating KF estimating the friction, learned offset, "
+                     "bounded kinematic dwell)")
 SHIPPED_FUSION = ("fusion (shipped: saturating KF estimating the friction, its noise growing with a_y, k_c 5 1/s, "
                   "learned offset)")
 

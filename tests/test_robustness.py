@@ -1,7 +1,8 @@
-"""Real roads and real sensors (docs/robustness.md): the shipped switching estimator (learned
-kinematic offset, bounded kinematic dwell) on a 3 degree bank and with a 0.5 m/s^2 a_y offset the
-vehicle file was not identified with, on both truth cars; and no estimator silently wrong anywhere
-in the robustness matrix. Settings not tuned on these runs."""
+"""Real roads and real sensors (docs/robustness.md): the shipped switching estimator (saturating KF,
+learned kinematic offset, bounded kinematic dwell) on a 3 degree bank and with a 0.5 m/s^2 a_y offset
+the vehicle file was not identified with, on both truth cars; and no estimator silently wrong
+anywhere in the robustness matrix. Some shipped settings were chosen on the matrix's runs
+(docs/robustness.md names them): its counts are not a hold-out score."""
 
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ CONTINUOUS_DLC_DISTURBANCES = {"bank right": {"bank": BANK["bank"]}, "bank left"
                                "offset +": OFFSET, "offset -": {"ay_offset": -OFFSET["ay_offset"]}}
 BALANCED_SHORTFALL = pytest.mark.xfail(strict=True, reason=(
     "a bank and an a_y offset cannot be told apart from a_y and r; offset_sensor_share = 0.4 balances "
-    "them and leaves c_class at 1.50 x (bank left) and 1.52 x (offset -), docs/robustness.md"))
+    "them and leaves c_class at 1.51 x (offset -), docs/robustness.md"))
 
 
 @pytest.mark.slow
@@ -57,7 +58,7 @@ def test_switching_step_steer_copes_with_a_bank_and_an_accelerometer_offset(car)
 
 @pytest.mark.slow
 @pytest.mark.parametrize("car, disturbance", [
-    ("c_class", "bank right"), pytest.param("c_class", "bank left", marks=BALANCED_SHORTFALL),
+    ("c_class", "bank right"), ("c_class", "bank left"),
     ("c_class", "offset +"), pytest.param("c_class", "offset -", marks=BALANCED_SHORTFALL),
     ("rwd_saloon", "bank left"), ("rwd_saloon", "offset +"), ("rwd_saloon", "offset -")])
 def test_switching_continuous_dlc_stays_within_1_5_times_its_undisturbed_rmse(car, disturbance):
