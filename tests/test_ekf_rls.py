@@ -123,7 +123,7 @@ def test_tyres_past_their_linear_range_raise_beyond_linear_range(vehicle_text):
     np.testing.assert_array_equal(flagged, expected)
     (result,) = verify_estimator(config, NAME, cases=(case,))
     assert result.ok, result
-    off = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.0,   # shipped: 0.5, 6 m/s^2
+    off = with_settings(vehicle_text, "estimator.ekf_rls", stiffness_drop_limit=0.0,   # shipped: 0.65, 6 m/s^2
                         linear_range=0.0)
     _, _, plain, _ = run(parse_vehicle(off, "plain.toml", "c_class"), case)
     assert not np.any(plain[:, est.outputs.index("status")].astype(int) & status.BEYOND_LINEAR_RANGE)
