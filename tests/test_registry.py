@@ -57,6 +57,8 @@ def test_tunable_settings_are_read_at_run_time_and_hold_the_shipped_values(confi
         if name not in vehicle.estimators:
             continue
         for key, tunable in definition.tunable.items():
+            if not tunable.applies(vehicle.settings(name)):
+                continue                        # the file's code does not read it (tune leaves it)
             values = np.atleast_1d(np.asarray(vehicle.settings(name)[key], dtype=float))
             if values.ndim == 2:
                 values = np.diag(values)

@@ -90,11 +90,15 @@ def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_compu
 def test_the_growth_of_the_noise_and_the_friction_state_are_searched_where_the_file_has_them(saloon, logs):
     """fusion's file has the noise growing with a_y and a friction scale in its KF: tune searches the
     load and the friction's noise and return time, and each reaches the tuning build as regenerating
-    with that value does; switching's file has neither (structural: tune cannot switch them on)."""
+    with that value does; switching's file has the friction scale and a constant noise, kf2dof's the
+    growing noise and linear tyres: tune searches only what the code has (structural)."""
     text, config = saloon
-    keys = {dim.key for dim in dimensions(config, "fusion")}
-    assert {"process_noise_load", "friction_noise", "friction_time"} <= keys
-    assert not {"process_noise_load", "friction_noise", "friction_time"} & {d.key for d in dimensions(config, "switching")}
+    growth, friction = {"process_noise_load"}, {"friction_noise", "friction_time"}
+
+    def searched(name):
+        return {dim.key for dim in dimensions(config, name)} & (growth | friction)
+
+    assert (searched("fusion"), searched("switching"), searched("kf2dof")) == (growth | friction, friction, growth)
     changed = config.with_settings("fusion", process_noise_load=0.7, friction_noise=0.3, friction_time=0.4)
     log = logs["train"][1][0]
     estimator, regenerated = compile_estimator(changed, "fusion", "double", "calibratable")

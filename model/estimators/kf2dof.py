@@ -23,7 +23,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import discretize, kalman, signals, status, tyres
-from vsegen.model.bicycle import GRAVITY, bicycle_matrices, sideslip, state_matrix_norm_bound
+from vsegen.model.bicycle import bicycle_matrices, sideslip, state_matrix_norm_bound
 from vsegen.model.calibration import Parameters, matrix
 from vsegen.model.estimator import (
     BEYOND_LINEAR,
