@@ -116,7 +116,8 @@ def test_the_readme_estimator_table_gives_the_figures_of_its_reports():
 
 def test_the_readmes_never_silent_claims_are_those_of_their_reports():
     """The README says how many runs the disturbance matrix has and that none is silently wrong
-    (docs/robustness.md, "K of N runs have a silent stretch beyond 0.5 s"), and that no estimator is
+    (docs/robustness.md, "K of N runs have a silent stretch beyond 0.5 s"), how many of its
+    model-based runs are no better than beta = 0 ("K of N runs break it"), and that no estimator is
     silent over 0.5 s on the real lap (docs/real.md's summary line)."""
     readme = (REPO / "README.md").read_text()
     (claimed,) = re.findall(r"Across the (\d+) runs of the disturbance matrix \(both truth cars\) no estimator "
@@ -124,6 +125,10 @@ def test_the_readmes_never_silent_claims_are_those_of_their_reports():
     (silent, runs), = re.findall(r"^(\d+) of (\d+) runs have a silent stretch beyond 0\.5 s",
                                  (REPO / "docs" / "robustness.md").read_text(), flags=re.MULTILINE)
     assert (claimed, silent) == (runs, "0")
+    (worse_claimed,) = re.findall(r"(\d+ of its \d+) model-based runs, unflagged, are no better than β = 0",
+                                  " ".join(readme.split()))
+    (worse,) = re.findall(r"\. (\d+) of (\d+) runs break it:", (REPO / "docs" / "robustness.md").read_text())
+    assert worse_claimed == f"{worse[0]} of its {worse[1]}"
     assert "No estimator is silently wrong for more than 0.5 s on it." in " ".join(readme.split())
     assert "* Silent stretches over 0.5 s on the whole lap (|beta error| > 2 deg, status 0): none." in (
         REPO / "docs" / "real.md").read_text()
