@@ -59,8 +59,7 @@ def _tyre_model_rows(config, log: Log, folder: Path) -> list[str]:
     """The saturating tyre model (an extended KF, model.tyres) against the linear KF, each
     estimator with a 2-DOF KF in both, its other settings as shipped."""
     lines = ["The saturating tyre model (`tyre_model = \"saturating\"`) against the linear tyres, same "
-             "log and options (the shipped files give fusion the saturating model, kf2dof and switching "
-             "the linear one):", "",
+             "log and options (column 'shipped': the model the shipped file gives the estimator):", "",
              "| estimator | shipped | linear | saturating | cost |", "|---|---|---|---|---|"]
     for name in (n for n in config.estimators if "tyre_model" in config.settings(n)):
         linear, saturating = (instructions_per_step(name, config.with_settings(name, tyre_model=model), log, folder)
