@@ -158,7 +158,8 @@ def with_hysteresis(vehicle_text, value):
     return with_option(vehicle_text, "hysteresis", value, kinematic_max_dwell=0.0)
 
 
-@pytest.mark.parametrize("params", ["baked", "calibratable"])
+# The calibratable builds of these options in the slow suite: the default run's 5-minute budget.
+@pytest.mark.parametrize("params", ["baked", pytest.param("calibratable", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("table, key, value", [
     ("switching", "hysteresis", 0.2), ("switching", "adaptive_memory", 5.0),
     pytest.param("switching", "yaw_rate_check", "reference", marks=pytest.mark.slow),
