@@ -127,12 +127,14 @@ def _saturating(settings) -> bool:
     return settings["tyre_model"] == "saturating"
 
 
-def _noise_grows(settings) -> bool:
+def noise_grows(settings) -> bool:
+    """Whether the KF's process noise grows with a_y (structural: ``process_noise_load`` > 0 when it
+    is generated, also in calibratable mode)."""
     return settings["process_noise_load"] > 0
 
 
 KF_TUNABLES = {"process_noise": Tunable(1e-4, 1e2), "measurement_noise": Tunable(1e-6, 1e1),
-               "process_noise_load": Tunable(0.5, 20.0, when=_noise_grows),
+               "process_noise_load": Tunable(0.5, 20.0, when=noise_grows),
                "tyre_friction": Tunable(0.3, 1.6, log=False, when=_saturating, regime=BEYOND_LINEAR),
                "friction_floor": Tunable(0.8, 1.5, log=False, when=_saturating, regime=BEYOND_LINEAR),
                "friction_noise": Tunable(1e-4, 1.0, when=friction_estimated, regime=BEYOND_LINEAR),
@@ -210,8 +212,8 @@ limit itself, a fault the input checks report, or aero); at process_noise_load =
 drifts about 1e-4 from its reference on input_extremes in one of the truth cars at either ceiling
 (tests/test_equivalence.py, KNOWN_DRIFT)."""
 LOAD_FLOOR = 0.1
-"""m/s^2: a ``process_noise_load`` below this counts as this (Q_c grows at most 1 + (g / 0.1)^2,
-3600-fold: a calibrated 1e-300 must not make Q infinite)."""
+"""m/s^2: a ``process_noise_load`` below this counts as this (Q_c grows at most 1 + (6 / 0.1)^2,
+about 3600-fold: a calibrated 1e-300 must not make Q infinite)."""
 
 
 def process_noise(numeric_settings, settings, ay, T: float) -> ca.SX:
@@ -220,7 +222,7 @@ def process_noise(numeric_settings, settings, ay, T: float) -> ca.SX:
     where that setting is > 0 (structural: decided on the ``numeric_settings``; ``settings`` may
     hold calibration symbols, and a calibrated 0 gives the constant noise back)."""
     Qd = matrix(settings["process_noise"]) * T
-    if numeric_settings["process_noise_load"] > 0.0:
+    if noise_grows(numeric_settings):
         load = settings["process_noise_load"]
         growth = 1 + (ca.fmin(ca.fabs(ay), LOAD_CEILING) / ca.fmax(load, LOAD_FLOOR)) ** 2
         Qd = Qd * ca.if_else(load > 0, growth, 1)
