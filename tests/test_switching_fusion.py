@@ -8,6 +8,7 @@ import pytest
 
 from vsegen.codegen.generate import render
 from vsegen.harness.host.build import compile_estimator, load_estimator
+from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.project.vehicles import with_settings
 from vsegen.harness.sim.scenarios import Case
 from vsegen.model import status
@@ -314,8 +315,6 @@ def test_the_shipped_saturating_kf_is_right_where_the_dwell_bound_hands_a_long_c
     """The step steer's sustained corner near the friction limit outlasts the 1 s kinematic dwell, so
     the KF takes over at the limit: with the shipped saturating tyres and friction estimate its beta
     error is a third of the linear KF's, which under-reads beta there."""
-    from vsegen.harness.host.run_log import run_estimator
-
     shipped = parse_vehicle(vehicle_text, "c_class.toml", "c_class")
     linear = parse_vehicle(with_settings(vehicle_text, "estimator.switching", tyre_model="linear"),
                            "linear.toml", "c_class")

@@ -74,17 +74,24 @@ def test_tuning_improves_training_and_a_local_cluster_gives_the_serial_result(sa
     assert set(serial.frozen) == {d.key for d in dimensions(tuned, "switching")} - {d.key for d in serial.dimensions}
 
 
+def _tuning_and_regenerated(base, changed, name: str, log: Log) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``name``'s outputs on ``log``: the tuning build of ``base`` as compiled, then with the calibration
+    of ``changed`` set at run time, and the calibratable build regenerated from ``changed``."""
+    estimator, regenerated = compile_estimator(changed, name, "double", "calibratable")
+    tuning = load_tuning_estimator(base, name)
+    inputs = log.matrix(estimator.inputs.names)
+    before = tuning.run(inputs)[0].copy()
+    tuning.set_calibration(calibration_values(changed, name, estimator.parameters.names))
+    return before, tuning.run(inputs)[0], regenerated.run(inputs)[0]
+
+
 def test_the_tuning_build_computes_what_the_regenerated_calibratable_build_computes(saloon, logs):
     """Setting the calibration at run time is the same as regenerating with those values: the
     calibration struct is what the code reads."""
     text, config = saloon
     tuned = parse_vehicle(_run(saloon, logs, "serial", trials=3).text, "tuned.toml", "rwd_saloon")
-    log = logs["train"][0][0]
-    estimator, regenerated = compile_estimator(tuned, "switching", "double", "calibratable")
-    tuning = load_tuning_estimator(config, "switching")
-    tuning.set_calibration(calibration_values(tuned, "switching", estimator.parameters.names))
-    inputs = log.matrix(estimator.inputs.names)
-    assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
+    _, tuning, regenerated = _tuning_and_regenerated(config, tuned, "switching", logs["train"][0][0])
+    assert np.array_equal(tuning, regenerated)
 
 
 def test_the_growth_of_the_noise_and_the_friction_state_are_searched_where_the_file_has_them(saloon, logs):
@@ -100,14 +107,9 @@ def test_the_growth_of_the_noise_and_the_friction_state_are_searched_where_the_f
 
     assert (searched("fusion"), searched("switching"), searched("kf2dof")) == (growth | friction, friction, growth)
     changed = config.with_settings("fusion", process_noise_load=0.7, friction_noise=0.3, friction_time=0.4)
-    log = logs["train"][1][0]
-    estimator, regenerated = compile_estimator(changed, "fusion", "double", "calibratable")
-    tuning = load_tuning_estimator(config, "fusion")
-    inputs = log.matrix(estimator.inputs.names)
-    base = tuning.run(inputs)[0].copy()
-    tuning.set_calibration(calibration_values(changed, "fusion", estimator.parameters.names))
-    assert np.array_equal(tuning.run(inputs)[0], regenerated.run(inputs)[0])
-    assert not np.array_equal(tuning.run(inputs)[0], base)
+    base, tuning, regenerated = _tuning_and_regenerated(config, changed, "fusion", logs["train"][1][0])
+    assert np.array_equal(tuning, regenerated)
+    assert not np.array_equal(tuning, base)
 
 
 def test_keeping_the_base_because_nothing_beat_it_is_no_harm():
