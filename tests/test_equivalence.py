@@ -59,8 +59,11 @@ def test_status_raises_only_the_declared_bits_and_the_header_defines_them(config
     assert defined == set(DEFINITIONS[name].status_bits)
 
 
-@pytest.mark.parametrize("real,params", FORMS)
+@pytest.mark.parametrize("real,params", [pytest.param(real, params, marks=pytest.mark.slow) if params == "calibratable"
+                                         else (real, params) for real, params in FORMS])
 def test_kf2dof_equals_the_reference_in_every_form(config, real, params):
+    """The default estimator in every form (the calibratable ones in the slow suite, as every other
+    estimator's; double baked: test_generated_c_equals_the_reference_on_every_scenario)."""
     for result in check_every_scenario(config, "kf2dof", real, params):
         beta = result.outputs[0]
         assert beta.name == "beta" and beta.max_abs <= (1e-4 if real == "float" else 1e-12)
