@@ -91,6 +91,15 @@ def test_no_estimator_is_silently_wrong_anywhere_in_the_robustness_matrix():
     assert len(worse) <= WORSE_THAN_ZERO_RUNS, worse
 
 
+def _beats_zero_only_as_shipped(config, name: str, case: Case, **other_settings) -> None:
+    """On ``case``, ``name`` as the file ships it beats answering beta = 0 (flags and all), and with
+    ``other_settings`` instead it does not."""
+    log = case.simulate(config, 1.0 / config.sample_time)
+    other = config.with_settings(name, **other_settings)
+    assert worse_than_zero(log, run_estimator(config, name, log)) is None
+    assert worse_than_zero(log, run_estimator(other, name, log)) is not None
+
+
 @pytest.mark.parametrize("car", ["c_class", "rwd_saloon"])
 def test_kf_noise_growing_with_a_y_beats_zero_where_a_constant_noise_does_not(car):
     """The steering angle frozen in the 80 km/h DLC's reversal: for 0.3 s nothing can tell it from
@@ -99,10 +108,8 @@ def test_kf_noise_growing_with_a_y_beats_zero_where_a_constant_noise_does_not(ca
     flags and all, beats answering beta = 0; with the papers' constant Q_c it does not."""
     config = load_vehicle(VEHICLES / f"{car}.toml")
     assert config.settings("kf2dof")["process_noise_load"] > 0
-    log = Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:2").simulate(config, 1.0 / config.sample_time)
-    constant = config.with_settings("kf2dof", process_noise=[[0.25, 0.0], [0.0, 0.01]], process_noise_load=0.0)
-    assert worse_than_zero(log, run_estimator(config, "kf2dof", log)) is None
-    assert worse_than_zero(log, run_estimator(constant, "kf2dof", log)) is not None
+    _beats_zero_only_as_shipped(config, "kf2dof", Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:2"),
+                                process_noise=[[0.25, 0.0], [0.0, 0.01]], process_noise_load=0.0)
 
 
 @pytest.mark.slow
@@ -114,10 +121,8 @@ def test_aukf_trusting_a_y_as_its_sensor_beats_zero_where_the_papers_noise_does_
     about the sensor's variance) it is."""
     config = load_vehicle(VEHICLES / f"{car}.toml")
     assert config.settings("aukf")["measurement_noise"][1] >= 0.09
-    log = Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:1.5").simulate(config, 1.0 / config.sample_time)
-    papers = config.with_settings("aukf", measurement_noise=[1e-3, 1e-3, 1e-3])
-    assert worse_than_zero(log, run_estimator(config, "aukf", log)) is None
-    assert worse_than_zero(log, run_estimator(papers, "aukf", log)) is not None
+    _beats_zero_only_as_shipped(config, "aukf", Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:1.5"),
+                                measurement_noise=[1e-3, 1e-3, 1e-3])
 
 
 @pytest.mark.slow
@@ -129,8 +134,5 @@ def test_switching_with_half_the_papers_kf_noise_beats_zero_where_the_papers_doe
     first bend, the straight is unflagged, and with the paper's Q_c = diag(0.25, 0.01) the a_y noise
     moves switching's beta by up to 0.15 deg there, no better than answering beta = 0; with the
     shipped Q_c it is."""
-    config = load_vehicle(VEHICLES / "rwd_saloon.toml")
-    log = case.simulate(config, 1.0 / config.sample_time)
-    papers = config.with_settings("switching", process_noise=[[0.25, 0.0], [0.0, 0.01]])
-    assert worse_than_zero(log, run_estimator(config, "switching", log)) is None
-    assert worse_than_zero(log, run_estimator(papers, "switching", log)) is not None
+    _beats_zero_only_as_shipped(load_vehicle(VEHICLES / "rwd_saloon.toml"), "switching", case,
+                                process_noise=[[0.25, 0.0], [0.0, 0.01]])
