@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-from cases import DECISIVE, PARTICLE_FILTERS
+from cases import DECISIVE, PARTICLE_FILTERS, UNSCENTED_FILTERS
 from locations import DEFAULT_VEHICLE, VEHICLES
 
 from vsegen.codegen.generate import render
@@ -38,13 +38,10 @@ def check_every_scenario(config, name, real, params, known_drift=()):
     return results
 
 
-UNSCENTED = ("ukf", "aukf")
-
-
 # The particle filters' double-baked runs take 19-25 s each: the slow suite verifies them, every
 # step and trajectory (tests/test_pf_adaptive_pf_improved.py), with their other forms. The unscented
 # filters' (long-double reference) take 15-27 s: they run in the slow suite too.
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in UNSCENTED else n
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in UNSCENTED_FILTERS else n
                                   for n in ESTIMATORS if n not in PARTICLE_FILTERS])
 def test_generated_c_equals_the_reference_on_every_scenario(config, name):
     check_every_scenario(config, name, "double", "baked")
