@@ -34,7 +34,8 @@ CASES = (("continuous DLC (Table 3)", Case.of("continuous_dlc")),
 PAPER_KF = {"tyre_model": "linear", "process_noise": [0.25, 0.01], "process_noise_load": 0.0}
 """The paper's KF: linear tyres and the noise docs/methods.md §3 gives the paper's schemes (the paper
 gives none), a constant Q_c = diag(0.5^2, 0.1^2) s (the shipped files give switching and fusion
-saturating tyres with a friction estimate, and let fusion's smaller Q_c grow with a_y)."""
+saturating tyres with a friction estimate, switching half this v_y noise, and let fusion's smaller
+Q_c grow with a_y)."""
 PAPER_SWITCHING = {"offset_memory": 0.0, "kinematic_max_dwell": 0.0, **PAPER_KF}
 """The paper's switching estimator: no learned kinematic offset, no bound on the kinematic dwell
 (the shipped files switch both on for roads with bank and sensors with offsets,

@@ -13,7 +13,9 @@ import pytest
 from locations import VEHICLES
 
 from bench.robustness import matrix, run_case
+from bench.seed002 import PAPER_DLC
 from bench.silent import MODEL_BASED
+from bench.table3 import PAPER_KF
 from vsegen.harness.host.run_log import run_estimator
 from vsegen.harness.jobs.pool import DaskPool
 from vsegen.harness.project.vehicles import load_vehicle
@@ -30,6 +32,8 @@ noise grows with a_y, kf2dof and ukf hold BEYOND_LINEAR_RANGE 0.2 and 0.3 s and 
 adapted noise of v at 2e-3, 13 since switching ships the saturating KF and ekf_rls flags below 0.65, 7 since
 ukf and aukf trust a_y as its sensor deserves and switching's KF noise is half the paper's; the count may only fall."""
 OFFSET = {"ay_offset": 0.5}
+PAPERS_Q_C = np.diag(PAPER_KF["process_noise"]).tolist()
+"""The papers' constant KF noise (bench.table3.PAPER_KF) as a parsed vehicle file holds it."""
 
 
 def _scores(config, case: Case) -> tuple[float, float, bool]:
@@ -109,7 +113,7 @@ def test_kf_noise_growing_with_a_y_beats_zero_where_a_constant_noise_does_not(ca
     config = load_vehicle(VEHICLES / f"{car}.toml")
     assert config.settings("kf2dof")["process_noise_load"] > 0
     _beats_zero_only_as_shipped(config, "kf2dof", Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:2"),
-                                process_noise=[[0.25, 0.0], [0.0, 0.01]], process_noise_load=0.0)
+                                process_noise=PAPERS_Q_C, process_noise_load=0.0)
 
 
 @pytest.mark.slow
@@ -122,7 +126,7 @@ def test_aukf_trusting_a_y_as_its_sensor_beats_zero_where_the_papers_noise_does_
     config = load_vehicle(VEHICLES / f"{car}.toml")
     assert config.settings("aukf")["measurement_noise"][1] >= 0.09
     _beats_zero_only_as_shipped(config, "aukf", Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:1.5"),
-                                measurement_noise=[1e-3, 1e-3, 1e-3])
+                                measurement_noise=PAPER_DLC["measurement_noise"])
 
 
 @pytest.mark.slow
@@ -135,4 +139,4 @@ def test_switching_with_half_the_papers_kf_noise_beats_zero_where_the_papers_doe
     moves switching's beta by up to 0.15 deg there, no better than answering beta = 0; with the
     shipped Q_c it is."""
     _beats_zero_only_as_shipped(load_vehicle(VEHICLES / "rwd_saloon.toml"), "switching", case,
-                                process_noise=[[0.25, 0.0], [0.0, 0.01]])
+                                process_noise=PAPERS_Q_C)

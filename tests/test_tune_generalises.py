@@ -10,6 +10,7 @@ import math
 import pytest
 from locations import VEHICLES
 
+from bench.table3 import PAPER_SWITCHING
 from vsegen.harness.logs.table import Log, write_log
 from vsegen.harness.project.vehicles import load_vehicle, with_settings
 from vsegen.harness.sim.scenarios import Case
@@ -153,13 +154,14 @@ def test_the_tuned_file_says_how_it_was_tuned(tmp_path, saloon, dlc_logs, vsegen
 
 
 def test_a_training_set_that_makes_things_worse_is_refused(tmp_path, vsegen):
-    """The saloon's switching as the paper has it (linear KF, no learned offset, unbounded kinematic dwell)
+    """The saloon's switching as the paper has it (bench.table3.PAPER_SWITCHING: linear KF with the
+    paper's noise, no learned offset, unbounded kinematic dwell)
     tuned on four dry test-track manoeuvres (the regime of its threshold and bands not covered):
     worse on a training log and on the continuous-DLC hold-out, so refused."""
     saloon = load_vehicle(VEHICLES / "rwd_saloon.toml")
     paper = tmp_path / "rwd_saloon.toml"
     paper.write_text(with_settings((VEHICLES / "rwd_saloon.toml").read_text(), "estimator.switching",
-                                   tyre_model="linear", offset_memory=0.0, kinematic_max_dwell=0.0))
+                                   **PAPER_SWITCHING))
     arguments = ["tune", "--estimator", "switching", "--vehicle", paper, "--scheduler",
                  "serial", "--out", tmp_path / "tuned.toml"]
     for i, case in enumerate((HIGH_FRICTION, Case.of("step_steer"), Case.of("sine_steer"), Case.of("fishhook"))):
