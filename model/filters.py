@@ -85,6 +85,19 @@ def low_pass(previous, value, time_constant, T: float, sampled=None):
     return previous + (step if sampled is None else ca.if_else(sampled, step, 0))
 
 
+def learned_mean(previous, taken, value, time_constant, T: float, sampled):
+    """One step of a mean learned from the samples where the 0/1 flag ``sampled`` is 1 (held
+    elsewhere): y_k = y_k-1 + g (x_k - y_k-1) with g = max(1 / (n + 1), 1 - exp(-T / time_constant)),
+    n the samples taken so far, counted up to N = ``time_constant`` / T in whole samples. It starts
+    as the running mean of its first samples, so it knows from a few of them what a first-order
+    low-pass from 0 (:func:`low_pass`) would need several time constants for, and forgets as that
+    low-pass once N samples are in. Returns (mean, samples taken); ``time_constant`` may be a
+    calibration symbol."""
+    gain = ca.fmax(1 / (taken + 1), 1 - ca.exp(-T / time_constant))
+    return (previous + ca.if_else(sampled, gain * (value - previous), 0),
+            taken + sampled * (taken < whole_samples(time_constant, T)))
+
+
 def tustin_derivative(time_constant: float, T: float) -> tuple[float, float]:
     """(n, d) of the Tustin-discretised filtered derivative s / (time_constant s + 1):
     y[k] = n (x[k] - x[k-1]) - d y[k-1]."""

@@ -58,6 +58,19 @@ def test_a_bank_or_an_accelerometer_offset_is_lateral_inconsistency(car, case):
     assert _raised(_car(car), "switching", case, LATERAL_INCONSISTENT).size
 
 
+@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("fault, bit", [({"bank": 100.0 * math.tan(math.radians(3.0))}, LATERAL_INCONSISTENT),
+                                        ({"steer_offset": math.radians(0.2)}, STEERING_OFFSET)])
+def test_a_bank_or_a_steering_zero_error_there_from_the_start_is_told_on_the_first_second_of_straight(
+        car, fault, bit):
+    """The step steer drives 1 s straight before its step: a 3 deg bank (0.51 m/s^2 against the
+    0.4 limit) or a 0.2 deg steering zero error (0.1 deg limit) under the car from start-up is
+    flagged there. The checks' means start as running means (model.filters.learned_mean); as
+    first-order low-passes from 0 they had reached 75 % and 13 % of the fault by then."""
+    flagged = _raised(_car(car), "switching", Case.of("step_steer", **fault), bit)
+    assert flagged.size and flagged[0] < 1.0
+
+
 @pytest.mark.slow   # 60 s drives: about a minute of the default suite
 @pytest.mark.parametrize("car", CARS)
 @pytest.mark.parametrize("sign", [1.0, -1.0])

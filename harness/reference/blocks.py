@@ -98,6 +98,14 @@ def low_pass(previous: float, value: float, T: float, time_constant: float) -> f
     return previous + (1.0 - math.exp(-T / time_constant)) * (value - previous)
 
 
+def learned_mean(previous: float, taken: float, value: float, T: float, time_constant: float) -> tuple[float, float]:
+    """One sampled step of a learned mean (model.filters.learned_mean): gain max(1 / (n + 1),
+    1 - exp(-T / tau)) over the n samples taken so far, n counted up to tau / T in whole samples.
+    Returns (mean, samples taken)."""
+    gain = max(1.0 / (taken + 1.0), 1.0 - math.exp(-T / time_constant))
+    return previous + gain * (value - previous), min(taken + 1.0, float(whole_samples(time_constant, T)))
+
+
 def kf_predict(x, P, Phi, Gamma, u, Qd):
     return Phi @ x + Gamma @ u, Phi @ P @ Phi.T + Qd
 

@@ -15,21 +15,28 @@ is no offset; above the gyro noise):
   a_y = r v_x. While quasi-steady, settled and |a_y| <= ``lateral_check_range`` (where body roll adds at
   most about 0.1 m/s^2 to a body-fixed accelerometer), the residual a_y - r v_x is averaged,
 
-      e_k = e_k-1 + (1 - exp(-T_c / lateral_check_time)) (a_y - r v_x - e_k-1),
+      e_k = e_k-1 + g_n (a_y - r v_x - e_k-1),   g_n = max(1 / (n + 1), 1 - exp(-T_c / lateral_check_time)),
 
-  and held outside those stretches. |e| > ``lateral_check_limit`` raises the bit: a road bank
-  (g sin(phi_r) in a_y: 0.51 m/s^2 for 3 deg), an accelerometer offset or mounting tilt, a yaw-rate
-  or speed error. Every estimator that integrates a_y or trusts a_y against r is suspect then.
+  n the runs it has sampled (a running mean of its first runs, then a first-order low-pass:
+  ``model.filters.learned_mean``; a bank or an offset there from the start is told within a few
+  runs of straight driving), and held outside those stretches. |e| > ``lateral_check_limit`` raises
+  the bit once the mean has sampled ``learned_after`` (a running mean of fewer runs is too noisy
+  for the limit; or lateral_check_time if shorter): a road bank (g sin(phi_r) in a_y: 0.51 m/s^2
+  for 3 deg), an accelerometer offset or mounting tilt, a yaw-rate or speed error. Every estimator
+  that integrates a_y or trusts a_y against r is suspect then.
 * **steering-angle zero** (status STEERING_OFFSET): driving straight (quasi-steady, settled, |a_y| <=
   ``steering_offset_range``, v_x >= ``steering_offset_speed``), the road-wheel angle of the
   kinematic (Ackermann) turn is l r / v_x; understeer adds K_us a_y, below 0.001 rad per m/s^2 for
   passenger cars, so the zero is learned as
 
-      d_k = d_k-1 + (1 - exp(-T_c / steering_offset_time)) (delta - l r / v_x - d_k-1)
+      d_k = d_k-1 + g_n (delta - l r / v_x - d_k-1),   g_n = max(1 / (n + 1), 1 - exp(-T_c / steering_offset_time)),
 
-  and |d| > ``steering_offset_limit`` raises the bit: the steering-angle sensor's zero is off (a
-  service calibration, an alignment or a sensor exchange), so every model-based scheme sees a
-  steer angle the car does not have. The learned zero d is a state (``steering_offset``).
+  (a running mean of its first n runs, then a low-pass, as the lateral check's, so an offset there
+  at start-up is told within a few runs, as an ESC learns its steering sensor's zero fast after
+  start-up and then slowly), and |d| > ``steering_offset_limit`` raises the bit once the zero has
+  sampled ``learned_after``: the steering-angle sensor's zero is off (a service calibration, an
+  alignment or a sensor exchange), so every model-based scheme sees a steer angle the car does not
+  have. The learned zero d is a state (``steering_offset``).
 * **steer angle follows the car** (status INPUT_FROZEN): at a constant steer angle the path
   curvature r / v_x stays constant once settled (understeer changes it by a few per cent with the
   speed). With the curvature low-passed,
@@ -52,7 +59,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import low_pass, whole_samples
+from vsegen.model.filters import learned_mean, low_pass, whole_samples
 from vsegen.model.input_checks import Watch
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
@@ -75,6 +82,9 @@ FIELDS = (
                 "bank, an accelerometer offset or tilt, a yaw-rate or speed error); 0 = no check",
                 default=0.0),
     positive("lateral_check_time", "s", "time constant of the lateral check's mean", default=0.5),
+    positive("learned_after", "s", "the lateral check and the steering zero judge their mean only once it "
+             "has sampled this long (in runs of check_period; a running mean of fewer runs is too noisy), "
+             "or their time constant if that is shorter", default=0.3),
     positive("lateral_check_range", "m/s^2", "the lateral check samples only while |a_y| is below "
              "this (body roll's share of a_y stays small)", default=1.5),
     nonnegative("steering_offset_limit", "rad", "beyond the papers: the steering-angle zero learned "
@@ -103,9 +113,13 @@ _STEADY = (Signal("steady_delta", "rad", "cross-checks: steer angle at the start
            Signal("steady_r", "rad/s", "cross-checks: yaw rate at their last run"))
 _CHECKS = (
     ("lateral_check_limit", status.LATERAL_INCONSISTENT,
-     (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x in quasi-steady driving"),)),
+     (Signal("lateral_residual", "m/s^2", "lateral check: mean of a_y - r v_x in quasi-steady driving"),
+      Signal("lateral_residual_samples", "-", "lateral check: runs its mean has taken (at most "
+             "lateral_check_time / check_period)"))),
     ("steering_offset_limit", status.STEERING_OFFSET,
-     (Signal("steering_offset", "rad", "learned steering-angle zero (road wheel)"),)),
+     (Signal("steering_offset", "rad", "learned steering-angle zero (road wheel)"),
+      Signal("steering_offset_samples", "-", "steering-angle zero: runs it has learned from (at most "
+             "steering_offset_time / check_period)"))),
     ("steer_check_limit", status.INPUT_FROZEN,
      (Signal("curvature", "1/m", "steer check: low-passed path curvature r / v_x"),
       Signal("steady_curvature", "1/m", "steer check: low-passed path curvature when the stretch turned "
@@ -167,18 +181,20 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
-        residual = low_pass(s["lateral_residual"], u["ay"] - u["r"] * u["vx"], settings["lateral_check_time"],
-                            sample_time, sampled)
-        updates["lateral_residual"] = residual
-        raised[status.LATERAL_INCONSISTENT] = ca.fabs(residual) > settings["lateral_check_limit"]
+        residual, taken = learned_mean(s["lateral_residual"], s["lateral_residual_samples"], u["ay"] - u["r"] * u["vx"],
+                                       settings["lateral_check_time"], sample_time, sampled)
+        updates |= {"lateral_residual": residual, "lateral_residual_samples": taken}
+        raised[status.LATERAL_INCONSISTENT] = _judged(taken, settings["lateral_check_time"], watch) * (
+            ca.fabs(residual) > settings["lateral_check_limit"])
     if _on(numeric_settings, "steering_offset_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
         kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
-        offset = low_pass(s["steering_offset"], kinematic_zero, settings["steering_offset_time"], sample_time,
-                          sampled)
-        updates["steering_offset"] = offset
-        raised[status.STEERING_OFFSET] = ca.fabs(offset) > settings["steering_offset_limit"]
+        offset, taken = learned_mean(s["steering_offset"], s["steering_offset_samples"], kinematic_zero,
+                                     settings["steering_offset_time"], sample_time, sampled)
+        updates |= {"steering_offset": offset, "steering_offset_samples": taken}
+        raised[status.STEERING_OFFSET] = _judged(taken, settings["steering_offset_time"], watch) * (
+            ca.fabs(offset) > settings["steering_offset_limit"])
     if _on(numeric_settings, "steer_check_limit"):
         curvature = low_pass(s["curvature"], u["r"] / u["vx"], settings["steer_check_time"], sample_time)
         turned_steady = steady * (s["steady_samples"] < limit)
@@ -189,3 +205,11 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
         raised[status.INPUT_FROZEN] = checked * (ca.fabs(change) > settings["steer_check_limit"])
     return ({k: ca.if_else(active, v, s[k]) for k, v in updates.items()},
             {bit: active * flag for bit, flag in raised.items()})
+
+
+def _judged(taken, time_constant, watch: Watch):
+    """1 once a learned mean has taken ``learned_after`` of runs, or its ``time_constant`` if that
+    is shorter (its count stops there)."""
+    runs = ca.fmin(whole_samples(watch.settings["learned_after"], watch.sample_time),
+                   whole_samples(time_constant, watch.sample_time))
+    return taken >= runs

@@ -10,8 +10,8 @@ from vsegen.harness.reference import blocks
 ORDER = 2
 INPUTS = ("delta", "vx", "ay", "r")
 """What the checks read; an estimator without all of them has none."""
-CHECKS = {"lateral_check_limit": (blocks.LATERAL_INCONSISTENT, ("lateral_residual",)),
-          "steering_offset_limit": (blocks.STEERING_OFFSET, ("steering_offset",)),
+CHECKS = {"lateral_check_limit": (blocks.LATERAL_INCONSISTENT, ("lateral_residual", "lateral_residual_samples")),
+          "steering_offset_limit": (blocks.STEERING_OFFSET, ("steering_offset", "steering_offset_samples")),
           "steer_check_limit": (blocks.INPUT_FROZEN, ("curvature", "steady_curvature"))}
 """Each check: the setting that switches it on (> 0), the bit it raises, its state entries."""
 
@@ -44,7 +44,8 @@ def states(settings, inputs) -> tuple[str, ...]:
 
 
 def initial(settings, inputs, first) -> dict:
-    """A quasi-steady stretch starting at the first sample's steer angle and yaw rate, nothing learned."""
+    """A quasi-steady stretch starting at the first sample's steer angle and yaw rate, nothing learned
+    (no sample taken)."""
     firsts = {"steady_delta": first["delta"], "steady_r": first["r"]}
     return {name: firsts.get(name, 0.0) for name in states(settings, inputs)}
 
@@ -63,19 +64,22 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
     settled = steady and abs(u["r"] - x["steady_r"]) * u["vx"] <= settings["settle_band"]   # r too, since the last run
     new["steady_r"] = u["r"]
     if _on(settings, "lateral_check_limit"):
-        residual = x["lateral_residual"]
+        residual, taken = x["lateral_residual"], x["lateral_residual_samples"]
         if settled and abs(u["ay"]) <= settings["lateral_check_range"]:
-            residual = blocks.low_pass(residual, u["ay"] - u["r"] * u["vx"], T, settings["lateral_check_time"])
-        new["lateral_residual"] = residual
-        code |= blocks.LATERAL_INCONSISTENT if abs(residual) > settings["lateral_check_limit"] else 0
+            residual, taken = blocks.learned_mean(residual, taken, u["ay"] - u["r"] * u["vx"], T,
+                                                  settings["lateral_check_time"])
+        new["lateral_residual"], new["lateral_residual_samples"] = residual, taken
+        judged = _judged(taken, settings["lateral_check_time"], settings, T)
+        code |= blocks.LATERAL_INCONSISTENT if judged and abs(residual) > settings["lateral_check_limit"] else 0
     if _on(settings, "steering_offset_limit"):
-        offset = x["steering_offset"]
+        offset, taken = x["steering_offset"], x["steering_offset_samples"]
         if (settled and abs(u["ay"]) <= settings["steering_offset_range"]
                 and u["vx"] >= settings["steering_offset_speed"]):
-            offset = blocks.low_pass(offset, u["delta"] - wheelbase * u["r"] / u["vx"], T,
-                                     settings["steering_offset_time"])
-        new["steering_offset"] = offset
-        code |= blocks.STEERING_OFFSET if abs(offset) > settings["steering_offset_limit"] else 0
+            offset, taken = blocks.learned_mean(offset, taken, u["delta"] - wheelbase * u["r"] / u["vx"], T,
+                                                settings["steering_offset_time"])
+        new["steering_offset"], new["steering_offset_samples"] = offset, taken
+        judged = _judged(taken, settings["steering_offset_time"], settings, T)
+        code |= blocks.STEERING_OFFSET if judged and abs(offset) > settings["steering_offset_limit"] else 0
     if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady
         curvature = blocks.low_pass(x["curvature"], u["r"] / u["vx"], T, settings["steer_check_time"])
         turned_steady = steady and x["steady_samples"] < steady_samples
@@ -85,3 +89,8 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
             change = (curvature - new["steady_curvature"]) * u["vx"] ** 2
             code |= blocks.INPUT_FROZEN if abs(change) > settings["steer_check_limit"] else 0
     return new, code
+
+
+def _judged(taken: float, time_constant: float, settings, T: float) -> bool:
+    """A learned mean is judged once it has taken learned_after of runs, or its time constant's if fewer."""
+    return taken >= min(blocks.whole_samples(settings["learned_after"], T), blocks.whole_samples(time_constant, T))
