@@ -99,10 +99,13 @@ class EstimatorCoverage:
 STATE_FAULTS: tuple[tuple[str, Callable[[np.ndarray], np.ndarray]], ...] = (
     ("every entry negated", lambda state: -state),
     ("every entry times 1e6", lambda state: 1e6 * state),
+    ("every entry times 3", lambda state: 3.0 * state),
 )
 """Injected faults of the state (a corrupted memory), applied to the state in the middle of the
 first scenario, which then runs on for FAULT_STEPS samples: variances below zero and a covariance
-no longer positive definite; variances, noise estimates and estimates far above any bound."""
+no longer positive definite; variances, noise estimates and estimates far above any bound; and
+every estimate a few times too large, still within its numbers' range (a learned parameter beyond
+the band it is clamped to, which a filter re-fitting from a huge covariance never reaches)."""
 FAULT_STEPS = 20
 
 
