@@ -239,8 +239,9 @@ def test_a_drift_is_never_explained_as_a_crossing():
 @pytest.mark.slow
 def test_rwd_saloons_float_calibratable_ekf_rls_crosses_its_seeding_threshold_on_the_fishhook():
     """The case that needed the crossings: the indicator within float rounding of indicator_low;
-    without them the fusion weight parted by 2.5e-4 (tolerance 1e-4)."""
-    config = load_vehicle(VEHICLES / "rwd_saloon.toml")
+    without them the fusion weight parted by 2.5e-4 (tolerance 1e-4). It arises with the RLS
+    learning from slips of 0.002 rad; the shipped file's 0.005 keeps this fishhook clear of it."""
+    config = load_vehicle(VEHICLES / "rwd_saloon.toml").with_settings("ekf_rls", slip_min=0.002)
     (result,) = verify_estimator(config, "ekf_rls", cases=(Case.of("fishhook"),),
                                  real="float", params="calibratable")
     assert result.ok and result.crossings >= 1, result
