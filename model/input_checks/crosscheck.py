@@ -181,20 +181,16 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
-        residual, taken = learned_mean(s["lateral_residual"], s["lateral_residual_samples"], u["ay"] - u["r"] * u["vx"],
-                                       settings["lateral_check_time"], sample_time, sampled)
-        updates |= {"lateral_residual": residual, "lateral_residual_samples": taken}
-        raised[status.LATERAL_INCONSISTENT] = _judged(taken, settings["lateral_check_time"], watch) * (
-            ca.fabs(residual) > settings["lateral_check_limit"])
+        learned, raised[status.LATERAL_INCONSISTENT] = _learned_check(
+            watch, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled, "lateral_check_time", "lateral_check_limit")
+        updates |= learned
     if _on(numeric_settings, "steering_offset_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
         kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
-        offset, taken = learned_mean(s["steering_offset"], s["steering_offset_samples"], kinematic_zero,
-                                     settings["steering_offset_time"], sample_time, sampled)
-        updates |= {"steering_offset": offset, "steering_offset_samples": taken}
-        raised[status.STEERING_OFFSET] = _judged(taken, settings["steering_offset_time"], watch) * (
-            ca.fabs(offset) > settings["steering_offset_limit"])
+        learned, raised[status.STEERING_OFFSET] = _learned_check(
+            watch, "steering_offset", kinematic_zero, sampled, "steering_offset_time", "steering_offset_limit")
+        updates |= learned
     if _on(numeric_settings, "steer_check_limit"):
         curvature = low_pass(s["curvature"], u["r"] / u["vx"], settings["steer_check_time"], sample_time)
         turned_steady = steady * (s["steady_samples"] < limit)
@@ -207,9 +203,14 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
             {bit: active * flag for bit, flag in raised.items()})
 
 
-def _judged(taken, time_constant, watch: Watch):
-    """1 once a learned mean has taken ``learned_after`` of runs, or its ``time_constant`` if that
-    is shorter (its count stops there)."""
-    runs = ca.fmin(whole_samples(watch.settings["learned_after"], watch.sample_time),
-                   whole_samples(time_constant, watch.sample_time))
-    return taken >= runs
+def _learned_check(watch: Watch, entry: str, value, sampled, time_key: str, limit_key: str) -> tuple[dict, ca.SX]:
+    """(new entries, flag) of a check on a learned mean: state ``entry`` learns ``value`` where
+    ``sampled`` (``model.filters.learned_mean``, time constant setting ``time_key``), counting its
+    runs in ``entry``_samples; the flag is 1 where |mean| > setting ``limit_key`` once the mean has
+    sampled ``learned_after``, or its time constant if that is shorter (its count stops there)."""
+    s, settings, sample_time = watch.s, watch.settings, watch.sample_time
+    count, time_constant = f"{entry}_samples", settings[time_key]
+    mean, taken = learned_mean(s[entry], s[count], value, time_constant, sample_time, sampled)
+    judged = taken >= ca.fmin(whole_samples(settings["learned_after"], sample_time),
+                              whole_samples(time_constant, sample_time))
+    return {entry: mean, count: taken}, judged * (ca.fabs(mean) > settings[limit_key])

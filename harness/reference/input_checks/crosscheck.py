@@ -64,22 +64,19 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
     settled = steady and abs(u["r"] - x["steady_r"]) * u["vx"] <= settings["settle_band"]   # r too, since the last run
     new["steady_r"] = u["r"]
     if _on(settings, "lateral_check_limit"):
-        residual, taken = x["lateral_residual"], x["lateral_residual_samples"]
-        if settled and abs(u["ay"]) <= settings["lateral_check_range"]:
-            residual, taken = blocks.learned_mean(residual, taken, u["ay"] - u["r"] * u["vx"], T,
-                                                  settings["lateral_check_time"])
-        new["lateral_residual"], new["lateral_residual_samples"] = residual, taken
-        judged = _judged(taken, settings["lateral_check_time"], settings, T)
-        code |= blocks.LATERAL_INCONSISTENT if judged and abs(residual) > settings["lateral_check_limit"] else 0
+        sampled = settled and abs(u["ay"]) <= settings["lateral_check_range"]
+        learned, raised = _learned_check(x, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled,
+                                         settings["lateral_check_time"], settings["lateral_check_limit"], settings, T)
+        new |= learned
+        code |= blocks.LATERAL_INCONSISTENT if raised else 0
     if _on(settings, "steering_offset_limit"):
-        offset, taken = x["steering_offset"], x["steering_offset_samples"]
-        if (settled and abs(u["ay"]) <= settings["steering_offset_range"]
-                and u["vx"] >= settings["steering_offset_speed"]):
-            offset, taken = blocks.learned_mean(offset, taken, u["delta"] - wheelbase * u["r"] / u["vx"], T,
-                                                settings["steering_offset_time"])
-        new["steering_offset"], new["steering_offset_samples"] = offset, taken
-        judged = _judged(taken, settings["steering_offset_time"], settings, T)
-        code |= blocks.STEERING_OFFSET if judged and abs(offset) > settings["steering_offset_limit"] else 0
+        sampled = (settled and abs(u["ay"]) <= settings["steering_offset_range"]
+                   and u["vx"] >= settings["steering_offset_speed"])
+        learned, raised = _learned_check(x, "steering_offset", u["delta"] - wheelbase * u["r"] / u["vx"], sampled,
+                                         settings["steering_offset_time"], settings["steering_offset_limit"],
+                                         settings, T)
+        new |= learned
+        code |= blocks.STEERING_OFFSET if raised else 0
     if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady
         curvature = blocks.low_pass(x["curvature"], u["r"] / u["vx"], T, settings["steer_check_time"])
         turned_steady = steady and x["steady_samples"] < steady_samples
@@ -91,6 +88,13 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
     return new, code
 
 
-def _judged(taken: float, time_constant: float, settings, T: float) -> bool:
-    """A learned mean is judged once it has taken learned_after of runs, or its time constant's if fewer."""
-    return taken >= min(blocks.whole_samples(settings["learned_after"], T), blocks.whole_samples(time_constant, T))
+def _learned_check(x, entry: str, value: float, sampled: bool, time_constant: float, limit: float, settings,
+                   T: float) -> tuple[dict, bool]:
+    """(new entries, raised) of a check on a learned mean: ``entry`` learns ``value`` where ``sampled``
+    (its runs counted in ``entry``_samples); raised where |mean| > ``limit`` once it has taken
+    learned_after of runs, or its time constant's if fewer."""
+    mean, taken = x[entry], x[f"{entry}_samples"]
+    if sampled:
+        mean, taken = blocks.learned_mean(mean, taken, value, T, time_constant)
+    judged = taken >= min(blocks.whole_samples(settings["learned_after"], T), blocks.whole_samples(time_constant, T))
+    return {entry: mean, f"{entry}_samples": taken}, judged and abs(mean) > limit
