@@ -2,8 +2,8 @@
 model with four-wheel kinematics, HSRI tyres and load transfer (1)-(8), the scaled UT (10)-(11),
 the UKF (12)-(14) with the points not redrawn, and (aukf) the sub-optimal Sage-Husa estimator of q
 and Q (15a)-(15b) with the §2.10 safeguard and
-the ceiling process_noise_max; beyond the spec, a restart when the estimate leaves the plausible
-envelope. NumPy only.
+the ceiling process_noise_max; beyond the spec, no noise learnt from a sample the monitor block
+flags and a restart when the estimate leaves the plausible envelope. NumPy only.
 
 The sigma points are propagated and weighted literally, in the difference form of C6, in
 ``numpy.longdouble`` (64-bit mantissa on x86-64): with alpha = 0.001 the weights are about +-1e6,
@@ -127,11 +127,12 @@ class Variant:
         P_new = P_pred - K @ P_zz @ K.T
 
         new = {**dict(zip(STATE, X_new)), **dict(zip(COVARIANCE, blocks.packed(P_new)))}
-        if self.adaptive:                                                  # (15a), (15b), §2.10
-            new.update(self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps))
+        monitor, judgement, first_inconsistent = block.judge_model(x, eps, config.sample_time, inputs["ay"], z_hat[1])
+        if self.adaptive:      # (15a), (15b), §2.10; beyond the spec: no sample the monitors flag
+            learnt = self._sage_husa(s, x, q, Q, mean, spread, X_new, P_new, K @ eps)
+            new.update(learnt if not (flags or judgement) else {k: x[k] for k in learnt})
         new["hold_reason"] = 0.0
         status |= blocks.COVARIANCE_REPAIRED if repaired else 0
-        monitor, judgement, first_inconsistent = block.judge_model(x, eps, config.sample_time, inputs["ay"], z_hat[1])
         new.update(monitor)                         # beyond the spec: the monitor block's model checks
         status |= judgement
         if _leaves_the_envelope(s, X_new, inputs["vx"]) or first_inconsistent:

@@ -16,7 +16,10 @@ docs/methods.md, seed 002, §2 with the §3/§5 defaults:
 * aukf: (15a)-(15b) with d_k = (1 - f)/(1 - f^(k+1)) (the state keeps f^(k+1)); Q kept diagonal,
   each entry at least 1e-3 Q_0 (§2.10; ``noise_safeguard = "none"`` drops this floor) and, beyond
   the spec, at most ``process_noise_max`` (abusive inputs otherwise grow Q and P until they
-  overflow).
+  overflow); beyond the spec too, a sample on which the monitor block raises any bit (an input
+  check, the consistency monitor, BEYOND_LINEAR_RANGE) is not learnt from: q, Q and f^(k+1) are
+  kept (the noise mean integrates the correction, so a steering angle frozen for 2 s otherwise
+  left a yaw-moment mean of 530 N*m and beta 0.2 deg off for good after it).
 
 Hold rule (model.guard, on the logged vx like every estimator): while holding every state is kept
 and beta = 0; ``hold_reason`` is 2 for a low-speed hold, 1 for an invalid input. The first sample
@@ -342,9 +345,10 @@ def _step(sym: _Symbols, init_state: ca.SX, f: _Filter) -> Estimator:
     x_pred = propagated + f.q
 
     x_new, P_new, innovation, correction = _update(settings, u, active, x_pred, spread, f.Q)
-    extra = _sage_husa(sym, f, propagated, spread, x_new, P_new, correction) if sym.adaptive else {}
-    next_state, output, checks = _finish(sym, init_state, f, x_new, P_new, innovation, x_pred[MEASURED[1]],
-                                         repaired, extra)
+    watched, judged = _monitors(sym, f, innovation, x_pred[MEASURED[1]])
+    extra = (_sage_husa(sym, f, propagated, spread, x_new, P_new, correction, learns=watched.code + judged.code == 0)
+             if sym.adaptive else {})
+    next_state, output, checks = _finish(sym, init_state, f, x_new, P_new, repaired, extra, watched, judged)
     repeated, next_state, output = make_repeated(name, sym.state, sym.inputs, offsets, shared, each,
                                                  results, ca.cse(next_state), ca.cse(output), params, checks)
     init, step = make_functions(name, sym.inputs_layout, sym.states, sym.outputs, sym.inputs, sym.state,
@@ -374,8 +378,23 @@ def _update(settings, u, active, x_pred: ca.SX, spread: ca.SX, Q: ca.SX):
     return x_new, P_new, innovation, correction
 
 
-def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, correction) -> dict:
-    """Sage-Husa (15a)-(15b): the next noise mean and variances (floored, capped) and fading."""
+def _monitors(sym: _Symbols, f: _Filter, innovation, ay_model):
+    """(the input checks' stage, the model checks' stage) of the monitor block, from the state as it
+    came in, the prior ``innovation`` and the prior's a_y ``ay_model`` (for the linear-range flag)."""
+    config = sym.params.config
+    T = config.sample_time
+    watched = sym.monitors.watch_inputs(sym.kept, sym.u, sym.guard.plausible, sym.guard.active, sym.settings, T,
+                                        config.vehicle, config.limits)
+    judged = sym.monitors.judge_model(f.s, sym.guard.active, sym.settings, T, innovation, sym.u["ay"], ay_model,
+                                      held_here=False)
+    return watched, judged
+
+
+def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, correction, learns) -> dict:
+    """Sage-Husa (15a)-(15b): the next noise mean and variances (floored, capped) and fading, where
+    ``learns``; else the three kept (beyond the spec: the sample is skipped while the monitor block
+    raises any bit, so that a fault or the model's error at the limit is not learnt as noise: the
+    noise mean integrates the correction, and kept for good what it learnt there)."""
     settings = sym.settings
     forgetting = settings["forgetting_factor"]
     d = (1 - forgetting) / (1 - f.s["fading"])
@@ -385,26 +404,23 @@ def _sage_husa(sym: _Symbols, f: _Filter, propagated, spread, x_new, P_new, corr
     if sym.params.numeric.settings(sym.name)["noise_safeguard"] == "floor":
         Q_new = ca.fmax(Q_new, Q_FLOOR * ca.vertcat(*settings["process_noise"]))
     Q_new = ca.fmin(Q_new, ca.vertcat(*settings["process_noise_max"]))
-    return {**{f"qmean_{n}": q_new[i] for i, n in enumerate(X_NAMES)},
-            **{f"qvar_{n}": Q_new[i] for i, n in enumerate(X_NAMES)},
-            "fading": f.s["fading"] * forgetting}
+    learnt = {**{f"qmean_{n}": q_new[i] for i, n in enumerate(X_NAMES)},
+              **{f"qvar_{n}": Q_new[i] for i, n in enumerate(X_NAMES)},
+              "fading": f.s["fading"] * forgetting}
+    return {name: ca.if_else(learns, value, f.s[name]) for name, value in learnt.items()}
 
 
-def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, innovation, ay_model, repaired, extra: dict):
+def _finish(sym: _Symbols, init_state, f: _Filter, x_new, P_new, repaired, extra: dict, watched, judged):
     """(next state, output, the input checks' segment): the update, the hold, or a restart (beyond
     the spec: the innovation monitor's first firing or an estimate outside the plausible envelope),
-    and the status; ``ay_model`` the prior's a_y (for the linear-range flag)."""
+    and the status; ``watched`` and ``judged`` the monitor block's stages (``_monitors``)."""
     settings, u, guard, kept, states = sym.settings, sym.u, sym.guard, sym.kept, sym.states
     active = guard.active
 
     def keep(value, key):
         return ca.if_else(active, value, kept[key])
 
-    T = sym.params.config.sample_time
-    judged = sym.monitors.judge_model(f.s, active, settings, T, innovation, u["ay"], ay_model, held_here=False)
     extra = {**extra, **judged.updates}
-    watched = sym.monitors.watch_inputs(kept, u, guard.plausible, active, settings, T,   # from the state as it came in
-                                        sym.params.config.vehicle, sym.params.config.limits)
     stuck = watched.updates
     upper = ca.vertsplit(kalman.pack_symmetric(P_new))
     updated = states.pack({**dict(zip(X_NAMES, ca.vertsplit(x_new))), **dict(zip(COVARIANCE, upper)),

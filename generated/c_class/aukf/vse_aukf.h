@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 19fe977260c80044f9b0c331f64fe7d84c65f642998ae27b8762ced0753e8a30
- * Operations: step 7897, input checks 209 a run (every check_period), init 131 (CasADi SX instructions).
+ * Operations: step 7949, input checks 209 a run (every check_period), init 131 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: 259ef57497c8344dfa96da2363a571ea02d42fefb69e172c03ea96baa078742f
-# Operations: step 7795, input checks 208 a run (every check_period), init 128 (CasADi SX instructions).
+# Operations: step 7837, input checks 208 a run (every check_period), init 128 (CasADi SX instructions).
 # longitudinal_force: wheel_speeds
 # sigma_points: 13, weights W_m0 = -9999, W_i = 833.3333; the C propagates the 6 pairs in a loop
 

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: c9a9e3f9eb1b3ae4545d4b3463d43e677a1a97216ff1724a424f1b453a45e12c
- * Operations: step 7900, input checks 211 a run (every check_period), init 131 (CasADi SX instructions).
+ * Operations: step 7952, input checks 211 a run (every check_period), init 131 (CasADi SX instructions).
  * longitudinal_force: wheel_speeds
  * sigma_points: 13, weights W_m0 = -999999, W_i = 83333.33; the C propagates the 6 pairs in a loop
  */
