@@ -23,7 +23,12 @@ error (a DBC factor typed 0.013 for 0.01) makes m proportional to r, small where
 little; so, with ``wheel_check_scale`` > 0, the mean wheel yaw rate n (|r_w| low-passed alike) is
 kept too, and |m| > wheel_check_scale n also raises the bit where n >= ``wheel_check_scale_rate``
 (a steered front axle over-reads r by up to 10 % at 4 m/s^2, a gyro on a pitching body under-reads
-it over a crest: 0.2 of n stays clear of both). The bit stays raised ``wheel_check_hold`` s after
+it over a crest: 0.2 of n stays clear of both). A scale typed wrong stays wrong, but where the car
+yaws little (a low-friction slalom) the share is too noisy to judge on one run; so, with
+``wheel_check_scale_time`` > 0, the check also learns the share |m| / n over the runs where it
+judges it (``model.filters.learned_mean``: a running mean of its first runs), and while that learned
+share is beyond ``wheel_check_scale`` raises the bit wherever n >= ``wheel_check_learned_rate``:
+what the last corners showed is kept for the milder ones. The bit stays raised ``wheel_check_hold`` s after
 it fell (m passes 0 whenever r does, while an estimate that integrated the wrong r recovers). An estimator has
 the check when it reads that axle's wheel speeds (the UKFs in their "wheel_speeds" mode) and
 ``wheel_check_limit`` > 0; a holding estimator holds it. Every estimator with the input monitors can
@@ -37,7 +42,7 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import held_flag, low_pass
+from vsegen.model.filters import held_flag, learned_mean, low_pass
 from vsegen.model.input_checks import Watch
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
@@ -61,6 +66,13 @@ FIELDS = (
                 "typed wrong); 0 = off", default=0.0),
     positive("wheel_check_scale_rate", "rad/s", "the share test (wheel_check_scale) judges only where "
              "the mean |wheel yaw rate| is at least this", default=0.1),
+    nonnegative("wheel_check_scale_time", "s", "beyond the papers: time constant of the learned share of "
+                "the yaw-rate check's mean in the mean |wheel yaw rate| (learned where the share test judges); "
+                "beyond wheel_check_scale it raises YAW_RATE_MISMATCH wherever the mean |wheel yaw rate| is at "
+                "least wheel_check_learned_rate (a yaw-rate scale typed wrong, kept for the mild corners); 0 = off",
+                default=0.0),
+    positive("wheel_check_learned_rate", "rad/s", "the learned share (wheel_check_scale_time) raises "
+             "YAW_RATE_MISMATCH only where the mean |wheel yaw rate| is at least this", default=0.02),
     nonnegative("wheel_check_hold", "s", "YAW_RATE_MISMATCH stays raised this long after the yaw-rate "
                 "check's means agree again, while the estimate recovers from the wrong yaw rate; "
                 "0 = off", default=0.0),
@@ -69,6 +81,10 @@ STATE = Signal("wheel_yaw_residual", "rad/s", "yaw-rate check: mean of r minus t
                                               "yaw rate")
 RATE = Signal("wheel_yaw_rate", "rad/s", "yaw-rate check: mean |non-driven wheels' yaw rate| "
                                          "(wheel_check_scale)")
+SHARE = Signal("wheel_yaw_share", "-", "yaw-rate check: learned share of the mean of r minus the wheels' "
+                                      "yaw rate in their mean |yaw rate| (wheel_check_scale_time)")
+SHARE_SAMPLES = Signal("wheel_yaw_share_samples", "-", "yaw-rate check: runs the learned share has taken, "
+                                                       "counted up to wheel_check_scale_time")
 HOLD = Signal("wheel_yaw_hold_left", "-", "samples YAW_RATE_MISMATCH stays raised (wheel_check_hold)")
 
 
@@ -110,7 +126,13 @@ def states(numeric_settings, inputs: tuple[str, ...]) -> tuple[Signal, ...]:
     if not enabled(numeric_settings, inputs):
         return ()
     return (STATE, *((RATE,) if numeric_settings["wheel_check_scale"] > 0.0 else ()),
+            *((SHARE, SHARE_SAMPLES) if _learns_share(numeric_settings) else ()),
             *((HOLD,) if numeric_settings["wheel_check_hold"] > 0.0 else ()))
+
+
+def _learns_share(numeric_settings) -> bool:
+    """Whether the check learns the share (structural)."""
+    return numeric_settings["wheel_check_scale"] > 0.0 and numeric_settings["wheel_check_scale_time"] > 0.0
 
 
 def initial_entries(first: dict, numeric_settings, inputs: tuple[str, ...]) -> dict:
@@ -136,6 +158,14 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
         updates[RATE.name] = rate
         yawing = rate >= settings["wheel_check_scale_rate"]
         scaled = yawing * (ca.fabs(residual) > settings["wheel_check_scale"] * rate)
+        if _learns_share(numeric_settings):                # kept for the corners too mild to judge
+            share = ca.fabs(residual) / ca.fmax(rate, settings["wheel_check_scale_rate"])
+            learned, updates[SHARE_SAMPLES.name] = learned_mean(
+                s[SHARE.name], s[SHARE_SAMPLES.name], share, settings["wheel_check_scale_time"], sample_time,
+                ca.logic_and(rolling, yawing))
+            updates[SHARE.name] = learned
+            kept = (learned > settings["wheel_check_scale"]) * (rate >= settings["wheel_check_learned_rate"])
+            scaled = scaled + kept - scaled * kept
         raised = raised + scaled - raised * scaled
     updates = {name: ca.if_else(active, value, s[name]) for name, value in updates.items()}
     if numeric_settings["wheel_check_hold"] > 0.0:
