@@ -2,7 +2,7 @@
 cars and the core manoeuvres, plus the road scenarios. Per run: beta RMSE and max (deg), the
 longest stretch of |beta error| > 2 deg with status 0 (s; "never silently wrong" allows 0.5 s),
 and, for a fault that starts at a known time, the time from its start to the first non-zero
-status (s). Seed 1, the shipped vehicle files (settings not tuned on these runs).
+status (s). Seed 1, the shipped vehicle files (some of their settings were chosen on these runs).
 
     python -m bench.robustness [--scheduler local|serial|ADDRESS]
 
@@ -144,7 +144,8 @@ def report(scheduler: str | None) -> list[str]:
              f"{provenance('python -m bench.robustness')}. Every sideslip estimator under each "
              "disturbance (`harness/sim/disturbances.py`, docs/scenarios.md) on the core manoeuvres "
              "and on the road scenarios; truth plant `harness/sim`, sensor-noise seed 1, the shipped "
-             "vehicle files (settings **not** tuned on these runs).", "",
+             "vehicle files; some of their settings were chosen on these runs (docs/estimators.md says which), so "
+             "the counts are not a hold-out score.", "",
              "Each cell: β RMSE (°) / β max |error| (°) / longest stretch of |β error| > 2° with "
              f"status 0 (s; **bold** beyond {SILENT_DURATION} s: silently wrong) / for a fault that "
              f"starts at {FAULT_AT:g} s, the time from its start to the first non-zero status (s; "

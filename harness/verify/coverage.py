@@ -58,6 +58,12 @@ JUSTIFIED: tuple[Justification, ...] = (
                   "the 0/0 guard of the pair's square roots of a tyre's combined slip demand: they sum "
                   "to less than 1e-30 only when the demand is exactly 0 at the mean and at both sigma "
                   "points (a zero sigma spread and a slip that rounds to exactly 0); kept for that case"),
+    Justification("aukf", r"^estimators/aukf\.py:\d+ _sage_husa$", "min", True,
+                  "the ceiling of the adapted Q (process_noise_max) bounds what abusive inputs (a_y "
+                  "alternating +-25 m/s^2) taught Sage-Husa; such inputs raise a monitor bit, and no "
+                  "sample with a bit raised is learnt from (20 abusive runs of 3000 samples: no entry "
+                  "reached its ceiling); kept as the bound of the noise state for an input no monitor "
+                  "flags"),
 )
 
 
