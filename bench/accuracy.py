@@ -119,7 +119,8 @@ def main(argv: list[str] | None = None) -> None:
         f"{provenance(_command(args))}: truth plant "
         "`harness/sim` (two-track, Magic Formula tyres), sensor noise of seed 000 Table 2 "
         "(biases only in the `bias=True` rows), estimates from the generated C with the vehicle "
-        "file's settings (not tuned on these runs). Errors "
+        "file's settings (a few of them, docs/estimators.md says which, were chosen on seed-1 runs of "
+        "these scenarios and of the robustness matrix). Errors "
         "e = estimate − truth over every sample, including held samples and runs that left the "
         "course (see the columns).",
         "",
