@@ -96,10 +96,13 @@ def test_never_silently_wrong(name, vehicle):
     # at mu = 0.5 (the ukf assumes 1.0) the consistency monitor alone flags the ukf
     ("ukf", Case.of("dlc", speed_kmh=120.0, mu=0.5), {"residual_window": 0.0, "linear_range": 0.0},
      {"residual_window": 0.2, "linear_range": 0.0}, MODEL_INCONSISTENT),
-    # the aukf's Sage-Husa noise estimate absorbs the innovations, so its monitor stays quiet while
-    # beta is wrong by up to 10 deg; linear_range (the road may be at its friction limit) flags it
-    ("aukf", Case.of("dlc", speed_kmh=120.0, mu=0.5), {"linear_range": 0.0}, {"linear_range": 4.0},
-     BEYOND_LINEAR_RANGE),
+    # the aukf's Sage-Husa noise estimate absorbed the innovations, and its monitor stayed quiet while
+    # beta was wrong by up to 10 deg; now that it learns nothing from a flagged sample, the monitor
+    # alone flags it, and so does linear_range (the road may be at its friction limit) alone
+    ("aukf", Case.of("dlc", speed_kmh=120.0, mu=0.5), {"residual_window": 0.0, "linear_range": 0.0},
+     {"residual_window": 0.2, "linear_range": 0.0}, MODEL_INCONSISTENT),
+    ("aukf", Case.of("dlc", speed_kmh=120.0, mu=0.5), {"residual_window": 0.0, "linear_range": 0.0},
+     {"residual_window": 0.0, "linear_range": 4.0}, BEYOND_LINEAR_RANGE),
     # v_y is never measured by the particle filters: on the hill sine pf_adaptive's and on the
     # low-speed scenario pf_improved's beta drifts past 2 deg; the drift bound flags it
     ("pf_adaptive", Case.of("hil_sine", mu=0.85), {"drift_acceleration": 0.0, "drift_yaw_rate": 0.0},
