@@ -1,8 +1,9 @@
 """The "never silently wrong" rule on both truth cars: for every sideslip estimator and every
 verification scenario, the longest stretch of |beta error| > 2 deg with status 0 (before the car
 spins; the rule allows 0.5 s), and whether it beats answering beta = 0 (RMSE within 0.7
-RMS(beta_ref) or 0.1 deg, over the run or over its unflagged samples). Seed 1, the shipped vehicle files (some
-of their settings were chosen on these runs). Writes docs/silent.md: ``python -m bench.silent [--scheduler ADDRESS]``."""
+RMS(beta_ref) or 0.1 deg, over the run or over its unflagged samples). Seed 1, the shipped vehicle
+files (some of their settings were chosen on these runs). Writes docs/silent.md:
+``python -m bench.silent [--scheduler ADDRESS]``."""
 
 from __future__ import annotations
 

@@ -140,14 +140,13 @@ def test_switching_seeing_a_frozen_steering_angle_sooner_beats_zero():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("car", ["c_class"])
-def test_aukf_trusting_a_y_as_its_sensor_beats_zero_where_the_papers_noise_does_not(car):
+def test_aukf_trusting_a_y_as_its_sensor_beats_zero_where_the_papers_noise_does_not():
     """The steering angle frozen for 1.5 s in the 80 km/h DLC's reversal: with the paper's R = 1e-3 I
     the aukf trusts a_y 90-fold more than its noise (0.3 m/s^2), which moves its straight-line v,
     and the run, flags and all, is no better than answering beta = 0; with the shipped R (a_y at
-    about the sensor's variance) it is. (On the saloon, the paper's R beats zero there too since
-    the aukf learns no noise from a flagged sample.)"""
-    config = load_vehicle(VEHICLES / f"{car}.toml")
+    about the sensor's variance) it is (C-class; on the saloon the paper's R beats zero there too since
+    the aukf learns no noise from a flagged sample)."""
+    config = load_vehicle(VEHICLES / "c_class.toml")
     assert config.settings("aukf")["measurement_noise"][1] >= 0.09
     _beats_zero_only_as_shipped(config, "aukf", Case.of("dlc", speed_kmh=80.0, freeze="delta:3.0:1.5"),
                                 measurement_noise=PAPER_DLC["measurement_noise"])
