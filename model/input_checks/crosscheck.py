@@ -59,8 +59,8 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import learned_mean, low_pass, whole_samples
-from vsegen.model.input_checks import Watch
+from vsegen.model.filters import low_pass, whole_samples
+from vsegen.model.input_checks import Watch, learned_check
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -82,9 +82,9 @@ FIELDS = (
                 "bank, an accelerometer offset or tilt, a yaw-rate or speed error); 0 = no check",
                 default=0.0),
     positive("lateral_check_time", "s", "time constant of the lateral check's mean", default=0.5),
-    positive("learned_after", "s", "the lateral check and the steering zero judge their mean only once it "
-             "has sampled this long (in runs of check_period; a running mean of fewer runs is too noisy), "
-             "or their time constant if that is shorter", default=0.3),
+    positive("learned_after", "s", "the lateral check, the steering zero and the yaw-rate check's learned "
+             "share judge their mean only once it has sampled this long (in runs of check_period; a running "
+             "mean of fewer runs is too noisy), or their time constant if that is shorter", default=0.3),
     positive("lateral_check_range", "m/s^2", "the lateral check samples only while |a_y| is below "
              "this (body roll's share of a_y stays small)", default=1.5),
     nonnegative("steering_offset_limit", "rad", "beyond the papers: the steering-angle zero learned "
@@ -181,14 +181,14 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     raised = {}
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
-        learned, raised[status.LATERAL_INCONSISTENT] = _learned_check(
+        learned, raised[status.LATERAL_INCONSISTENT] = learned_check(
             watch, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled, "lateral_check_time", "lateral_check_limit")
         updates |= learned
     if _on(numeric_settings, "steering_offset_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
         kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
-        learned, raised[status.STEERING_OFFSET] = _learned_check(
+        learned, raised[status.STEERING_OFFSET] = learned_check(
             watch, "steering_offset", kinematic_zero, sampled, "steering_offset_time", "steering_offset_limit")
         updates |= learned
     if _on(numeric_settings, "steer_check_limit"):
@@ -201,16 +201,3 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
         raised[status.INPUT_FROZEN] = checked * (ca.fabs(change) > settings["steer_check_limit"])
     return ({k: ca.if_else(active, v, s[k]) for k, v in updates.items()},
             {bit: active * flag for bit, flag in raised.items()})
-
-
-def _learned_check(watch: Watch, entry: str, value, sampled, time_key: str, limit_key: str) -> tuple[dict, ca.SX]:
-    """(new entries, flag) of a check on a learned mean: state ``entry`` learns ``value`` where
-    ``sampled`` (``model.filters.learned_mean``, time constant setting ``time_key``), counting its
-    runs in ``entry``_samples; the flag is 1 where |mean| > setting ``limit_key`` once the mean has
-    sampled ``learned_after``, or its time constant if that is shorter (its count stops there)."""
-    s, settings, sample_time = watch.s, watch.settings, watch.sample_time
-    count, time_constant = f"{entry}_samples", settings[time_key]
-    mean, taken = learned_mean(s[entry], s[count], value, time_constant, sample_time, sampled)
-    judged = taken >= ca.fmin(whole_samples(settings["learned_after"], sample_time),
-                              whole_samples(time_constant, sample_time))
-    return {entry: mean, count: taken}, judged * (ca.fabs(mean) > settings[limit_key])

@@ -5,7 +5,7 @@
 # Options: real=double, params=baked.
 # DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
 # Parameter set SHA-256: f0e31fd57f166eb74a55ca89cc2512c8ba57cfe4c035840b76ad1ffc32b2bc47
-# Operations: step 494, input checks 266 a run (every check_period), init 129 (CasADi SX instructions).
+# Operations: step 494, input checks 269 a run (every check_period), init 129 (CasADi SX instructions).
 # stiffness: rls
 # weighting: stiffness_rate
 # stiffness_regressor: kinematic_slip

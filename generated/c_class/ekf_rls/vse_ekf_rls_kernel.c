@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: f0e31fd57f166eb74a55ca89cc2512c8ba57cfe4c035840b76ad1ffc32b2bc47
- * Operations: step 494, input checks 266 a run (every check_period), init 129 (CasADi SX instructions).
+ * Operations: step 494, input checks 269 a run (every check_period), init 129 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -460,32 +460,35 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(a24*a22);
   a06=(a06+a24);
   res[0][18]=a06;
-  a06=5.0000000000000003e-02;
-  a24=casadi_fabs(a11);
-  a06=(casadi_real)(a06<a24);
-  a24=2.0000000000000001e-01;
-  a22=(a24*a13);
+  a24=5.0000000000000003e-02;
+  a22=casadi_fabs(a11);
+  a24=(casadi_real)(a24<a22);
+  a22=2.0000000000000001e-01;
+  a27=(a22*a13);
   a11=casadi_fabs(a11);
-  a22=(casadi_real)(a22<a11);
-  a25=(a25*a22);
-  a24=(casadi_real)(a24<a00);
-  a00=2.0000000000000000e-02;
-  a00=(casadi_real)(a00<=a13);
-  a24=(a24*a00);
-  a00=(a25+a24);
-  a25=(a25*a24);
-  a00=(a00-a25);
-  a25=(a06+a00);
-  a06=(a06*a00);
-  a25=(a25-a06);
+  a27=(casadi_real)(a27<a11);
+  a25=(a25*a27);
+  a06=(casadi_real)(a10<=a06);
+  a00=casadi_fabs(a00);
+  a22=(casadi_real)(a22<a00);
+  a06=(a06*a22);
+  a22=2.0000000000000000e-02;
+  a22=(casadi_real)(a22<=a13);
+  a06=(a06*a22);
+  a22=(a25+a06);
+  a25=(a25*a06);
+  a22=(a22-a25);
+  a25=(a24+a22);
+  a24=(a24*a22);
+  a25=(a25-a24);
   a19=(a19*a25);
-  a06=(a03-a25);
-  a00=state_45;
-  a24=(a00-a03);
+  a24=(a03-a25);
+  a22=state_45;
+  a06=(a22-a03);
   a13=0.;
-  a24=casadi_fmax(a24,a13);
-  a06=(a06*a24);
-  a19=(a19+a06);
+  a06=casadi_fmax(a06,a13);
+  a24=(a24*a06);
+  a19=(a19+a24);
   res[0][19]=a19;
   res[0][20]=a13;
   res[0][21]=a13;
@@ -495,8 +498,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][24]=a19;
   a19=2048.;
   a16=casadi_fabs(a16);
-  a06=6.;
-  a16=(casadi_real)(a16<=a06);
+  a24=6.;
+  a16=(casadi_real)(a16<=a24);
   a08=(a08*a16);
   a15=(a15-a09);
   a15=(a15*a12);
@@ -535,7 +538,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a19+a17);
   a17=32768.;
   a03=(a03-a25);
-  a13=(casadi_real)(a13<a00);
+  a13=(casadi_real)(a13<a22);
   a03=(a03*a13);
   a25=(a25+a03);
   a17=(a17*a25);
@@ -545,7 +548,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_checks: 266 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_checks: 269 operations (CasADi SX instructions)
  * arg[0] state[52]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left,

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: c11a536c2586ada903372d7dd570aa0ae91f13789d92af50f8aca8a2318e9f90
- * Operations: step 1616, input checks 288 a run (every check_period), init 104 (CasADi SX instructions).
+ * Operations: step 1619, input checks 291 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -446,32 +446,36 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a20=(a20*a22);
   a26=(a26+a20);
   res[0][18]=a26;
-  a26=5.0000000000000003e-02;
-  a20=casadi_fabs(a12);
-  a26=(casadi_real)(a26<a20);
-  a20=2.0000000000000001e-01;
-  a22=(a20*a14);
+  a20=5.0000000000000003e-02;
+  a22=casadi_fabs(a12);
+  a20=(casadi_real)(a20<a22);
+  a22=2.0000000000000001e-01;
+  a02=(a22*a14);
   a12=casadi_fabs(a12);
-  a22=(casadi_real)(a22<a12);
-  a00=(a00*a22);
-  a20=(casadi_real)(a20<a10);
-  a10=2.0000000000000000e-02;
-  a10=(casadi_real)(a10<=a14);
-  a20=(a20*a10);
-  a10=(a00+a20);
-  a00=(a00*a20);
-  a10=(a10-a00);
-  a00=(a26+a10);
-  a26=(a26*a10);
-  a00=(a00-a26);
+  a02=(casadi_real)(a02<a12);
+  a00=(a00*a02);
+  a02=3.;
+  a26=(casadi_real)(a02<=a26);
+  a10=casadi_fabs(a10);
+  a22=(casadi_real)(a22<a10);
+  a26=(a26*a22);
+  a22=2.0000000000000000e-02;
+  a22=(casadi_real)(a22<=a14);
+  a26=(a26*a22);
+  a22=(a00+a26);
+  a00=(a00*a26);
+  a22=(a22-a00);
+  a00=(a20+a22);
+  a20=(a20*a22);
+  a00=(a00-a20);
   a19=(a19*a00);
-  a26=(a03-a00);
-  a10=state_47;
-  a20=(a10-a03);
+  a20=(a03-a00);
+  a22=state_47;
+  a26=(a22-a03);
   a14=0.;
-  a20=casadi_fmax(a20,a14);
-  a26=(a26*a20);
-  a19=(a19+a26);
+  a26=casadi_fmax(a26,a14);
+  a20=(a20*a26);
+  a19=(a19+a20);
   res[0][19]=a19;
   a16=casadi_fabs(a16);
   a19=6.;
@@ -516,25 +520,24 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a17=(a17+a09);
   a07=(a07*a17);
   a17=8192.;
-  a09=3.;
-  a18=(casadi_real)(a09<=a18);
-  a08=4.0000000000000002e-01;
+  a18=(casadi_real)(a02<=a18);
+  a09=4.0000000000000002e-01;
   a11=casadi_fabs(a11);
-  a08=(casadi_real)(a08<a11);
-  a18=(a18*a08);
+  a09=(casadi_real)(a09<a11);
+  a18=(a18*a09);
   a17=(a17*a18);
   a07=(a07+a17);
   a17=16384.;
-  a09=(casadi_real)(a09<=a21);
+  a02=(casadi_real)(a02<=a21);
   a21=1.6999999999999999e-03;
   a05=casadi_fabs(a05);
   a21=(casadi_real)(a21<a05);
-  a09=(a09*a21);
-  a17=(a17*a09);
+  a02=(a02*a21);
+  a17=(a17*a02);
   a07=(a07+a17);
   a17=32768.;
   a03=(a03-a00);
-  a14=(casadi_real)(a14<a10);
+  a14=(casadi_real)(a14<a22);
   a03=(a03*a14);
   a00=(a00+a03);
   a17=(a17*a00);
@@ -544,7 +547,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_switching_kernel_checks: 288 operations (CasADi SX instructions)
+ * vse_switching_kernel_checks: 291 operations (CasADi SX instructions)
  * arg[0] state[55]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, friction,
  *     P_vy_vy, P_vy_r, P_vy_friction, P_r_r, P_r_friction, P_friction_friction, delta_prev,

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: c11a536c2586ada903372d7dd570aa0ae91f13789d92af50f8aca8a2318e9f90
- * Operations: step 1616, input checks 288 a run (every check_period), init 104 (CasADi SX instructions).
+ * Operations: step 1619, input checks 291 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 14 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 1.1e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 8d09216d7ce605c555b65c0ad2105e2245fd7ee2edb873f37a36b6f51f1257d0
- * Operations: step 494, input checks 268 a run (every check_period), init 129 (CasADi SX instructions).
+ * Operations: step 494, input checks 271 a run (every check_period), init 129 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip

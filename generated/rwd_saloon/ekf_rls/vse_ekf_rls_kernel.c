@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 8d09216d7ce605c555b65c0ad2105e2245fd7ee2edb873f37a36b6f51f1257d0
- * Operations: step 494, input checks 268 a run (every check_period), init 129 (CasADi SX instructions).
+ * Operations: step 494, input checks 271 a run (every check_period), init 129 (CasADi SX instructions).
  * stiffness: rls
  * weighting: stiffness_rate
  * stiffness_regressor: kinematic_slip
@@ -462,32 +462,35 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a20=(a20*a22);
   a09=(a09+a20);
   res[0][18]=a09;
-  a09=5.0000000000000003e-02;
-  a20=casadi_fabs(a11);
-  a09=(casadi_real)(a09<a20);
-  a20=2.0000000000000001e-01;
-  a22=(a20*a13);
+  a20=5.0000000000000003e-02;
+  a22=casadi_fabs(a11);
+  a20=(casadi_real)(a20<a22);
+  a22=2.0000000000000001e-01;
+  a06=(a22*a13);
   a11=casadi_fabs(a11);
-  a22=(casadi_real)(a22<a11);
-  a26=(a26*a22);
-  a20=(casadi_real)(a20<a00);
-  a00=2.0000000000000000e-02;
-  a00=(casadi_real)(a00<=a13);
-  a20=(a20*a00);
-  a00=(a26+a20);
-  a26=(a26*a20);
-  a00=(a00-a26);
-  a26=(a09+a00);
-  a09=(a09*a00);
-  a26=(a26-a09);
+  a06=(casadi_real)(a06<a11);
+  a26=(a26*a06);
+  a09=(casadi_real)(a10<=a09);
+  a00=casadi_fabs(a00);
+  a22=(casadi_real)(a22<a00);
+  a09=(a09*a22);
+  a22=2.0000000000000000e-02;
+  a22=(casadi_real)(a22<=a13);
+  a09=(a09*a22);
+  a22=(a26+a09);
+  a26=(a26*a09);
+  a22=(a22-a26);
+  a26=(a20+a22);
+  a20=(a20*a22);
+  a26=(a26-a20);
   a19=(a19*a26);
-  a09=(a03-a26);
-  a00=state_45;
-  a20=(a00-a03);
+  a20=(a03-a26);
+  a22=state_45;
+  a09=(a22-a03);
   a13=0.;
-  a20=casadi_fmax(a20,a13);
-  a09=(a09*a20);
-  a19=(a19+a09);
+  a09=casadi_fmax(a09,a13);
+  a20=(a20*a09);
+  a19=(a19+a20);
   res[0][19]=a19;
   res[0][20]=a13;
   res[0][21]=a13;
@@ -497,8 +500,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   res[0][24]=a19;
   a19=2048.;
   a16=casadi_fabs(a16);
-  a09=6.;
-  a16=(casadi_real)(a16<=a09);
+  a20=6.;
+  a16=(casadi_real)(a16<=a20);
   a08=(a08*a16);
   a15=(a15-a24);
   a15=(a15*a12);
@@ -537,7 +540,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a19+a17);
   a17=32768.;
   a03=(a03-a26);
-  a13=(casadi_real)(a13<a00);
+  a13=(casadi_real)(a13<a22);
   a03=(a03*a13);
   a26=(a26+a03);
   a17=(a17*a26);
@@ -547,7 +550,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_ekf_rls_kernel_checks: 268 operations (CasADi SX instructions)
+ * vse_ekf_rls_kernel_checks: 271 operations (CasADi SX instructions)
  * arg[0] state[52]: beta_ekf, r_ekf, P_beta_beta, P_beta_r, P_r_r, c0_1, c0_2, Prls_c0_1_c0_1,
  *     Prls_c0_1_c0_2, Prls_c0_2_c0_2, c_front, c_rear, r_last, r_dot, indicator, beta, holding,
  *     beta_kin, ax_f, ay_f, r_f, delta_f, beta_f, residual, residual_hold_left,

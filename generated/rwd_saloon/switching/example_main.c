@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 5eba87afc89578ab11995ec1564191c1d59cefe0b002e1bb4f2a609a26115634
- * Operations: step 1611, input checks 290 a run (every check_period), init 104 (CasADi SX instructions).
+ * Operations: step 1614, input checks 293 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples

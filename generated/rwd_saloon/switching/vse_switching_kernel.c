@@ -6,7 +6,7 @@
  * Options: real=double, params=baked.
  * DO NOT EDIT: change the vehicle file or the templates and run `vsegen generate`.
  * Parameter set SHA-256: 5eba87afc89578ab11995ec1564191c1d59cefe0b002e1bb4f2a609a26115634
- * Operations: step 1611, input checks 290 a run (every check_period), init 104 (CasADi SX instructions).
+ * Operations: step 1614, input checks 293 a run (every check_period), init 104 (CasADi SX instructions).
  * discretisation: zoh
  * zoh_series: 13 Taylor terms, 2 squarings, |Phi - expm(A T)|_inf <= 7.9e-17 for ||A|| up to its bound over 3.0 <= vx <= 90.0 m/s
  * median_window: 5 samples
@@ -448,32 +448,36 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a25=(a25*a22);
   a10=(a10+a25);
   res[0][18]=a10;
-  a10=5.0000000000000003e-02;
-  a25=casadi_fabs(a12);
-  a10=(casadi_real)(a10<a25);
-  a25=2.0000000000000001e-01;
-  a22=(a25*a14);
+  a25=5.0000000000000003e-02;
+  a22=casadi_fabs(a12);
+  a25=(casadi_real)(a25<a22);
+  a22=2.0000000000000001e-01;
+  a27=(a22*a14);
   a12=casadi_fabs(a12);
-  a22=(casadi_real)(a22<a12);
-  a00=(a00*a22);
-  a25=(casadi_real)(a25<a24);
-  a24=2.0000000000000000e-02;
-  a24=(casadi_real)(a24<=a14);
-  a25=(a25*a24);
-  a24=(a00+a25);
-  a00=(a00*a25);
-  a24=(a24-a00);
-  a00=(a10+a24);
-  a10=(a10*a24);
-  a00=(a00-a10);
+  a27=(casadi_real)(a27<a12);
+  a00=(a00*a27);
+  a27=3.;
+  a10=(casadi_real)(a27<=a10);
+  a24=casadi_fabs(a24);
+  a22=(casadi_real)(a22<a24);
+  a10=(a10*a22);
+  a22=2.0000000000000000e-02;
+  a22=(casadi_real)(a22<=a14);
+  a10=(a10*a22);
+  a22=(a00+a10);
+  a00=(a00*a10);
+  a22=(a22-a00);
+  a00=(a25+a22);
+  a25=(a25*a22);
+  a00=(a00-a25);
   a19=(a19*a00);
-  a10=(a03-a00);
-  a24=state_47;
-  a25=(a24-a03);
+  a25=(a03-a00);
+  a22=state_47;
+  a10=(a22-a03);
   a14=0.;
-  a25=casadi_fmax(a25,a14);
-  a10=(a10*a25);
-  a19=(a19+a10);
+  a10=casadi_fmax(a10,a14);
+  a25=(a25*a10);
+  a19=(a19+a25);
   res[0][19]=a19;
   a16=casadi_fabs(a16);
   a19=6.;
@@ -518,25 +522,24 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a17=(a17+a09);
   a07=(a07*a17);
   a17=8192.;
-  a09=3.;
-  a18=(casadi_real)(a09<=a18);
-  a08=4.0000000000000002e-01;
+  a18=(casadi_real)(a27<=a18);
+  a09=4.0000000000000002e-01;
   a11=casadi_fabs(a11);
-  a08=(casadi_real)(a08<a11);
-  a18=(a18*a08);
+  a09=(casadi_real)(a09<a11);
+  a18=(a18*a09);
   a17=(a17*a18);
   a07=(a07+a17);
   a17=16384.;
-  a09=(casadi_real)(a09<=a21);
+  a27=(casadi_real)(a27<=a21);
   a21=1.6999999999999999e-03;
   a05=casadi_fabs(a05);
   a21=(casadi_real)(a21<a05);
-  a09=(a09*a21);
-  a17=(a17*a09);
+  a27=(a27*a21);
+  a17=(a17*a27);
   a07=(a07+a17);
   a17=32768.;
   a03=(a03-a00);
-  a14=(casadi_real)(a14<a24);
+  a14=(casadi_real)(a14<a22);
   a03=(a03*a14);
   a00=(a00+a03);
   a17=(a17*a00);
@@ -546,7 +549,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 /*
- * vse_switching_kernel_checks: 290 operations (CasADi SX instructions)
+ * vse_switching_kernel_checks: 293 operations (CasADi SX instructions)
  * arg[0] state[55]: ay_m_1, ay_m_2, ay_b_1, ay_b_2, ay_b_hist_1, ay_b_hist_2, ay_b_hist_3,
  *     ay_b_hist_4, r_last, ay_last, r_rejections, ay_rejections, mode, vy_kin, vy, r, friction,
  *     P_vy_vy, P_vy_r, P_vy_friction, P_r_r, P_r_friction, P_friction_friction, delta_prev,

@@ -6,6 +6,7 @@ against the kinematic turn (STEERING_OFFSET), the path curvature at a held steer
 from __future__ import annotations
 
 from vsegen.harness.reference import blocks
+from vsegen.harness.reference.input_checks import learned_check
 
 ORDER = 2
 INPUTS = ("delta", "vx", "ay", "r")
@@ -65,16 +66,16 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
     new["steady_r"] = u["r"]
     if _on(settings, "lateral_check_limit"):
         sampled = settled and abs(u["ay"]) <= settings["lateral_check_range"]
-        learned, raised = _learned_check(x, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled,
-                                         settings["lateral_check_time"], settings["lateral_check_limit"], settings, T)
+        learned, raised = learned_check(x, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled,
+                                        settings["lateral_check_time"], settings["lateral_check_limit"], settings, T)
         new |= learned
         code |= blocks.LATERAL_INCONSISTENT if raised else 0
     if _on(settings, "steering_offset_limit"):
         sampled = (settled and abs(u["ay"]) <= settings["steering_offset_range"]
                    and u["vx"] >= settings["steering_offset_speed"])
-        learned, raised = _learned_check(x, "steering_offset", u["delta"] - wheelbase * u["r"] / u["vx"], sampled,
-                                         settings["steering_offset_time"], settings["steering_offset_limit"],
-                                         settings, T)
+        learned, raised = learned_check(x, "steering_offset", u["delta"] - wheelbase * u["r"] / u["vx"], sampled,
+                                        settings["steering_offset_time"], settings["steering_offset_limit"],
+                                        settings, T)
         new |= learned
         code |= blocks.STEERING_OFFSET if raised else 0
     if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady
@@ -86,15 +87,3 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
             change = (curvature - new["steady_curvature"]) * u["vx"] ** 2
             code |= blocks.INPUT_FROZEN if abs(change) > settings["steer_check_limit"] else 0
     return new, code
-
-
-def _learned_check(x, entry: str, value: float, sampled: bool, time_constant: float, limit: float, settings,
-                   T: float) -> tuple[dict, bool]:
-    """(new entries, raised) of a check on a learned mean: ``entry`` learns ``value`` where ``sampled``
-    (its runs counted in ``entry``_samples); raised where |mean| > ``limit`` once it has taken
-    learned_after of runs, or its time constant's if fewer."""
-    mean, taken = x[entry], x[f"{entry}_samples"]
-    if sampled:
-        mean, taken = blocks.learned_mean(mean, taken, value, T, time_constant)
-    judged = taken >= min(blocks.whole_samples(settings["learned_after"], T), blocks.whole_samples(time_constant, T))
-    return {entry: mean, f"{entry}_samples": taken}, judged and abs(mean) > limit

@@ -1,14 +1,16 @@
 """The yaw rate against the non-driven axle's wheel yaw rate r_w (model.input_checks.wheel_yaw):
 the mean of r - r_w beyond the limit, or beyond a share of the mean |r_w| where that is large
-enough, or a learned share of it beyond that share where the mean |r_w| is at least a lower rate,
-held a while after, raises YAW_RATE_MISMATCH; all of the checks' period's means (r, the
-axle's right minus left wheel speed, a_x); a period braking or accelerating hard is skipped."""
+enough, or a share of it learned there (judged once it has sampled learned_after) beyond that
+share where the mean |r_w| is at least a lower rate, held a while after, raises
+YAW_RATE_MISMATCH; all of the checks' period's means (r, the axle's right minus left wheel speed,
+a_x); a period braking or accelerating hard is skipped."""
 
 from __future__ import annotations
 
 import math
 
 from vsegen.harness.reference import blocks
+from vsegen.harness.reference.input_checks import learned_check
 
 ORDER = 3
 
@@ -53,9 +55,10 @@ def initial(settings, inputs, first) -> dict:
 
 def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]:
     """(new entries, YAW_RATE_MISMATCH or 0) from the period's means ``u``."""
-    scale, learns = settings["wheel_check_scale"] > 0, _learns_share(settings)
+    scale = settings["wheel_check_scale"] > 0
     new = {name: x[name] for name in states(settings, inputs) if name != "wheel_yaw_hold_left"}
-    if abs(u["ax"]) <= settings["wheel_check_ax"]:     # no brake or drive slip
+    rolling = abs(u["ax"]) <= settings["wheel_check_ax"]     # no brake or drive slip
+    if rolling:
         steer = math.cos(u["delta"]) if settings["wheel_check_axle"] == "front" else 1.0
         difference = u[f"omega_{_axle(settings)}_diff"]     # the period's mean right minus left
         wheel_yaw_rate = vehicle["wheel_radius"] * difference / (vehicle["track_width"] * steer)
@@ -64,16 +67,17 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
         if scale:
             new["wheel_yaw_rate"] = blocks.low_pass(new["wheel_yaw_rate"], abs(wheel_yaw_rate), T,
                                                     settings["wheel_check_time"])
-        if learns and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]:
-            share = abs(new["wheel_yaw_residual"]) / new["wheel_yaw_rate"]
-            new["wheel_yaw_share"], new["wheel_yaw_share_samples"] = blocks.learned_mean(
-                new["wheel_yaw_share"], new["wheel_yaw_share_samples"], share, T, settings["wheel_check_scale_time"])
     residual = abs(new["wheel_yaw_residual"])
     mismatch = residual > settings["wheel_check_limit"]
-    if scale and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]:
+    yawing = scale and new["wheel_yaw_rate"] >= settings["wheel_check_scale_rate"]
+    if yawing:
         mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
-    if learns and new["wheel_yaw_rate"] >= settings["wheel_check_learned_rate"]:
-        mismatch = mismatch or new["wheel_yaw_share"] > settings["wheel_check_scale"]
+    if _learns_share(settings):     # the share, learned where it is judged, kept for the milder corners
+        share = residual / max(new["wheel_yaw_rate"], settings["wheel_check_scale_rate"])
+        learned, beyond = learned_check(new, "wheel_yaw_share", share, rolling and yawing,
+                                        settings["wheel_check_scale_time"], settings["wheel_check_scale"], settings, T)
+        new |= learned
+        mismatch = mismatch or (beyond and new["wheel_yaw_rate"] >= settings["wheel_check_learned_rate"])
     if settings["wheel_check_hold"] > 0:
         new["wheel_yaw_hold_left"], mismatch = blocks.held_flag(x["wheel_yaw_hold_left"], mismatch,
                                                                 settings["wheel_check_hold"], T)
