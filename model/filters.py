@@ -98,6 +98,20 @@ def learned_mean(previous, taken, value, time_constant, T: float, sampled):
             taken + sampled * (taken < whole_samples(time_constant, T)))
 
 
+def learned_check(s, settings, sample_time: float, entry: str, value, sampled, time_key: str,
+                  limit_key: str) -> tuple[dict, ca.SX]:
+    """(new entries, flag) of a check on a learned mean: state entry ``entry`` of ``s`` learns
+    ``value`` where ``sampled`` (:func:`learned_mean`, time constant setting ``time_key``), counting
+    its samples in ``entry``_samples; the flag is 1 where |mean| > setting ``limit_key`` once the
+    mean has sampled setting ``learned_after``, or its time constant if that is shorter (its count
+    stops there). ``settings`` numbers or calibration symbols."""
+    count, time_constant = f"{entry}_samples", settings[time_key]
+    mean, taken = learned_mean(s[entry], s[count], value, time_constant, sample_time, sampled)
+    judged = taken >= ca.fmin(whole_samples(settings["learned_after"], sample_time),
+                              whole_samples(time_constant, sample_time))
+    return {entry: mean, count: taken}, judged * (ca.fabs(mean) > settings[limit_key])
+
+
 def tustin_derivative(time_constant: float, T: float) -> tuple[float, float]:
     """(n, d) of the Tustin-discretised filtered derivative s / (time_constant s + 1):
     y[k] = n (x[k] - x[k-1]) - d y[k-1]."""

@@ -106,6 +106,18 @@ def learned_mean(previous: float, taken: float, value: float, T: float, time_con
     return previous + gain * (value - previous), min(taken + 1.0, float(whole_samples(time_constant, T)))
 
 
+def learned_check(x, entry: str, value: float, sampled: bool, time_constant: float, limit: float, settings,
+                  T: float) -> tuple[dict, bool]:
+    """(new entries, raised) of a check on a learned mean: ``entry`` learns ``value`` where ``sampled``
+    (its runs counted in ``entry``_samples); raised where |mean| > ``limit`` once it has taken
+    learned_after of runs, or its time constant's if fewer."""
+    mean, taken = x[entry], x[f"{entry}_samples"]
+    if sampled:
+        mean, taken = learned_mean(mean, taken, value, T, time_constant)
+    judged = taken >= min(whole_samples(settings["learned_after"], T), whole_samples(time_constant, T))
+    return {entry: mean, f"{entry}_samples": taken}, judged and abs(mean) > limit
+
+
 def kf_predict(x, P, Phi, Gamma, u, Qd):
     return Phi @ x + Gamma @ u, Phi @ P @ Phi.T + Qd
 

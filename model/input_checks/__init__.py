@@ -24,7 +24,6 @@ from typing import Protocol
 
 import casadi as ca
 
-from vsegen.model.filters import learned_mean, whole_samples
 from vsegen.model.schema import Field
 from vsegen.model.signals import Signal
 
@@ -55,19 +54,6 @@ class Watch:
     raw: Mapping
     """The sample's own inputs (a bit-for-bit test wants the sample); those only the checks read
     may be implausible."""
-
-
-def learned_check(watch: Watch, entry: str, value, sampled, time_key: str, limit_key: str) -> tuple[dict, ca.SX]:
-    """(new entries, flag) of a check on a learned mean: state ``entry`` learns ``value`` where
-    ``sampled`` (``model.filters.learned_mean``, time constant setting ``time_key``), counting its
-    runs in ``entry``_samples; the flag is 1 where |mean| > setting ``limit_key`` once the mean has
-    sampled ``learned_after``, or its time constant if that is shorter (its count stops there)."""
-    s, settings, sample_time = watch.s, watch.settings, watch.sample_time
-    count, time_constant = f"{entry}_samples", settings[time_key]
-    mean, taken = learned_mean(s[entry], s[count], value, time_constant, sample_time, sampled)
-    judged = taken >= ca.fmin(whole_samples(settings["learned_after"], sample_time),
-                              whole_samples(time_constant, sample_time))
-    return {entry: mean, count: taken}, judged * (ca.fabs(mean) > settings[limit_key])
 
 
 class InputCheck(Protocol):

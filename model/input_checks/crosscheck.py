@@ -59,8 +59,8 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import low_pass, whole_samples
-from vsegen.model.input_checks import Watch, learned_check
+from vsegen.model.filters import learned_check, low_pass, whole_samples
+from vsegen.model.input_checks import Watch
 from vsegen.model.schema import nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -182,14 +182,16 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
     if _on(numeric_settings, "lateral_check_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["lateral_check_range"])
         learned, raised[status.LATERAL_INCONSISTENT] = learned_check(
-            watch, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled, "lateral_check_time", "lateral_check_limit")
+            s, settings, sample_time, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled,
+            "lateral_check_time", "lateral_check_limit")
         updates |= learned
     if _on(numeric_settings, "steering_offset_limit"):
         sampled = settled * (ca.fabs(u["ay"]) <= settings["steering_offset_range"]) * (
             u["vx"] >= settings["steering_offset_speed"])
         kinematic_zero = u["delta"] - wheelbase * u["r"] / ca.fmax(u["vx"], settings["steering_offset_speed"])
         learned, raised[status.STEERING_OFFSET] = learned_check(
-            watch, "steering_offset", kinematic_zero, sampled, "steering_offset_time", "steering_offset_limit")
+            s, settings, sample_time, "steering_offset", kinematic_zero, sampled, "steering_offset_time",
+            "steering_offset_limit")
         updates |= learned
     if _on(numeric_settings, "steer_check_limit"):
         curvature = low_pass(s["curvature"], u["r"] / u["vx"], settings["steer_check_time"], sample_time)

@@ -26,7 +26,7 @@ kept too, and |m| > wheel_check_scale n also raises the bit where n >= ``wheel_c
 it over a crest: 0.2 of n stays clear of both). A scale typed wrong stays wrong, but where the car
 yaws little (a low-friction slalom) the share is too noisy to judge on one run; so, with
 ``wheel_check_scale_time`` > 0, the check also learns the share |m| / n over the runs where it
-judges it (``model.input_checks.learned_check``: a running mean of its first runs, judged once it
+judges it (``model.filters.learned_check``: a running mean of its first runs, judged once it
 has sampled ``learned_after``), and while that learned share is beyond ``wheel_check_scale`` raises
 the bit wherever n >= ``wheel_check_learned_rate``:
 what the last corners showed is kept for the milder ones. The bit stays raised ``wheel_check_hold`` s after
@@ -43,8 +43,8 @@ from __future__ import annotations
 import casadi as ca
 
 from vsegen.model import status
-from vsegen.model.filters import held_flag, low_pass
-from vsegen.model.input_checks import Watch, learned_check
+from vsegen.model.filters import held_flag, learned_check, low_pass
+from vsegen.model.input_checks import Watch
 from vsegen.model.schema import choice, nonnegative, positive
 from vsegen.model.signals import Signal
 
@@ -161,8 +161,9 @@ def monitor(watch: Watch) -> tuple[dict, dict]:
         scaled = yawing * (ca.fabs(residual) > settings["wheel_check_scale"] * rate)
         if _learns_share(numeric_settings):                # kept for the corners too mild to judge
             share = ca.fabs(residual) / ca.fmax(rate, settings["wheel_check_scale_rate"])
-            learned, beyond = learned_check(watch, SHARE.name, share, ca.logic_and(rolling, yawing),
-                                            "wheel_check_scale_time", "wheel_check_scale")
+            learned, beyond = learned_check(s, settings, sample_time, SHARE.name, share,
+                                            ca.logic_and(rolling, yawing), "wheel_check_scale_time",
+                                            "wheel_check_scale")
             updates |= learned
             kept = beyond * (rate >= settings["wheel_check_learned_rate"])
             scaled = scaled + kept - scaled * kept

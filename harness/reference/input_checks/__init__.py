@@ -16,8 +16,6 @@ import importlib
 import pkgutil
 from functools import cache
 
-from vsegen.harness.reference import blocks
-
 
 @cache
 def checks() -> tuple:
@@ -25,14 +23,3 @@ def checks() -> tuple:
     found = (importlib.import_module(f"{__name__}.{info.name}") for info in pkgutil.iter_modules(__path__))
     return tuple(sorted(found, key=lambda module: module.ORDER))
 
-
-def learned_check(x, entry: str, value: float, sampled: bool, time_constant: float, limit: float, settings,
-                  T: float) -> tuple[dict, bool]:
-    """(new entries, raised) of a check on a learned mean: ``entry`` learns ``value`` where ``sampled``
-    (its runs counted in ``entry``_samples); raised where |mean| > ``limit`` once it has taken
-    learned_after of runs, or its time constant's if fewer."""
-    mean, taken = x[entry], x[f"{entry}_samples"]
-    if sampled:
-        mean, taken = blocks.learned_mean(mean, taken, value, T, time_constant)
-    judged = taken >= min(blocks.whole_samples(settings["learned_after"], T), blocks.whole_samples(time_constant, T))
-    return {entry: mean, f"{entry}_samples": taken}, judged and abs(mean) > limit

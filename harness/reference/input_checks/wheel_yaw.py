@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 
 from vsegen.harness.reference import blocks
-from vsegen.harness.reference.input_checks import learned_check
 
 ORDER = 3
 
@@ -74,8 +73,9 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
         mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
     if _learns_share(settings):     # the share, learned where it is judged, kept for the milder corners
         share = residual / max(new["wheel_yaw_rate"], settings["wheel_check_scale_rate"])
-        learned, beyond = learned_check(new, "wheel_yaw_share", share, rolling and yawing,
-                                        settings["wheel_check_scale_time"], settings["wheel_check_scale"], settings, T)
+        learned, beyond = blocks.learned_check(new, "wheel_yaw_share", share, rolling and yawing,
+                                               settings["wheel_check_scale_time"], settings["wheel_check_scale"],
+                                               settings, T)
         new |= learned
         mismatch = mismatch or (beyond and new["wheel_yaw_rate"] >= settings["wheel_check_learned_rate"])
     if settings["wheel_check_hold"] > 0:
