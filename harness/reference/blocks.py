@@ -106,16 +106,18 @@ def learned_mean(previous: float, taken: float, value: float, T: float, time_con
     return previous + gain * (value - previous), min(taken + 1.0, float(whole_samples(time_constant, T)))
 
 
-def learned_check(x, entry: str, value: float, sampled: bool, time_constant: float, limit: float, settings,
-                  T: float) -> tuple[dict, bool]:
-    """(new entries, raised) of a check on a learned mean: ``entry`` learns ``value`` where ``sampled``
-    (its runs counted in ``entry``_samples); raised where |mean| > ``limit`` once it has taken
+def learned_check(x, settings, T: float, entry: str, value: float, sampled: bool, time_key: str,
+                  limit_key: str) -> tuple[dict, bool]:
+    """(new entries, raised) of a check on a learned mean (model.filters.learned_check): ``entry``
+    of ``x`` learns ``value`` where ``sampled`` (time constant setting ``time_key``; its runs counted
+    in ``entry``_samples); raised where |mean| > setting ``limit_key`` once it has taken
     learned_after of runs, or its time constant's if fewer."""
-    mean, taken = x[entry], x[f"{entry}_samples"]
+    count, time_constant = f"{entry}_samples", settings[time_key]
+    mean, taken = x[entry], x[count]
     if sampled:
         mean, taken = learned_mean(mean, taken, value, T, time_constant)
     judged = taken >= min(whole_samples(settings["learned_after"], T), whole_samples(time_constant, T))
-    return {entry: mean, f"{entry}_samples": taken}, judged and abs(mean) > limit
+    return {entry: mean, count: taken}, judged and abs(mean) > settings[limit_key]
 
 
 def kf_predict(x, P, Phi, Gamma, u, Qd):

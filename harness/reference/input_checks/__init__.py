@@ -22,4 +22,3 @@ def checks() -> tuple:
     """The check modules of this package, in their ORDER."""
     found = (importlib.import_module(f"{__name__}.{info.name}") for info in pkgutil.iter_modules(__path__))
     return tuple(sorted(found, key=lambda module: module.ORDER))
-

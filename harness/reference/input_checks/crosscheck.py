@@ -65,17 +65,16 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
     new["steady_r"] = u["r"]
     if _on(settings, "lateral_check_limit"):
         sampled = settled and abs(u["ay"]) <= settings["lateral_check_range"]
-        learned, raised = blocks.learned_check(x, "lateral_residual", u["ay"] - u["r"] * u["vx"], sampled,
-                                               settings["lateral_check_time"], settings["lateral_check_limit"],
-                                               settings, T)
+        learned, raised = blocks.learned_check(x, settings, T, "lateral_residual", u["ay"] - u["r"] * u["vx"],
+                                               sampled, "lateral_check_time", "lateral_check_limit")
         new |= learned
         code |= blocks.LATERAL_INCONSISTENT if raised else 0
     if _on(settings, "steering_offset_limit"):
         sampled = (settled and abs(u["ay"]) <= settings["steering_offset_range"]
                    and u["vx"] >= settings["steering_offset_speed"])
-        learned, raised = blocks.learned_check(x, "steering_offset", u["delta"] - wheelbase * u["r"] / u["vx"],
-                                               sampled, settings["steering_offset_time"],
-                                               settings["steering_offset_limit"], settings, T)
+        learned, raised = blocks.learned_check(x, settings, T, "steering_offset",
+                                               u["delta"] - wheelbase * u["r"] / u["vx"], sampled,
+                                               "steering_offset_time", "steering_offset_limit")
         new |= learned
         code |= blocks.STEERING_OFFSET if raised else 0
     if _on(settings, "steer_check_limit"):      # the low-passed curvature, taken when steady

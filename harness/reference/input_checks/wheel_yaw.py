@@ -45,6 +45,7 @@ def states(settings, inputs) -> tuple[str, ...]:
 
 
 def _learns_share(settings) -> bool:
+    """Whether the check learns the share (model.input_checks.wheel_yaw._learns_share)."""
     return settings["wheel_check_scale"] > 0 and settings["wheel_check_scale_time"] > 0
 
 
@@ -73,9 +74,8 @@ def step(x, u, ok, settings, T: float, inputs, vehicle, raw) -> tuple[dict, int]
         mismatch = mismatch or residual > settings["wheel_check_scale"] * new["wheel_yaw_rate"]
     if _learns_share(settings):     # the share, learned where it is judged, kept for the milder corners
         share = residual / max(new["wheel_yaw_rate"], settings["wheel_check_scale_rate"])
-        learned, beyond = blocks.learned_check(new, "wheel_yaw_share", share, rolling and yawing,
-                                               settings["wheel_check_scale_time"], settings["wheel_check_scale"],
-                                               settings, T)
+        learned, beyond = blocks.learned_check(new, settings, T, "wheel_yaw_share", share, rolling and yawing,
+                                               "wheel_check_scale_time", "wheel_check_scale")
         new |= learned
         mismatch = mismatch or (beyond and new["wheel_yaw_rate"] >= settings["wheel_check_learned_rate"])
     if settings["wheel_check_hold"] > 0:
